@@ -1,0 +1,71 @@
+"""The FastAPI application factory. Nothing is built at import time."""
+
+from __future__ import annotations
+
+import secrets
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from fastapi import FastAPI, Request
+from fastapi.responses import RedirectResponse, Response
+from fastapi.staticfiles import StaticFiles
+from fastapi.templating import Jinja2Templates
+from starlette.middleware.sessions import SessionMiddleware
+
+from chameleons import __version__
+from chameleons.backend.auth import endpoints as auth_endpoints
+from chameleons.backend.auth import pages as auth_pages
+from chameleons.backend.auth.csrf import csrf_token
+from chameleons.backend.auth.dependencies import LoginRequiredError
+from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.health import endpoints as health_endpoints
+from chameleons.settings import Settings
+
+FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
+
+
+def build_templates() -> Jinja2Templates:
+    templates = Jinja2Templates(directory=str(FRONTEND_DIR / "templates"))
+    templates.env.globals["csrf_token"] = csrf_token
+    templates.env.globals["app_version"] = __version__
+    return templates
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or Settings()
+    settings.require_secure()
+    engine = build_engine(settings.effective_database_url)
+
+    @asynccontextmanager
+    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        yield
+        engine.dispose()
+
+    app = FastAPI(title="Mechanical Chameleons", version=__version__, lifespan=lifespan)
+    app.state.settings = settings
+    app.state.engine = engine
+    app.state.sessionmaker = build_sessionmaker(engine)
+    app.state.templates = build_templates()
+    app.state.login_throttle = LoginThrottle(
+        settings.login_max_failures, settings.login_lockout_seconds
+    )
+    app.add_middleware(
+        SessionMiddleware,
+        # Demo mode may run without a key: then sessions last only as long as this process.
+        secret_key=settings.secret_key.get_secret_value() or secrets.token_urlsafe(32),
+        session_cookie="chameleons_session",
+        same_site="lax",
+        https_only=settings.session_cookie_secure,
+        max_age=12 * 3600,
+    )
+
+    @app.exception_handler(LoginRequiredError)
+    async def _to_login(_request: Request, exc: LoginRequiredError) -> Response:
+        return RedirectResponse(f"/login?next={exc.next_path}", status_code=303)
+
+    app.mount("/static", StaticFiles(directory=FRONTEND_DIR / "static"), name="static")
+    for router in (health_endpoints.router, auth_pages.router, auth_endpoints.router):
+        app.include_router(router)
+    return app

@@ -1,0 +1,47 @@
+"""Who is asking: staff login (session cookie) and role checks."""
+
+from __future__ import annotations
+
+from typing import Annotated
+from urllib.parse import quote
+
+from fastapi import Depends, HTTPException, Request, status
+
+from chameleons.backend.auth import repository
+from chameleons.backend.dependencies import DbSession
+from chameleons.backend.models import StaffUser
+
+SESSION_USER_KEY = "staff_id"
+
+
+class LoginRequiredError(Exception):
+    """Raised for a staff page without login; the app turns it into a redirect to /login."""
+
+    def __init__(self, next_path: str) -> None:
+        super().__init__(next_path)
+        self.next_path = next_path
+
+
+def _is_api(request: Request) -> bool:
+    return request.url.path.startswith("/api/") or request.url.path.startswith("/ws/")
+
+
+def current_staff(request: Request, db: DbSession) -> StaffUser:
+    user_id = request.session.get(SESSION_USER_KEY)
+    user = repository.get_by_id(db, user_id) if isinstance(user_id, int) else None
+    if user is None or not user.is_active:
+        if _is_api(request):
+            raise HTTPException(status.HTTP_401_UNAUTHORIZED, "Log in as staff first.")
+        target = request.url.path + (f"?{request.url.query}" if request.url.query else "")
+        raise LoginRequiredError(quote(target, safe="/?=&"))
+    return user
+
+
+def require_pi(user: Annotated[StaffUser, Depends(current_staff)]) -> StaffUser:
+    if user.role != "pi":
+        raise HTTPException(status.HTTP_403_FORBIDDEN, "Only the PI can do this.")
+    return user
+
+
+CurrentStaff = Annotated[StaffUser, Depends(current_staff)]
+CurrentPI = Annotated[StaffUser, Depends(require_pi)]

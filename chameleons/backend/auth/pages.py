@@ -1,0 +1,78 @@
+"""Login form, logout, and the staff landing page."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, Form, Request, status
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+
+from chameleons.backend.auth import service
+from chameleons.backend.auth.csrf import rotate_csrf_token, verify_csrf
+from chameleons.backend.auth.dependencies import SESSION_USER_KEY, CurrentStaff
+from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.dependencies import DbSession, Templates
+
+router = APIRouter(tags=["auth"])
+
+
+def _safe_next(next_path: str | None) -> str:
+    # Only local paths: an open redirect would let a phishing link bounce through /login.
+    if next_path and next_path.startswith("/") and not next_path.startswith("//"):
+        return next_path
+    return "/"
+
+
+@router.get("/login", response_class=HTMLResponse)
+def login_form(request: Request, templates: Templates, next: str | None = None) -> Response:  # noqa: A002
+    return templates.TemplateResponse(
+        request, "login.html", {"next": _safe_next(next), "error": None, "username": ""}
+    )
+
+
+@router.post("/login", response_class=HTMLResponse, dependencies=[Depends(verify_csrf)])
+def login(
+    request: Request,
+    db: DbSession,
+    templates: Templates,
+    username: Annotated[str, Form(max_length=64)] = "",
+    password: Annotated[str, Form(max_length=256)] = "",
+    next: Annotated[str, Form()] = "/",  # noqa: A002
+) -> Response:
+    throttle: LoginThrottle = request.app.state.login_throttle
+    client = request.client.host if request.client else "unknown"
+    keys = (f"user:{username.lower()}", f"ip:{client}")
+    wait = throttle.retry_after(*keys)
+    error: str | None = None
+    status_code = status.HTTP_200_OK
+    if wait > 0:
+        error = f"Too many failed attempts. Try again in {int(wait) + 1} seconds."
+        status_code = status.HTTP_429_TOO_MANY_REQUESTS
+    else:
+        user = service.authenticate(db, username, password)
+        if user is not None:
+            throttle.reset(*keys)
+            request.session.clear()
+            request.session[SESSION_USER_KEY] = user.id
+            rotate_csrf_token(request)
+            return RedirectResponse(_safe_next(next), status_code=status.HTTP_303_SEE_OTHER)
+        throttle.record_failure(*keys)
+        error = "Wrong username or password."
+        status_code = status.HTTP_401_UNAUTHORIZED
+    return templates.TemplateResponse(
+        request,
+        "login.html",
+        {"next": _safe_next(next), "error": error, "username": username},
+        status_code=status_code,
+    )
+
+
+@router.post("/logout", dependencies=[Depends(verify_csrf)])
+def logout(request: Request) -> Response:
+    request.session.clear()
+    return RedirectResponse("/login", status_code=status.HTTP_303_SEE_OTHER)
+
+
+@router.get("/", response_class=HTMLResponse)
+def staff_home(request: Request, user: CurrentStaff, templates: Templates) -> Response:
+    return templates.TemplateResponse(request, "staff_home.html", {"user": user})

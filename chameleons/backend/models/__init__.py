@@ -1,0 +1,27 @@
+"""SQLAlchemy models, one per module; importing this package registers them all."""
+
+from chameleons.backend.models.base import Base
+from chameleons.backend.models.event import Event
+from chameleons.backend.models.interaction import Interaction
+from chameleons.backend.models.participant import Participant
+from chameleons.backend.models.plan_row import PlanRow
+from chameleons.backend.models.questionnaire_response import QuestionnaireResponse
+from chameleons.backend.models.recording import Recording
+from chameleons.backend.models.session import Session
+from chameleons.backend.models.staff_user import StaffUser
+from chameleons.backend.models.study import Study
+from chameleons.backend.models.suggestion import Suggestion
+
+__all__ = [
+    "Base",
+    "Event",
+    "Interaction",
+    "Participant",
+    "PlanRow",
+    "QuestionnaireResponse",
+    "Recording",
+    "Session",
+    "StaffUser",
+    "Study",
+    "Suggestion",
+]

@@ -1,0 +1,37 @@
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import CheckConstraint, ForeignKey, String, UniqueConstraint
+from sqlalchemy.orm import Mapped, mapped_column
+
+from chameleons.backend.models.base import Base
+
+
+class Interaction(Base):
+    """One of a session's three interactions, as planned and as actually run."""
+
+    __tablename__ = "interaction"
+    __table_args__ = (
+        UniqueConstraint("session_id", "position"),
+        CheckConstraint("position >= 1", name="position"),
+    )
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("session.id", ondelete="CASCADE"))
+    position: Mapped[int]
+    state: Mapped[str] = mapped_column(String(32), default="pending")
+    planned_condition: Mapped[str] = mapped_column(String(32))
+    condition: Mapped[str] = mapped_column(String(32))
+    actor: Mapped[str] = mapped_column(String(64))
+    robot_name: Mapped[str] = mapped_column(String(64))
+    face: Mapped[str] = mapped_column(String(64))
+    task: Mapped[str] = mapped_column(String(64))
+    item_set: Mapped[str] = mapped_column(String(32))
+    presented_order: Mapped[list[Any]]
+    initial_ranking: Mapped[list[Any] | None]
+    current_ranking: Mapped[list[Any] | None]
+    final_ranking: Mapped[list[Any] | None]
+    started_at: Mapped[datetime | None]
+    ended_at: Mapped[datetime | None]

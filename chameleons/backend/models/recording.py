@@ -1,0 +1,25 @@
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import CheckConstraint, ForeignKey, String
+from sqlalchemy.orm import Mapped, mapped_column
+
+from chameleons.backend.models.base import Base, utcnow
+
+
+class Recording(Base):
+    """A face-stream file a worker wrote for an interaction (indexed, not stored, here)."""
+
+    __tablename__ = "recording"
+    __table_args__ = (CheckConstraint("stream IN ('participant', 'agent')", name="stream"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    interaction_id: Mapped[int] = mapped_column(
+        ForeignKey("interaction.id", ondelete="CASCADE")
+    )
+    stream: Mapped[str] = mapped_column(String(16))
+    path: Mapped[str] = mapped_column(String(512))
+    frames: Mapped[int] = mapped_column(default=0)
+    size_bytes: Mapped[int] = mapped_column(default=0)
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)

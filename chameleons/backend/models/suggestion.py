@@ -1,0 +1,33 @@
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import CheckConstraint, ForeignKey, String, UniqueConstraint
+from sqlalchemy.orm import Mapped, mapped_column
+
+from chameleons.backend.models.base import Base, utcnow
+
+
+class Suggestion(Base):
+    """One of the robot's three ranking change requests in an interaction."""
+
+    __tablename__ = "suggestion"
+    __table_args__ = (
+        UniqueConstraint("interaction_id", "index"),
+        CheckConstraint('"index" BETWEEN 1 AND 3', name="index_range"),
+        CheckConstraint("kind IN ('optimal', 'random')", name="kind"),
+        CheckConstraint("to_rank < from_rank", name="moves_up"),
+    )
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    interaction_id: Mapped[int] = mapped_column(
+        ForeignKey("interaction.id", ondelete="CASCADE")
+    )
+    index: Mapped[int]
+    item: Mapped[str] = mapped_column(String(64))
+    from_rank: Mapped[int]
+    to_rank: Mapped[int]
+    kind: Mapped[str] = mapped_column(String(16))
+    accepted: Mapped[bool | None]
+    proposed_at: Mapped[datetime] = mapped_column(default=utcnow)
+    decided_at: Mapped[datetime | None]

@@ -1,0 +1,23 @@
+"""The ``chameleons`` command. Each sub-command lives in its own module and is added here."""
+
+from __future__ import annotations
+
+import click
+
+from chameleons import __version__
+from chameleons.cli import db_commands, serve_command, user_commands
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="chameleons")
+def cli() -> None:
+    """Mechanical Chameleons: run Wizard-of-Oz studies of robot facial mimicry."""
+
+
+cli.add_command(db_commands.db)
+cli.add_command(serve_command.serve)
+cli.add_command(user_commands.user)
+
+
+def main() -> None:
+    cli()

@@ -1,0 +1,85 @@
+"""All configuration: one pydantic-settings class, environment prefix ``CHAMELEONS_``.
+
+Settings are built explicitly (``Settings()`` in ``create_app``/CLI), never at import.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, SecretStr, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+# Secrets that ship in the repository (demo, .env.example). They never work outside demo mode.
+KNOWN_INSECURE_SECRETS = frozenset(
+    {"", "change-me", "changeme", "demo-secret-key-not-for-production", "secret"}
+)
+DEFAULT_DATA_DIR = Path("data")
+
+
+class InsecureSettingsError(ValueError):
+    """Raised when a secret is missing or a known example value outside demo mode."""
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(
+        env_prefix="CHAMELEONS_", env_file=".env", env_file_encoding="utf-8", extra="ignore"
+    )
+
+    demo_mode: bool = False
+    data_dir: Path = DEFAULT_DATA_DIR
+    database_url: str | None = Field(
+        default=None, description="SQLAlchemy URL; default: SQLite file under data_dir"
+    )
+    secret_key: SecretStr = SecretStr("")
+    host: str = "127.0.0.1"
+    port: int = Field(default=8000, ge=1, le=65535)
+    public_url: str | None = Field(
+        default=None, description="Base URL phones use (QR codes); default http://host:port"
+    )
+    session_cookie_secure: bool = False
+    login_max_failures: int = Field(default=5, ge=1)
+    login_lockout_seconds: float = Field(default=30.0, ge=0)
+
+    # ZeroMQ endpoints between server and workers (loopback unless configured otherwise).
+    worker_command_endpoint: str = "tcp://127.0.0.1:5555"
+    worker_telemetry_endpoint: str = "tcp://127.0.0.1:5556"
+
+    # Face capture inputs of a worker.
+    livelink_port: int = Field(default=11111, ge=1, le=65535)
+    facecapturex_port: int = Field(default=19977, ge=1, le=65535)
+    capture_bind_host: str = "0.0.0.0"  # the iPhone is on the LAN by design
+
+    log_level: Literal["debug", "info", "warning", "error"] = "info"
+
+    @model_validator(mode="after")
+    def _resolve_paths(self) -> Settings:
+        self.data_dir = self.data_dir.expanduser()
+        return self
+
+    @property
+    def effective_database_url(self) -> str:
+        if self.database_url:
+            return self.database_url
+        return f"sqlite:///{(self.data_dir / 'chameleons.sqlite3').resolve()}"
+
+    @property
+    def effective_public_url(self) -> str:
+        if self.public_url:
+            return self.public_url.rstrip("/")
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "::") else self.host  # noqa: S104
+        return f"http://{host}:{self.port}"
+
+    def require_secure(self) -> None:
+        """Refuse to run outside demo mode with a missing or example secret key."""
+        if self.demo_mode:
+            return
+        secret = self.secret_key.get_secret_value()
+        if secret in KNOWN_INSECURE_SECRETS or len(secret) < 16:
+            raise InsecureSettingsError(
+                "CHAMELEONS_SECRET_KEY is missing, too short (< 16 characters) or an example "
+                "value. Generate one with: python -c 'import secrets; "
+                "print(secrets.token_urlsafe(32))' and set it in the environment or .env. "
+                "(`chameleons demo` runs without one, for trying the system out.)"
+            )
