@@ -11,8 +11,13 @@ from chameleons.cli.common import load_settings
 @click.command()
 @click.option("--host", default=None, help="Bind address (default from settings: 127.0.0.1).")
 @click.option("--port", type=int, default=None, help="Port (default from settings: 8000).")
-@click.option("--upgrade/--no-upgrade", "run_upgrade", default=True, show_default=True,
-              help="Apply database migrations before serving.")
+@click.option(
+    "--upgrade/--no-upgrade",
+    "run_upgrade",
+    default=True,
+    show_default=True,
+    help="Apply database migrations before serving.",
+)
 def serve(host: str | None, port: int | None, run_upgrade: bool) -> None:
     """Run the web server (wizard console, phone pages, PI dashboard, API)."""
     settings = load_settings(secure=True, host=host, port=port)

@@ -27,7 +27,7 @@ def user_add(name: str, role: str, password: str | None) -> None:
     if password is None:
         password = click.prompt("Password", hide_input=True, confirmation_prompt=True)
     try:
-        data = StaffUserCreate(username=name, password=password, role=role)  # type: ignore[arg-type]
+        data = StaffUserCreate(username=name, password=password, role=role)
     except ValidationError as exc:
         problems = "; ".join(f"{e['loc'][0]}: {e['msg']}" for e in exc.errors())
         raise click.ClickException(problems) from exc

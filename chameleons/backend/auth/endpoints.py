@@ -18,9 +18,7 @@ def me(user: CurrentStaff) -> StaffUserRead:
     return StaffUserRead.model_validate(user)
 
 
-@router.post(
-    "/users", status_code=status.HTTP_201_CREATED, dependencies=[Depends(verify_csrf)]
-)
+@router.post("/users", status_code=status.HTTP_201_CREATED, dependencies=[Depends(verify_csrf)])
 def create_user(data: StaffUserCreate, _pi: CurrentPI, db: DbSession) -> StaffUserRead:
     try:
         return StaffUserRead.model_validate(service.create_user(db, data))

@@ -24,7 +24,7 @@ def _safe_next(next_path: str | None) -> str:
 
 
 @router.get("/login", response_class=HTMLResponse)
-def login_form(request: Request, templates: Templates, next: str | None = None) -> Response:  # noqa: A002
+def login_form(request: Request, templates: Templates, next: str | None = None) -> Response:
     return templates.TemplateResponse(
         request, "login.html", {"next": _safe_next(next), "error": None, "username": ""}
     )
@@ -37,7 +37,7 @@ def login(
     templates: Templates,
     username: Annotated[str, Form(max_length=64)] = "",
     password: Annotated[str, Form(max_length=256)] = "",
-    next: Annotated[str, Form()] = "/",  # noqa: A002
+    next: Annotated[str, Form()] = "/",
 ) -> Response:
     throttle: LoginThrottle = request.app.state.login_throttle
     client = request.client.host if request.client else "unknown"

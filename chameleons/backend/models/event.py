@@ -19,9 +19,7 @@ class Event(Base):
     __tablename__ = "event"
     __table_args__ = (UniqueConstraint("session_id", "client_id"),)
 
-    id: Mapped[int] = mapped_column(
-        BigInteger().with_variant(Integer, "sqlite"), primary_key=True
-    )
+    id: Mapped[int] = mapped_column(BigInteger().with_variant(Integer, "sqlite"), primary_key=True)
     study_id: Mapped[int | None] = mapped_column(ForeignKey("study.id", ondelete="CASCADE"))
     session_id: Mapped[int | None] = mapped_column(
         ForeignKey("session.id", ondelete="CASCADE"), index=True

@@ -24,9 +24,7 @@ class Participant(Base):
     id: Mapped[int] = mapped_column(primary_key=True)
     study_id: Mapped[int] = mapped_column(ForeignKey("study.id", ondelete="RESTRICT"))
     code: Mapped[str] = mapped_column(String(32))
-    plan_row_id: Mapped[int | None] = mapped_column(
-        ForeignKey("plan_row.id", ondelete="RESTRICT")
-    )
+    plan_row_id: Mapped[int | None] = mapped_column(ForeignKey("plan_row.id", ondelete="RESTRICT"))
     status: Mapped[str] = mapped_column(String(16), default="registered")
     is_rehearsal: Mapped[bool] = mapped_column(default=False)
     consent_at: Mapped[datetime | None]

@@ -15,9 +15,7 @@ class Recording(Base):
     __table_args__ = (CheckConstraint("stream IN ('participant', 'agent')", name="stream"),)
 
     id: Mapped[int] = mapped_column(primary_key=True)
-    interaction_id: Mapped[int] = mapped_column(
-        ForeignKey("interaction.id", ondelete="CASCADE")
-    )
+    interaction_id: Mapped[int] = mapped_column(ForeignKey("interaction.id", ondelete="CASCADE"))
     stream: Mapped[str] = mapped_column(String(16))
     path: Mapped[str] = mapped_column(String(512))
     frames: Mapped[int] = mapped_column(default=0)

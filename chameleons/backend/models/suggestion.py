@@ -20,9 +20,7 @@ class Suggestion(Base):
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)
-    interaction_id: Mapped[int] = mapped_column(
-        ForeignKey("interaction.id", ondelete="CASCADE")
-    )
+    interaction_id: Mapped[int] = mapped_column(ForeignKey("interaction.id", ondelete="CASCADE"))
     index: Mapped[int]
     item: Mapped[str] = mapped_column(String(64))
     from_rank: Mapped[int]

@@ -1,0 +1,1 @@
+"""The realtime pipeline of one booth. Imports nothing from ``chameleons.backend``."""
