@@ -1,0 +1,3 @@
+from chameleons.cli.main import main
+
+main()
