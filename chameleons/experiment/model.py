@@ -1,0 +1,222 @@
+"""The study as typed, immutable values (built by :mod:`chameleons.experiment.study`).
+
+Collections are tuples in the order the study file gives them; lookups by id are methods.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+ItemType = Literal["differential", "agreement", "text"]
+Phase = Literal["interaction", "final"]
+
+
+@dataclass(frozen=True)
+class Item:
+    """One survival-task item; ``expert_rank`` 1 is the most important."""
+
+    id: str
+    name: str
+    description: str
+    expert_rank: int
+
+
+@dataclass(frozen=True)
+class Task:
+    id: str
+    name: str
+    source: str
+    introduction: str
+    items: tuple[Item, ...]
+
+    def item(self, item_id: str) -> Item:
+        for item in self.items:
+            if item.id == item_id:
+                return item
+        raise KeyError(f"task {self.id!r} has no item {item_id!r}")
+
+    @property
+    def expert_order(self) -> tuple[str, ...]:
+        """All item ids, most important first."""
+        return tuple(item.id for item in sorted(self.items, key=lambda i: i.expert_rank))
+
+
+@dataclass(frozen=True)
+class ItemSetRule:
+    """Expert ranks ``first_rank..last_rank`` split, in expert order, into equal sets."""
+
+    first_rank: int
+    last_rank: int
+    sets: tuple[str, ...]
+
+    @property
+    def set_size(self) -> int:
+        return (self.last_rank - self.first_rank + 1) // len(self.sets)
+
+    def ranks_of(self, set_id: str) -> range:
+        start = self.first_rank + self.sets.index(set_id) * self.set_size
+        return range(start, start + self.set_size)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A task with one item set: the five items of one interaction, in expert order."""
+
+    task: str
+    item_set: str
+    items: tuple[str, ...]
+
+    @property
+    def id(self) -> str:
+        return f"{self.task}-{self.item_set}"
+
+
+@dataclass(frozen=True)
+class Condition:
+    id: str
+    label: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Voice:
+    """A hint for synthetic demo voices (espeak-ng voice name, pitch 0-99, words/min)."""
+
+    espeak: str
+    pitch: int
+    speed: int
+
+
+@dataclass(frozen=True)
+class Actor:
+    id: str
+    name: str
+    gender: str
+    voice: Voice
+    properties: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
+
+
+@dataclass(frozen=True)
+class Face:
+    id: str
+    label: str
+    properties: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
+
+
+@dataclass(frozen=True)
+class QuestionnaireItem:
+    """A question. ``differential``: anchors ``left`` (1) and ``right`` (max);
+    ``agreement``: a statement rated on the scale; ``text``: an open answer."""
+
+    id: str
+    type: ItemType
+    text: str = ""
+    left: str = ""
+    right: str = ""
+    reverse: bool = False
+    identifying: bool = False
+
+    @property
+    def numeric(self) -> bool:
+        return self.type != "text"
+
+
+@dataclass(frozen=True)
+class Questionnaire:
+    id: str
+    version: str
+    title: str
+    phase: Phase
+    points: int
+    low: str
+    high: str
+    items: tuple[QuestionnaireItem, ...]
+
+    @property
+    def numeric_items(self) -> tuple[QuestionnaireItem, ...]:
+        return tuple(item for item in self.items if item.numeric)
+
+    @property
+    def scored(self) -> bool:
+        """Whether answers average into one score (it has numeric items)."""
+        return bool(self.numeric_items)
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study. ``config`` is its canonical JSON-able snapshot, ``content_hash``
+    the sha256 of that snapshot's canonical JSON (see :func:`study.canonical_json`)."""
+
+    id: str
+    name: str
+    description: str
+    conditions: tuple[Condition, ...]
+    tasks: tuple[Task, ...]
+    item_sets: ItemSetRule
+    suggestions_per_interaction: int
+    alternate_tasks: bool
+    actors: tuple[Actor, ...]
+    faces: tuple[Face, ...]
+    robot_names: tuple[str, ...]
+    questionnaires: tuple[Questionnaire, ...]
+    config: dict[str, Any] = field(hash=False, compare=False, repr=False)
+    content_hash: str = field(compare=True)
+
+    @property
+    def condition_ids(self) -> tuple[str, ...]:
+        return tuple(c.id for c in self.conditions)
+
+    @property
+    def interactions_per_session(self) -> int:
+        """One interaction per condition (within-subjects)."""
+        return len(self.conditions)
+
+    def task(self, task_id: str) -> Task:
+        for task in self.tasks:
+            if task.id == task_id:
+                return task
+        raise KeyError(f"no task {task_id!r}")
+
+    def condition(self, condition_id: str) -> Condition:
+        for condition in self.conditions:
+            if condition.id == condition_id:
+                return condition
+        raise KeyError(f"no condition {condition_id!r}")
+
+    def questionnaire(self, questionnaire_id: str) -> Questionnaire:
+        for questionnaire in self.questionnaires:
+            if questionnaire.id == questionnaire_id:
+                return questionnaire
+        raise KeyError(f"no questionnaire {questionnaire_id!r}")
+
+    def questionnaires_for(self, phase: Phase) -> tuple[Questionnaire, ...]:
+        return tuple(q for q in self.questionnaires if q.phase == phase)
+
+    @property
+    def measures(self) -> tuple[str, ...]:
+        """Analysed measures: accepted suggestions, then each scored interaction questionnaire."""
+        scored = (q.id for q in self.questionnaires_for("interaction") if q.scored)
+        return ("accepted", *scored)
+
+    def scenario(self, task_id: str, item_set: str) -> Scenario:
+        task = self.task(task_id)
+        ranks = self.item_sets.ranks_of(item_set)
+        chosen = sorted((i for i in task.items if i.expert_rank in ranks), key=_rank)
+        return Scenario(task_id, item_set, tuple(i.id for i in chosen))
+
+    @property
+    def scenarios(self) -> tuple[Scenario, ...]:
+        """Every task x item set, tasks in study order, sets in rule order."""
+        return tuple(
+            self.scenario(task.id, set_id) for task in self.tasks for set_id in self.item_sets.sets
+        )
+
+    def expert_order(self, task_id: str, item_ids: tuple[str, ...] | list[str]) -> list[str]:
+        """The given items of a task, most important first (the policy's target order)."""
+        task = self.task(task_id)
+        return sorted(item_ids, key=lambda item_id: task.item(item_id).expert_rank)
+
+
+def _rank(item: Item) -> int:
+    return item.expert_rank

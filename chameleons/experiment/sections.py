@@ -1,0 +1,239 @@
+"""Reading each section of a study document into model values (problems go to the reader)."""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any, cast
+
+from chameleons.experiment.model import (
+    Actor,
+    Condition,
+    Face,
+    Item,
+    ItemSetRule,
+    ItemType,
+    Phase,
+    Questionnaire,
+    QuestionnaireItem,
+    Task,
+    Voice,
+)
+from chameleons.experiment.reader import SNAKE, Reader, join
+
+ITEM_TYPES = ("differential", "agreement", "text")
+PHASES = ("interaction", "final")
+
+
+def read_conditions(reader: Reader, node: object) -> tuple[Condition, ...]:
+    conditions = []
+    for cid, body, place in reader.keyed(node, "conditions", SNAKE):
+        reader.check_keys(body, place, ["label"], ["description"])
+        conditions.append(
+            Condition(
+                cid,
+                reader.text(body, "label", place),
+                _optional(reader, body, "description", place),
+            )
+        )
+    if len(conditions) < 2:
+        reader.problem("conditions", "needs at least 2 conditions")
+    return tuple(conditions)
+
+
+def read_tasks(reader: Reader, node: object) -> tuple[Task, ...]:
+    tasks = []
+    for tid, body, place in reader.keyed(node, "tasks", SNAKE):
+        reader.check_keys(body, place, ["name", "items"], ["source", "introduction"])
+        items = _read_items(reader, body.get("items", []), join(place, "items"))
+        tasks.append(
+            Task(
+                id=tid,
+                name=reader.text(body, "name", place),
+                source=_optional(reader, body, "source", place),
+                introduction=_optional(reader, body, "introduction", place),
+                items=items,
+            )
+        )
+    if not tasks:
+        reader.problem("tasks", "needs at least one task")
+    return tuple(tasks)
+
+
+def _read_items(reader: Reader, node: object, path: str) -> tuple[Item, ...]:
+    items = []
+    for index, element in enumerate(reader.sequence(node, path)):
+        place = join(path, index)
+        body = reader.mapping(element, place)
+        reader.check_keys(body, place, ["id", "name", "expert_rank"], ["description"])
+        items.append(
+            Item(
+                id=reader.identifier(body.get("id"), join(place, "id"), SNAKE),
+                name=reader.text(body, "name", place),
+                description=_optional(reader, body, "description", place),
+                expert_rank=reader.integer(body, "expert_rank", place, minimum=1),
+            )
+        )
+    _check_unique_items(reader, items, path)
+    return tuple(items)
+
+
+def _check_unique_items(reader: Reader, items: list[Item], path: str) -> None:
+    first_index: dict[str, int] = {}
+    rank_index: dict[int, int] = {}
+    for index, item in enumerate(items):
+        if item.id in first_index:
+            reader.problem(join(path, index), f"item id {item.id!r} used twice")
+        first_index.setdefault(item.id, index)
+        if item.expert_rank in rank_index:
+            reader.problem(join(path, index), f"expert rank {item.expert_rank} used twice")
+        rank_index.setdefault(item.expert_rank, index)
+    missing = sorted(set(range(1, len(items) + 1)) - set(rank_index))
+    if items and missing:
+        reader.problem(path, f"expert ranks must be 1..{len(items)}; missing {missing}")
+
+
+def read_item_sets(reader: Reader, node: object, tasks: tuple[Task, ...]) -> ItemSetRule:
+    path = "item_sets"
+    body = reader.mapping(node, path)
+    reader.check_keys(body, path, ["first_rank", "last_rank", "sets"], [])
+    first = reader.integer(body, "first_rank", path, minimum=1)
+    last = reader.integer(body, "last_rank", path, minimum=1)
+    sets = [
+        reader.identifier(s, join(join(path, "sets"), i), SNAKE)
+        for i, s in enumerate(reader.sequence(body.get("sets", []), join(path, "sets")))
+    ]
+    for set_id, count in Counter(sets).items():
+        if count > 1:
+            reader.problem(join(path, "sets"), f"set {set_id!r} named twice")
+    span = last - first + 1
+    if span < 1:
+        reader.problem(path, f"last_rank {last} is before first_rank {first}")
+    elif not sets:
+        reader.problem(join(path, "sets"), "needs at least one set")
+    elif span % len(sets):
+        reader.problem(path, f"ranks {first}..{last} ({span}) do not split into {len(sets)} sets")
+    for task in tasks:
+        if task.items and last > len(task.items):
+            reader.problem(
+                join("tasks", task.id),
+                f"has {len(task.items)} items but item_sets uses rank {last}",
+            )
+    return ItemSetRule(first, last, tuple(sets))
+
+
+def read_actors(reader: Reader, node: object) -> tuple[Actor, ...]:
+    actors = []
+    for aid, body, place in reader.keyed(node, "actors"):
+        reader.check_keys(body, place, ["name", "gender", "voice"], ["properties"])
+        voice_place = join(place, "voice")
+        voice = reader.mapping(body.get("voice", {}), voice_place)
+        if "voice" in body:  # a missing voice is one problem, not one per field
+            reader.check_keys(voice, voice_place, ["espeak"], ["pitch", "speed"])
+        actors.append(
+            Actor(
+                id=aid,
+                name=reader.text(body, "name", place),
+                gender=reader.text(body, "gender", place),
+                voice=Voice(
+                    espeak=reader.text(voice, "espeak", voice_place),
+                    pitch=reader.integer(
+                        voice, "pitch", voice_place, default=50, minimum=0, maximum=99
+                    ),
+                    speed=reader.integer(
+                        voice, "speed", voice_place, default=160, minimum=80, maximum=450
+                    ),
+                ),
+                properties=_properties(reader, body, place),
+            )
+        )
+    return tuple(actors)
+
+
+def read_faces(reader: Reader, node: object) -> tuple[Face, ...]:
+    faces = []
+    for fid, body, place in reader.keyed(node, "faces"):
+        reader.check_keys(body, place, ["label"], ["properties"])
+        faces.append(Face(fid, reader.text(body, "label", place), _properties(reader, body, place)))
+    return tuple(faces)
+
+
+def read_robot_names(reader: Reader, node: object) -> tuple[str, ...]:
+    names = []
+    for index, name in enumerate(reader.sequence(node, "robot_names")):
+        if not isinstance(name, str) or not name.strip():
+            reader.problem(join("robot_names", index), "must be a non-empty name")
+        elif name.strip() in names:
+            reader.problem(join("robot_names", index), f"name {name!r} listed twice")
+        else:
+            names.append(name.strip())
+    return tuple(names)
+
+
+def read_questionnaires(reader: Reader, node: object) -> tuple[Questionnaire, ...]:
+    questionnaires = []
+    for qid, body, place in reader.keyed(node, "questionnaires", SNAKE):
+        reader.check_keys(body, place, ["version", "phase", "items"], ["title", "scale"])
+        phase = body.get("phase")
+        if phase not in PHASES:
+            reader.problem(join(place, "phase"), f"must be one of {list(PHASES)}, got {phase!r}")
+        scale_place = join(place, "scale")
+        scale = reader.mapping(body.get("scale", {}), scale_place)
+        reader.check_keys(scale, scale_place, [], ["points", "low", "high"])
+        items = _read_questions(reader, body.get("items", []), join(place, "items"))
+        points = reader.integer(scale, "points", scale_place, default=7, minimum=2, maximum=11)
+        questionnaires.append(
+            Questionnaire(
+                id=qid,
+                version=reader.text(body, "version", place),
+                title=reader.text(body, "title", place, default=qid),
+                phase=cast(Phase, phase if phase in PHASES else "interaction"),
+                points=points,
+                low=_optional(reader, scale, "low", scale_place),
+                high=_optional(reader, scale, "high", scale_place),
+                items=items,
+            )
+        )
+    return tuple(questionnaires)
+
+
+def _read_questions(reader: Reader, node: object, path: str) -> tuple[QuestionnaireItem, ...]:
+    questions: list[QuestionnaireItem] = []
+    for index, element in enumerate(reader.sequence(node, path)):
+        place = join(path, index)
+        body = reader.mapping(element, place)
+        kind = body.get("type")
+        if kind in ITEM_TYPES:
+            required = {"differential": ["left", "right"], "agreement": ["text"], "text": ["text"]}
+            optional = ["identifying"] + ([] if kind == "text" else ["reverse"])
+            optional += ["text"] if kind == "differential" else []
+            reader.check_keys(body, place, ["id", "type", *required[kind]], optional)
+        else:  # which other keys belong depends on the type: report only the type
+            reader.problem(join(place, "type"), f"must be one of {list(ITEM_TYPES)}, got {kind!r}")
+            kind = "text"
+        question = QuestionnaireItem(
+            id=reader.identifier(body.get("id"), join(place, "id"), SNAKE),
+            type=cast(ItemType, kind),
+            text=_optional(reader, body, "text", place),
+            left=_optional(reader, body, "left", place),
+            right=_optional(reader, body, "right", place),
+            reverse=reader.boolean(body, "reverse", place, default=False),
+            identifying=reader.boolean(body, "identifying", place, default=kind == "text"),
+        )
+        if any(q.id == question.id for q in questions):
+            reader.problem(join(place, "id"), f"question id {question.id!r} used twice")
+        questions.append(question)
+    if not questions:
+        reader.problem(path, "needs at least one question")
+    return tuple(questions)
+
+
+def _optional(reader: Reader, body: dict[str, Any], key: str, place: str) -> str:
+    return reader.text(body, key, place, default="", allow_empty=True)
+
+
+def _properties(reader: Reader, body: dict[str, Any], place: str) -> dict[str, Any]:
+    return (
+        reader.mapping(body["properties"], join(place, "properties"))
+        if "properties" in body
+        else {}
+    )

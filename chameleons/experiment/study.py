@@ -1,0 +1,213 @@
+"""Loading a study from YAML (or from a stored config snapshot), validated in full.
+
+``load_study`` reads one YAML file; every problem is reported with its place, all at once
+(``StudyError.problems``). The loaded :class:`~chameleons.experiment.model.Study` carries
+``config``, a canonical JSON-able snapshot (keyed collections become lists of objects with
+an ``id``, defaults filled in), and ``content_hash``, the sha256 of that snapshot's
+canonical JSON. ``study_from_config(study.config)`` rebuilds an equal study with the same
+hash, so a stored snapshot always identifies the study its data was collected under.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from chameleons.experiment import sections
+from chameleons.experiment.model import Study
+from chameleons.experiment.reader import SLUG, Reader
+
+__all__ = [
+    "Study",
+    "StudyError",
+    "canonical_json",
+    "default_study_path",
+    "load_default_study",
+    "load_study",
+    "study_from_config",
+]
+
+TOP_LEVEL_REQUIRED = ["id", "name", "conditions", "tasks", "item_sets", "actors", "faces"]
+TOP_LEVEL_OPTIONAL = [
+    "description",
+    "suggestions_per_interaction",
+    "design",
+    "robot_names",
+    "questionnaires",
+]
+
+
+class StudyError(ValueError):
+    """A study file or snapshot is unusable; ``problems`` lists every problem with its place."""
+
+    def __init__(self, problems: list[str], source: str = "study") -> None:
+        self.problems = list(problems)
+        self.source = source
+        listed = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"{source} has {len(self.problems)} problem(s):\n{listed}")
+
+
+def default_study_path() -> Path:
+    return Path(__file__).parent / "studies" / "default" / "study.yaml"
+
+
+def load_default_study() -> Study:
+    return load_study(default_study_path())
+
+
+def load_study(path: Path | str) -> Study:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise StudyError([f"cannot read the file: {exc.strerror or exc}"], str(path)) from exc
+    document, duplicates = _parse_yaml(text, str(path))
+    return _build(document, str(path), duplicates)
+
+
+def study_from_config(config: dict[str, Any]) -> Study:
+    """Rebuild a study from its stored snapshot (``Study.config``)."""
+    return _build(config, "study config", [])
+
+
+def canonical_json(config: dict[str, Any]) -> str:
+    """The exact text the content hash is computed over (sorted keys, no whitespace)."""
+    return json.dumps(config, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
+class _DuplicateKeyLoader(yaml.SafeLoader):
+    """A safe loader that records duplicate mapping keys instead of silently keeping the last."""
+
+    duplicates: list[str]
+
+
+def _construct_mapping(loader: _DuplicateKeyLoader, node: yaml.MappingNode) -> dict[Any, Any]:
+    seen: set[Any] = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node)
+        if key in seen:
+            line = key_node.start_mark.line + 1
+            loader.duplicates.append(f"line {line}: duplicate key {key!r}")
+        seen.add(key)
+    return loader.construct_mapping(node)
+
+
+_DuplicateKeyLoader.add_constructor(
+    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+    _construct_mapping,
+)
+
+
+def _parse_yaml(text: str, source: str) -> tuple[Any, list[str]]:
+    loader = _DuplicateKeyLoader(text)
+    loader.duplicates = []
+    try:
+        document = loader.get_single_data()
+    except yaml.YAMLError as exc:
+        raise StudyError([f"not valid YAML: {exc}"], source) from exc
+    finally:
+        loader.dispose()
+    return document, loader.duplicates
+
+
+def _build(document: object, source: str, duplicates: list[str]) -> Study:
+    reader = Reader()
+    reader.problems.extend(duplicates)
+    top = reader.mapping(document, "")
+    if not isinstance(document, dict):
+        raise StudyError(reader.problems, source)
+    reader.check_keys(top, "", TOP_LEVEL_REQUIRED, TOP_LEVEL_OPTIONAL)
+    design = reader.mapping(top.get("design", {}), "design")
+    reader.check_keys(design, "design", [], ["alternate_tasks"])
+    tasks = sections.read_tasks(reader, top.get("tasks", {}))
+    parts: dict[str, Any] = {
+        "id": reader.identifier(top.get("id", ""), "id", SLUG),
+        "name": reader.text(top, "name", ""),
+        "description": reader.text(top, "description", "", default="", allow_empty=True),
+        "conditions": sections.read_conditions(reader, top.get("conditions", {})),
+        "tasks": tasks,
+        "item_sets": sections.read_item_sets(reader, top.get("item_sets", {}), tasks),
+        "suggestions_per_interaction": reader.integer(
+            top, "suggestions_per_interaction", "", default=3, minimum=0, maximum=20
+        ),
+        "alternate_tasks": reader.boolean(design, "alternate_tasks", "design", default=True),
+        "actors": sections.read_actors(reader, top.get("actors", {})),
+        "faces": sections.read_faces(reader, top.get("faces", {})),
+        "robot_names": sections.read_robot_names(reader, top.get("robot_names", [])),
+        "questionnaires": sections.read_questionnaires(reader, top.get("questionnaires", {})),
+    }
+    _check_design_fits(reader, parts)
+    if reader.problems:
+        raise StudyError(reader.problems, source)
+    config = _config_of(parts)
+    digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
+    return Study(**parts, config=config, content_hash=digest)
+
+
+def _check_design_fits(reader: Reader, parts: dict[str, Any]) -> None:
+    """Cross-section checks: a session has one interaction per condition and needs that many
+    distinct actors, faces, robot names and scenarios."""
+    per_session = len(parts["conditions"])
+    scenarios = len(parts["tasks"]) * len(parts["item_sets"].sets)
+    for key, count in [
+        ("actors", len(parts["actors"])),
+        ("faces", len(parts["faces"])),
+        ("robot_names", len(parts["robot_names"])),
+    ]:
+        if count < per_session:
+            reader.problem(
+                key, f"has {count}, a session of {per_session} interactions needs {per_session}"
+            )
+    if parts["tasks"] and parts["item_sets"].sets and scenarios < per_session:
+        reader.problem(
+            "item_sets",
+            f"gives {scenarios} scenarios, a session of {per_session} needs {per_session}",
+        )
+    if parts["alternate_tasks"] and per_session > 1 and len(parts["tasks"]) == 1:
+        reader.problem("design.alternate_tasks", "needs at least 2 tasks (or set it to false)")
+
+
+def _config_of(parts: dict[str, Any]) -> dict[str, Any]:
+    """The canonical snapshot: plain JSON types, keyed collections as lists with ``id``."""
+    rule = parts["item_sets"]
+    return {
+        "id": parts["id"],
+        "name": parts["name"],
+        "description": parts["description"],
+        "conditions": [asdict(c) for c in parts["conditions"]],
+        "tasks": [
+            {
+                **{k: v for k, v in asdict(t).items() if k != "items"},
+                "items": [asdict(i) for i in t.items],
+            }
+            for t in parts["tasks"]
+        ],
+        "item_sets": {
+            "first_rank": rule.first_rank,
+            "last_rank": rule.last_rank,
+            "sets": list(rule.sets),
+        },
+        "suggestions_per_interaction": parts["suggestions_per_interaction"],
+        "design": {"alternate_tasks": parts["alternate_tasks"]},
+        "actors": [asdict(a) for a in parts["actors"]],
+        "faces": [asdict(f) for f in parts["faces"]],
+        "robot_names": list(parts["robot_names"]),
+        "questionnaires": [_questionnaire_config(q) for q in parts["questionnaires"]],
+    }
+
+
+def _questionnaire_config(questionnaire: Any) -> dict[str, Any]:
+    data = asdict(questionnaire)
+    scale = {"points": data.pop("points"), "low": data.pop("low"), "high": data.pop("high")}
+    items = []
+    for item in questionnaire.items:
+        entry = {k: v for k, v in asdict(item).items() if v != ""}
+        if not item.numeric:
+            entry.pop("reverse", None)
+        items.append(entry)
+    return {**data, "scale": scale, "items": items}
