@@ -106,7 +106,7 @@ def settings(database_url: str, tmp_path: Path) -> Settings:
         secret_key=secrets.token_urlsafe(32),
         login_max_failures=3,
         login_lockout_seconds=60,
-        _env_file=None,  # type: ignore[call-arg]
+        _env_file=None,
     )
 
 

@@ -41,7 +41,7 @@ def _demo_credentials(settings: Settings) -> dict[str, str]:
                 password = stored.get(username) or secrets.token_urlsafe(9)
                 user = repository.get_by_username(db, username)
                 if user is None:
-                    data = StaffUserCreate(username=username, password=password, role=role)  # type: ignore[arg-type]
+                    data = StaffUserCreate(username=username, password=password, role=role)
                     service.create_user(db, data)
                 elif username not in stored:
                     service.set_password(db, user, password)

@@ -13,7 +13,7 @@ from chameleons.backend.db import build_sessionmaker, session_scope
 
 def add_user(engine: Engine, name: str, password: str, role: str) -> None:
     for db in session_scope(build_sessionmaker(engine)):
-        service.create_user(db, StaffUserCreate(username=name, password=password, role=role))  # type: ignore[arg-type]
+        service.create_user(db, StaffUserCreate(username=name, password=password, role=role))
 
 
 def csrf_from(html: str) -> str:

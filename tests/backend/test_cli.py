@@ -10,7 +10,9 @@ from pathlib import Path
 import pytest
 
 
-def run_cli(*args: str, env: dict[str, str], stdin: str | None = None) -> subprocess.CompletedProcess[str]:
+def run_cli(
+    *args: str, env: dict[str, str], stdin: str | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "chameleons", *args],
         env=env, input=stdin, capture_output=True, text=True, timeout=60, check=False,
@@ -48,7 +50,9 @@ def test_db_upgrade_then_current(cli_env: dict[str, str]) -> None:
 
 def test_user_add_with_prompted_password_and_duplicate(cli_env: dict[str, str]) -> None:
     run_cli("db", "upgrade", env=cli_env)
-    created = run_cli("user", "add", "pia", "--role", "pi", env=cli_env, stdin="pw-123456\npw-123456\n")
+    created = run_cli(
+        "user", "add", "pia", "--role", "pi", env=cli_env, stdin="pw-123456\npw-123456\n"
+    )
     assert created.returncode == 0, created.stderr
     assert "created pi account 'pia'" in created.stdout
     again = run_cli("user", "add", "pia", "--role", "pi", "--password", "pw-123456", env=cli_env)

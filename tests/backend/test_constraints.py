@@ -39,10 +39,10 @@ def _study_with_session(db: Session) -> tuple[Study, StudySession]:
 
 
 def _interaction(session_id: int, position: int) -> Interaction:
-    fields: dict[str, Any] = dict(
-        planned_condition="copy", condition="copy", actor="m1", robot_name="Nova",
-        face="face-1", task="lunar", item_set="better", presented_order=["a"],
-    )  # fmt: skip
+    fields: dict[str, Any] = {
+        "planned_condition": "copy", "condition": "copy", "actor": "m1", "robot_name": "Nova",
+        "face": "face-1", "task": "lunar", "item_set": "better", "presented_order": ["a"],
+    }  # fmt: skip
     return Interaction(session_id=session_id, position=position, **fields)
 
 

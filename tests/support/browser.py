@@ -66,7 +66,9 @@ def page(context: BrowserContext) -> Page:
 def phone_context(browser: Browser) -> Iterator[BrowserContext]:
     """A small phone: 375 px wide, touch, mobile user agent."""
     ctx = browser.new_context(
-        viewport={"width": 375, "height": 740}, has_touch=True, is_mobile=True,
+        viewport={"width": 375, "height": 740},
+        has_touch=True,
+        is_mobile=True,
         device_scale_factor=2,
     )
     yield ctx
