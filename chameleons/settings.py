@@ -10,10 +10,11 @@ from typing import Literal
 
 from pydantic import Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
+from sqlalchemy.engine import make_url
 
 # Secrets that ship in the repository (demo, .env.example). They never work outside demo mode.
 KNOWN_INSECURE_SECRETS = frozenset(
-    {"", "change-me", "changeme", "demo-secret-key-not-for-production", "secret"}
+    {"", "change-me", "changeme", "change-me-db-password", "secret", "password", "postgres"}
 )
 DEFAULT_DATA_DIR = Path("data")
 
@@ -50,6 +51,18 @@ class Settings(BaseSettings):
     livelink_port: int = Field(default=11111, ge=1, le=65535)
     facecapturex_port: int = Field(default=19977, ge=1, le=65535)
     capture_bind_host: str = "0.0.0.0"  # the iPhone is on the LAN by design
+    # Unit of Live Link head/eye rotations on the wire: "degrees/180" (value * 180), "radians",
+    # "degrees", or a plain factor. Calibrate: turn the head ~45 deg; the raw HeadYaw reads
+    # ~0.25 for "degrees/180" and ~0.79 for "radians" (see chameleons.worker.ingest.livelink).
+    livelink_rotation_scale: str = Field(
+        default="degrees/180",
+        pattern=r"^(degrees/180|radians|degrees|[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)$",
+    )
+    # Rotation of the phone about its viewing axis (degrees, counter-clockwise seen from the
+    # front); the original study's mount needed 90.
+    mounting_rotation_deg: float = Field(default=0.0, ge=-360, le=360)
+    # Mirror the participant (swap left/right, negate yaw and roll) rather than same side.
+    mirror: bool = True
 
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
@@ -75,6 +88,12 @@ class Settings(BaseSettings):
         """Refuse to run outside demo mode with a missing or example secret key."""
         if self.demo_mode:
             return
+        db_password = make_url(self.effective_database_url).password
+        if db_password is not None and str(db_password) in KNOWN_INSECURE_SECRETS:
+            raise InsecureSettingsError(
+                "The database password in CHAMELEONS_DATABASE_URL is an example value "
+                "(from .env.example). Set a real password for PostgreSQL and in the URL."
+            )
         secret = self.secret_key.get_secret_value()
         if secret in KNOWN_INSECURE_SECRETS or len(secret) < 16:
             raise InsecureSettingsError(

@@ -1,0 +1,17 @@
+# One image for the server and the workers of a lab.
+FROM python:3.11-slim
+
+ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 PIP_NO_CACHE_DIR=1
+WORKDIR /app
+
+COPY pyproject.toml README.md ./
+COPY chameleons ./chameleons
+COPY prompts ./prompts
+RUN pip install --no-cache-dir . \
+    && useradd --create-home --uid 1000 chameleons \
+    && mkdir -p /data && chown chameleons /data
+
+USER chameleons
+ENV CHAMELEONS_DATA_DIR=/data
+EXPOSE 8000 5555 5556 11111/udp 19977
+CMD ["chameleons", "serve", "--host", "0.0.0.0"]
