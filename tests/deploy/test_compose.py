@@ -90,7 +90,8 @@ def test_ports_agree_with_setting_defaults() -> None:
     assert str(defaults.port) in server_ports
     for endpoint in (defaults.worker_command_endpoint, defaults.worker_telemetry_endpoint):
         port = re.search(r":(\d+)$", endpoint)
-        assert port and port.group(1) in server_ports
+        assert port
+        assert port.group(1) in server_ports
         worker_env = SERVICES["worker-booth-1"]["environment"]
         assert any(v.endswith(":" + port.group(1)) for v in worker_env.values())
     worker_ports = _container_ports(SERVICES["worker-booth-1"])
