@@ -1,0 +1,66 @@
+"""The manifest file format: one CSV per actor, edited by a lab in a spreadsheet.
+
+Reading keeps each record's starting line (the header is line 1; a quoted cell may span
+lines) so every problem can be reported as ``file:line``.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+MANIFEST_NAME = "manifest.csv"
+ACTOR_PROFILE_NAME = "actor.yaml"
+MANIFEST_COLUMNS: tuple[str, ...] = (
+    "id", "stage", "group", "text", "task", "item", "other_item", "robot_name", "audio",
+    "lipsync",
+)  # fmt: skip
+# Without these a row cannot be understood; the others may be left out of the header.
+REQUIRED_COLUMNS: tuple[str, ...] = ("id", "stage", "group", "text")
+
+
+@dataclass(frozen=True, slots=True)
+class ManifestRow:
+    line: int
+    cells: Mapping[str, str]  # column -> stripped cell text ("" when empty or absent)
+    extra_cells: int = 0  # cells beyond the header (a stray comma in a spreadsheet)
+
+
+@dataclass(frozen=True, slots=True)
+class ManifestTable:
+    header: tuple[str, ...]
+    rows: tuple[ManifestRow, ...]
+
+
+def read_manifest(path: Path) -> ManifestTable:
+    """Parse ``path`` (UTF-8, an Excel BOM is fine). Raises OSError/UnicodeError/csv.Error."""
+    header: tuple[str, ...] = ()
+    rows: list[ManifestRow] = []
+    with path.open(encoding="utf-8-sig", newline="") as handle:
+        reader = csv.reader(handle, strict=True)
+        previous_end = 0
+        for record in reader:
+            start = previous_end + 1
+            previous_end = reader.line_num
+            if not header:
+                header = tuple(cell.strip().lower() for cell in record)
+            elif any(cell.strip() for cell in record):  # skip the ",,,," rows of spreadsheets
+                rows.append(_row(header, record, start))
+    return ManifestTable(header, tuple(rows))
+
+
+def _row(header: tuple[str, ...], record: list[str], line: int) -> ManifestRow:
+    cells = {name: value.strip() for name, value in zip(header, record, strict=False)}
+    return ManifestRow(line, cells, max(0, len(record) - len(header)))
+
+
+def write_manifest(path: Path, rows: Iterable[Mapping[str, str | None]]) -> None:
+    """Write rows (dicts keyed by column; missing or None cells are empty) in column order."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", encoding="utf-8", newline="") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(MANIFEST_COLUMNS)
+        for row in rows:
+            writer.writerow([row.get(column) or "" for column in MANIFEST_COLUMNS])
