@@ -11,7 +11,7 @@ from chameleons.prompts.loader import (
     load_catalogue,
     load_catalogues,
 )
-from chameleons.prompts.manifest import MANIFEST_COLUMNS, write_manifest
+from chameleons.prompts.manifest import MANIFEST_COLUMNS, manifest_text, write_manifest
 from chameleons.prompts.model import (
     ActorProfile,
     Prompt,
@@ -36,6 +36,7 @@ __all__ = [
     "item_ref",
     "load_catalogue",
     "load_catalogues",
+    "manifest_text",
     "pick_variant",
     "write_manifest",
 ]

@@ -7,6 +7,7 @@ lines) so every problem can be reported as ``file:line``.
 from __future__ import annotations
 
 import csv
+import io
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,11 +57,17 @@ def _row(header: tuple[str, ...], record: list[str], line: int) -> ManifestRow:
     return ManifestRow(line, cells, max(0, len(record) - len(header)))
 
 
+def manifest_text(rows: Iterable[Mapping[str, str | None]]) -> str:
+    """The CSV text of a manifest: header, then rows in column order (None/missing = empty)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(MANIFEST_COLUMNS)
+    for row in rows:
+        writer.writerow([row.get(column) or "" for column in MANIFEST_COLUMNS])
+    return buffer.getvalue()
+
+
 def write_manifest(path: Path, rows: Iterable[Mapping[str, str | None]]) -> None:
-    """Write rows (dicts keyed by column; missing or None cells are empty) in column order."""
+    """Write ``manifest_text(rows)`` to ``path`` (UTF-8), creating the actor folder."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", encoding="utf-8", newline="") as handle:
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(MANIFEST_COLUMNS)
-        for row in rows:
-            writer.writerow([row.get(column) or "" for column in MANIFEST_COLUMNS])
+    path.write_text(manifest_text(rows), encoding="utf-8", newline="")

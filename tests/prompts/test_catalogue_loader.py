@@ -257,3 +257,17 @@ def test_write_manifest_round_trips(tmp_path: Path) -> None:
         ("q", 'Say "bye", then go.', None),
         ("r", "Hi,\nthere.", "Iris"),
     ]
+
+
+def test_command_line_check_prints_problems_and_exit_code(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from chameleons.prompts.__main__ import main
+
+    write_actor(tmp_path, GOOD_ROWS, actor="m1")
+    assert main([str(tmp_path)]) == 0
+    assert "m1: 8 prompts, 0 with audio" in capsys.readouterr().out
+
+    write_actor(tmp_path, ["a,intro,,,,,,,,"], actor="m2")
+    assert main([str(tmp_path / "m2")]) == 1
+    assert capsys.readouterr().err.strip() == f"{tmp_path / 'm2' / 'manifest.csv'}:2: empty text"
