@@ -151,3 +151,15 @@ def test_committed_manifests_match_the_generator() -> None:
         assert _content_columns(committed) == _content_columns(text), (
             f"{path} is stale: run .venv/bin/python scripts/write_demo_catalogue.py"
         )
+
+
+def test_demo_catalogue_fits_the_default_study() -> None:
+    from chameleons.experiment.study import load_default_study
+
+    study = load_default_study()
+    known_items = {task.id: {item.id for item in task.items} for task in study.tasks}
+
+    catalogues = load_catalogues(PROMPTS, known_items, robot_names=study.robot_names)
+
+    assert known_items == KNOWN_ITEMS
+    assert set(catalogues) == {actor.id for actor in study.actors}
