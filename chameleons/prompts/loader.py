@@ -6,7 +6,6 @@ lab fixes its spreadsheet in one pass instead of one error per run.
 
 from __future__ import annotations
 
-import csv
 from collections.abc import Collection, Mapping
 from pathlib import Path
 
@@ -15,6 +14,7 @@ from chameleons.prompts.manifest import (
     ACTOR_PROFILE_NAME,
     MANIFEST_NAME,
     REQUIRED_COLUMNS,
+    ManifestSyntaxError,
     read_manifest,
 )
 from chameleons.prompts.model import Prompt
@@ -99,7 +99,9 @@ def _load_prompts(
         table = read_manifest(path)
     except FileNotFoundError:
         return [], [f"{path}: manifest not found"]
-    except (OSError, UnicodeError, csv.Error) as error:
+    except ManifestSyntaxError as error:
+        return [], [f"{path}:{error.line}: {error}"]
+    except (OSError, UnicodeError) as error:
         return [], [f"{path}: cannot read manifest: {error}"]
     missing = [column for column in REQUIRED_COLUMNS if column not in table.header]
     if missing:

@@ -35,15 +35,33 @@ class ManifestTable:
     rows: tuple[ManifestRow, ...]
 
 
+class ManifestSyntaxError(ValueError):
+    """Broken CSV quoting; ``line`` is where the broken record starts."""
+
+    def __init__(self, line: int, message: str) -> None:
+        super().__init__(message)
+        self.line = line
+
+
 def read_manifest(path: Path) -> ManifestTable:
-    """Parse ``path`` (UTF-8, an Excel BOM is fine). Raises OSError/UnicodeError/csv.Error."""
+    """Parse ``path`` (UTF-8, an Excel BOM is fine).
+
+    Raises OSError, UnicodeError, or ManifestSyntaxError for broken quoting.
+    """
     header: tuple[str, ...] = ()
     rows: list[ManifestRow] = []
     with path.open(encoding="utf-8-sig", newline="") as handle:
         reader = csv.reader(handle, strict=True)
         previous_end = 0
-        for record in reader:
+        records = iter(reader)
+        while True:
             start = previous_end + 1
+            try:
+                record = next(records)
+            except StopIteration:
+                break
+            except csv.Error as error:
+                raise ManifestSyntaxError(start, f"broken quoting: {error}") from error
             previous_end = reader.line_num
             if not header:
                 header = tuple(cell.strip().lower() for cell in record)

@@ -169,6 +169,28 @@ def test_each_broken_row_is_reported_at_its_line(
     assert expected in problems[0]
 
 
+@pytest.mark.parametrize(
+    ("content", "expected"),
+    [
+        # The unclosed quote opened on line 2 swallows the rest of the file.
+        (b'a,intro,,"Hello there,,,,,,\nb,intro,,Bye,,,,,,\n', ":2: broken quoting"),
+        (b'a,intro,,Hi,,,,,,\nb,intro,,"Hi" you,,,,,,\n', ":3: broken quoting"),
+        (b"a,intro,,\xff\xfe,,,,,,\n", ": cannot read manifest: 'utf-8' codec"),
+    ],
+)
+def test_unreadable_manifest_is_reported_not_raised(
+    tmp_path: Path, content: bytes, expected: str
+) -> None:
+    actor_dir = tmp_path / "m1"
+    actor_dir.mkdir()
+    (actor_dir / "manifest.csv").write_bytes(HEADER.encode() + b"\n" + content)
+
+    problems = problems_of(actor_dir)
+
+    assert len(problems) == 1
+    assert problems[0].startswith(f"{actor_dir / 'manifest.csv'}{expected}")
+
+
 def test_missing_required_column_is_reported_on_the_header_line(tmp_path: Path) -> None:
     header = "id,group,text,task,item"
     actor_dir = write_actor(tmp_path, ["a,,Hello,,"], header=header)
