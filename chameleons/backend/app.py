@@ -20,6 +20,7 @@ from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
 from chameleons.settings import Settings
 
@@ -66,6 +67,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return RedirectResponse(f"/login?next={exc.next_path}", status_code=303)
 
     app.mount("/static", StaticFiles(directory=FRONTEND_DIR / "static"), name="static")
-    for router in (health_endpoints.router, auth_pages.router, auth_endpoints.router):
+    for router in (
+        health_endpoints.router,
+        auth_pages.router,
+        auth_endpoints.router,
+        export_endpoints.router,
+    ):
         app.include_router(router)
     return app

@@ -1,0 +1,1 @@
+"""Tidy exports of a study's data (CSV always; Parquet, Excel, JSON when asked)."""

@@ -1,0 +1,302 @@
+"""The export's tables and columns: one definition feeds the writers and the codebook.
+
+Column names are stable API (R and pandas scripts use them): add columns, never rename.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from chameleons.experiment.model import Study as StudySpec
+
+ColumnType = Literal["string", "integer", "number", "boolean", "datetime"]
+LIST_SEPARATOR = ";"
+TIME_NOTE = "ISO 8601 in UTC with millisecond precision, e.g. 2026-03-02T09:00:00.000+00:00"
+
+
+@dataclass(frozen=True)
+class Column:
+    name: str
+    type: ColumnType
+    description: str
+    values: str = ""
+    identifying: bool = False
+
+
+@dataclass(frozen=True)
+class TableSpec:
+    name: str
+    description: str
+    columns: tuple[Column, ...]
+
+    @property
+    def column_names(self) -> list[str]:
+        return [column.name for column in self.columns]
+
+
+def _participant() -> Column:
+    return Column("participant", "string", "Pseudonymous participant code (no names are stored).")
+
+
+def _session() -> Column:
+    return Column("session", "integer", "Session id (a participant normally has one session).")
+
+
+def _position() -> Column:
+    return Column("position", "integer", "Interaction position in the session.", "1..3")
+
+
+def _condition(spec: StudySpec, what: str = "Condition actually run.") -> Column:
+    return Column("condition", "string", what, ", ".join(spec.condition_ids))
+
+
+def _time(name: str, what: str) -> Column:
+    return Column(name, "datetime", f"{what} ({TIME_NOTE}).")
+
+
+def _list(name: str, what: str) -> Column:
+    return Column(name, "string", f"{what}; item ids joined by '{LIST_SEPARATOR}', first = rank 1.")
+
+
+def participants_table(spec: StudySpec) -> TableSpec:
+    return TableSpec(
+        "participants",
+        "One row per participant, with their (last) session.",
+        (
+            _participant(),
+            Column("plan_row", "integer", "Counterbalancing plan row the participant ran."),
+            Column("status", "string", "Participant status.", "registered, active, complete"),
+            Column("rehearsal", "boolean", "Marked as a staff rehearsal, not a real participant."),
+            _session(),
+            Column("booth", "string", "Booth the session ran in."),
+            Column("session_state", "string", "Session state at export time."),
+            _time("consent_at", "Time consent was recorded"),
+            _time("started_at", "Session start"),
+            _time("completed_at", "Session completion"),
+            Column("duration_s", "number", "Session duration in seconds (start to completion)."),
+            Column(
+                "study_config_hash",
+                "string",
+                "sha256 of the study config the data was collected under.",
+            ),
+        ),
+    )
+
+
+def interactions_table(spec: StudySpec) -> TableSpec:
+    return TableSpec(
+        "interactions",
+        "One row per interaction (three per session).",
+        (
+            _participant(),
+            _session(),
+            _position(),
+            Column(
+                "planned_condition",
+                "string",
+                "Condition the plan prescribed.",
+                ", ".join(spec.condition_ids),
+            ),
+            _condition(spec),
+            Column("deviation", "boolean", "The condition run differs from the planned one."),
+            Column(
+                "actor",
+                "string",
+                "Voice actor (robot personality).",
+                ", ".join(a.id for a in spec.actors),
+            ),
+            Column("actor_gender", "string", "The actor's gender.", "female, male"),
+            Column("robot_name", "string", "The robot's name in this interaction."),
+            Column("face", "string", "Robot face.", ", ".join(f.id for f in spec.faces)),
+            Column("task", "string", "Survival task.", ", ".join(t.id for t in spec.tasks)),
+            Column("item_set", "string", "Item set of the task.", ", ".join(spec.item_sets.sets)),
+            _list("presented_order", "Order the items were shown in"),
+            _list("initial_ranking", "The participant's ranking before the negotiation"),
+            _list("final_ranking", "The ranking after the robot's suggestions"),
+            Column(
+                "initial_error",
+                "integer",
+                "Error score of the initial ranking: sum of |rank - expert rank| over the"
+                " interaction's items, ranks within the item set (0 = expert order).",
+            ),
+            Column(
+                "final_error", "integer", "Error score of the final ranking (as initial_error)."
+            ),
+            Column("accepted", "integer", "Suggestions the participant accepted.", "0..3"),
+            _time("started_at", "Interaction start"),
+            _time("ended_at", "Interaction end"),
+            Column("duration_s", "number", "Interaction duration in seconds."),
+        ),
+    )
+
+
+def suggestions_table(spec: StudySpec) -> TableSpec:
+    return TableSpec(
+        "suggestions",
+        "One row per robot suggestion (three per interaction).",
+        (
+            _participant(),
+            _session(),
+            _position(),
+            _condition(spec),
+            Column("index", "integer", "Suggestion number within the interaction.", "1..3"),
+            Column("item", "string", "Item the robot proposed to move."),
+            Column("from_rank", "integer", "The item's rank when proposed (1 = most important)."),
+            Column("to_rank", "integer", "Rank the robot proposed (always above from_rank)."),
+            Column(
+                "kind",
+                "string",
+                "optimal: moves toward the expert order; random: the fallback when"
+                " nothing useful was left.",
+                "optimal, random",
+            ),
+            Column("accepted", "boolean", "The participant's decision; empty if never decided."),
+            _time("proposed_at", "When the suggestion was made"),
+            _time("decided_at", "When the decision was recorded"),
+            Column("decision_s", "number", "Seconds from proposal to decision."),
+        ),
+    )
+
+
+def questionnaire_table(spec: StudySpec) -> TableSpec:
+    return TableSpec(
+        "questionnaire",
+        "One row per questionnaire answer (long format).",
+        (
+            _participant(),
+            _session(),
+            Column(
+                "position",
+                "integer",
+                "Interaction the answer is about; 0 = the final questionnaire.",
+                "0..3",
+            ),
+            Column(
+                "condition",
+                "string",
+                "Condition of that interaction; empty for the final questionnaire.",
+                ", ".join(spec.condition_ids),
+            ),
+            Column(
+                "questionnaire",
+                "string",
+                "Questionnaire id.",
+                ", ".join(q.id for q in spec.questionnaires),
+            ),
+            Column("version", "string", "Wording version the answer was given to."),
+            Column("item", "string", "Item id within the questionnaire."),
+            Column(
+                "reverse_keyed",
+                "boolean",
+                "The item is reverse-keyed (scored as points + 1 - value).",
+            ),
+            Column(
+                "value",
+                "integer",
+                "Raw answer on the questionnaire's scale (1 = left anchor / strongly"
+                " disagree); empty for open questions.",
+                "1..7",
+            ),
+            Column(
+                "scored_value",
+                "integer",
+                "The value as it enters the score (reverse-keyed items reversed).",
+            ),
+            Column(
+                "text",
+                "string",
+                "Open answer. POSSIBLY IDENTIFYING: free text may name or describe the"
+                " participant; review before sharing.",
+                identifying=True,
+            ),
+            _time("answered_at", "When the answer was stored"),
+        ),
+    )
+
+
+def scores_table(spec: StudySpec) -> TableSpec:
+    scored = [q for q in spec.questionnaires_for("interaction") if q.scored]
+    return TableSpec(
+        "scores",
+        "One row per participant x condition: the analysed measures (input to the Friedman tests).",
+        (
+            _participant(),
+            _condition(spec),
+            _position(),
+            Column(
+                "accepted", "integer", "Accepted robot suggestions in that interaction.", "0..3"
+            ),
+            *(
+                Column(
+                    q.id,
+                    "number",
+                    f"{q.title} score: mean of its {len(q.numeric_items)} items, reverse-keyed"
+                    " items reversed; empty if any item is missing.",
+                    f"1..{q.points}",
+                )
+                for q in scored
+            ),
+        ),
+    )
+
+
+def events_table(spec: StudySpec) -> TableSpec:
+    return TableSpec(
+        "events",
+        "One row per timeline event of the counted sessions, in time order.",
+        (
+            Column("event", "integer", "Event id (append-only, increasing)."),
+            _participant(),
+            _session(),
+            Column("position", "integer", "Interaction position; empty for session-level events."),
+            Column("kind", "string", "What happened (e.g. interaction_started, prompt_played)."),
+            Column("source", "string", "Who reported it (wizard, phone, worker, server, ...)."),
+            _time("server_time", "When the server recorded it"),
+            Column(
+                "worker_time",
+                "number",
+                "The worker's monotonic clock in seconds, where the worker reported it.",
+            ),
+            Column(
+                "payload",
+                "string",
+                "Event details as a JSON object. POSSIBLY IDENTIFYING when it carries"
+                " submitted text.",
+                identifying=True,
+            ),
+        ),
+    )
+
+
+TABLE_BUILDERS = (
+    participants_table,
+    interactions_table,
+    suggestions_table,
+    questionnaire_table,
+    scores_table,
+    events_table,
+)
+TABLE_NAMES = ("participants", "interactions", "suggestions", "questionnaire", "scores", "events")
+
+
+def table_specs(spec: StudySpec) -> list[TableSpec]:
+    return [build(spec) for build in TABLE_BUILDERS]
+
+
+CODEBOOK_COLUMNS = ("table", "column", "type", "description", "values", "possibly_identifying")
+
+
+def codebook_rows(specs: list[TableSpec]) -> list[dict[str, object]]:
+    return [
+        {
+            "table": table.name,
+            "column": column.name,
+            "type": column.type,
+            "description": column.description,
+            "values": column.values,
+            "possibly_identifying": column.identifying,
+        }
+        for table in specs
+        for column in table.columns
+    ]

@@ -1,0 +1,206 @@
+"""Row generators for the export tables, read from the database in batches.
+
+Each generator yields plain dicts keyed by the table's column names (see
+:mod:`columns`), already in export shape: ISO times, lists joined, booleans as bools.
+Rehearsals are filtered in SQL, so every table agrees on which sessions count.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session as DbSession
+
+from chameleons.backend.export.columns import LIST_SEPARATOR
+from chameleons.backend.export.queries import (
+    BATCH,
+    accepted_counts,
+    counted_interactions,
+    joined,
+    session_filter,
+)
+from chameleons.backend.export.scoring import error_score
+from chameleons.backend.export.selection import as_utc, iso
+from chameleons.backend.models import (
+    Event,
+    Interaction,
+    Participant,
+    PlanRow,
+    QuestionnaireResponse,
+    Session,
+    Study,
+    Suggestion,
+)
+from chameleons.experiment.model import Study as StudySpec
+
+Row = dict[str, Any]
+
+
+def _seconds(start: datetime | None, end: datetime | None) -> float | None:
+    first, last = as_utc(start), as_utc(end)
+    if first is None or last is None:
+        return None
+    return round((last - first).total_seconds(), 3)
+
+
+def _joined_list(items: list[Any] | None) -> str | None:
+    return None if items is None else LIST_SEPARATOR.join(str(item) for item in items)
+
+
+def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Iterator[Row]:
+    query = (
+        select(Participant, Session, PlanRow.row_number)
+        .join(Session, Session.participant_id == Participant.id)
+        .join(PlanRow, PlanRow.id == Session.plan_row_id)
+        .where(*session_filter(study.id, include_rehearsal))
+        .order_by(Participant.code, Session.id)
+    )
+    last: dict[str, Row] = {}  # a participant's last session wins
+    for participant, session, row_number in db.execute(query):
+        last[participant.code] = {
+            "participant": participant.code,
+            "plan_row": row_number,
+            "status": participant.status,
+            "rehearsal": participant.is_rehearsal or session.is_rehearsal,
+            "session": session.id,
+            "booth": session.booth,
+            "session_state": session.state,
+            "consent_at": iso(participant.consent_at),
+            "started_at": iso(session.started_at),
+            "completed_at": iso(session.completed_at),
+            "duration_s": _seconds(session.started_at, session.completed_at),
+            "study_config_hash": study.config_hash,
+        }
+    yield from last.values()
+
+
+def interaction_rows(
+    db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
+) -> Iterator[Row]:
+    interactions = counted_interactions(db, study.id, include_rehearsal)
+    accepted = accepted_counts(db, [i.id for i, _ in interactions])
+    actors = {actor.id: actor for actor in spec.actors}
+    for interaction, code in interactions:
+        actor = actors.get(interaction.actor)
+        yield {
+            "participant": code,
+            "session": interaction.session_id,
+            "position": interaction.position,
+            "planned_condition": interaction.planned_condition,
+            "condition": interaction.condition,
+            "deviation": interaction.condition != interaction.planned_condition,
+            "actor": interaction.actor,
+            "actor_gender": actor.gender if actor else None,
+            "robot_name": interaction.robot_name,
+            "face": interaction.face,
+            "task": interaction.task,
+            "item_set": interaction.item_set,
+            "presented_order": _joined_list(interaction.presented_order),
+            "initial_ranking": _joined_list(interaction.initial_ranking),
+            "final_ranking": _joined_list(interaction.final_ranking),
+            "initial_error": error_score(spec, interaction.task, interaction.initial_ranking),
+            "final_error": error_score(spec, interaction.task, interaction.final_ranking),
+            "accepted": accepted[interaction.id],
+            "started_at": iso(interaction.started_at),
+            "ended_at": iso(interaction.ended_at),
+            "duration_s": _seconds(interaction.started_at, interaction.ended_at),
+        }
+
+
+def suggestion_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Iterator[Row]:
+    query = (
+        select(Suggestion, Interaction.session_id, Interaction.position, Interaction.condition)
+        .add_columns(Participant.code)
+        .join(Interaction, Interaction.id == Suggestion.interaction_id)
+        .join(Session, Session.id == Interaction.session_id)
+    )
+    query = joined(query, study.id, include_rehearsal).order_by(
+        Participant.code, Session.id, Interaction.position, Suggestion.index
+    )
+    for suggestion, session_id, position, condition, code in db.execute(
+        query.execution_options(yield_per=BATCH)
+    ):
+        yield {
+            "participant": code,
+            "session": session_id,
+            "position": position,
+            "condition": condition,
+            "index": suggestion.index,
+            "item": suggestion.item,
+            "from_rank": suggestion.from_rank,
+            "to_rank": suggestion.to_rank,
+            "kind": suggestion.kind,
+            "accepted": suggestion.accepted,
+            "proposed_at": iso(suggestion.proposed_at),
+            "decided_at": iso(suggestion.decided_at),
+            "decision_s": _seconds(suggestion.proposed_at, suggestion.decided_at),
+        }
+
+
+def _reverse_keyed(spec: StudySpec) -> dict[tuple[str, str], int]:
+    """(questionnaire, item) -> scale points, for reverse-keyed items."""
+    return {
+        (q.id, item.id): q.points for q in spec.questionnaires for item in q.items if item.reverse
+    }
+
+
+def questionnaire_rows(
+    db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
+) -> Iterator[Row]:
+    reverse = _reverse_keyed(spec)
+    query = (
+        select(QuestionnaireResponse, Interaction.condition, Participant.code)
+        .join(Session, Session.id == QuestionnaireResponse.session_id)
+        .outerjoin(Interaction, Interaction.id == QuestionnaireResponse.interaction_id)
+    )
+    query = joined(query, study.id, include_rehearsal).order_by(
+        Participant.code,
+        Session.id,
+        QuestionnaireResponse.position == 0,  # the final questionnaire after the interactions
+        QuestionnaireResponse.position,
+        QuestionnaireResponse.id,
+    )
+    for answer, condition, code in db.execute(query.execution_options(yield_per=BATCH)):
+        points = reverse.get((answer.questionnaire, answer.item))
+        scored = answer.value
+        if scored is not None and points is not None:
+            scored = points + 1 - scored
+        yield {
+            "participant": code,
+            "session": answer.session_id,
+            "position": answer.position,
+            "condition": condition,
+            "questionnaire": answer.questionnaire,
+            "version": answer.version,
+            "item": answer.item,
+            "reverse_keyed": points is not None,
+            "value": answer.value,
+            "scored_value": scored,
+            "text": answer.text,
+            "answered_at": iso(answer.created_at),
+        }
+
+
+def event_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Iterator[Row]:
+    query = (
+        select(Event, Participant.code, Interaction.position)
+        .join(Session, Session.id == Event.session_id)
+        .outerjoin(Interaction, Interaction.id == Event.interaction_id)
+    )
+    query = joined(query, study.id, include_rehearsal).order_by(Event.server_time, Event.id)
+    for event, code, position in db.execute(query.execution_options(yield_per=BATCH)):
+        yield {
+            "event": event.id,
+            "participant": code,
+            "session": event.session_id,
+            "position": position,
+            "kind": event.kind,
+            "source": event.source,
+            "server_time": iso(event.server_time),
+            "worker_time": event.worker_time,
+            "payload": json.dumps(event.payload, sort_keys=True, ensure_ascii=False),
+        }

@@ -1,0 +1,89 @@
+"""Per-interaction measures: accepted suggestions, questionnaire scores, ranking error.
+
+The scores table (one row per participant x condition) is what the analysis reads, from
+the database as well as from an exported ``scores.csv``; both go through
+:func:`score_rows`, so the two paths cannot disagree.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session as DbSession
+
+from chameleons.backend.export.queries import accepted_counts, counted_interactions
+from chameleons.backend.models import QuestionnaireResponse, Study
+from chameleons.experiment.model import Questionnaire
+from chameleons.experiment.model import Study as StudySpec
+
+
+def error_score(spec: StudySpec, task: str, ranking: Sequence[str] | None) -> int | None:
+    """Sum of |rank - expert rank| over a ranking's items, expert ranks taken within the
+    ranked items (so a 5-item scenario scores 0..12, like the 15-item score scores 0..112)."""
+    if not ranking:
+        return None
+    try:
+        expert = spec.expert_order(task, list(ranking))
+    except KeyError:
+        return None
+    return sum(abs(rank - expert.index(item)) for rank, item in enumerate(ranking))
+
+
+def questionnaire_score(questionnaire: Questionnaire, values: dict[str, int]) -> float | None:
+    """Mean of the numeric items, reverse-keyed ones reversed; None unless all are answered."""
+    scored = []
+    for item in questionnaire.numeric_items:
+        value = values.get(item.id)
+        if value is None:
+            return None
+        scored.append(questionnaire.points + 1 - value if item.reverse else value)
+    return sum(scored) / len(scored) if scored else None
+
+
+def _answers_by_interaction(
+    db: DbSession, interaction_ids: list[int]
+) -> dict[int, dict[str, dict[str, int]]]:
+    """interaction id -> questionnaire id -> item id -> raw value."""
+    answers: dict[int, dict[str, dict[str, int]]] = defaultdict(lambda: defaultdict(dict))
+    if not interaction_ids:
+        return answers
+    query = select(
+        QuestionnaireResponse.interaction_id,
+        QuestionnaireResponse.questionnaire,
+        QuestionnaireResponse.item,
+        QuestionnaireResponse.value,
+    ).where(
+        QuestionnaireResponse.interaction_id.in_(interaction_ids),
+        QuestionnaireResponse.value.is_not(None),
+    )
+    for interaction_id, questionnaire, item, value in db.execute(query):
+        answers[interaction_id][questionnaire][item] = value
+    return answers
+
+
+def score_rows(
+    db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
+) -> list[dict[str, Any]]:
+    """One row per counted interaction (= participant x condition when the plan was kept)."""
+    interactions = counted_interactions(db, study.id, include_rehearsal)
+    ids = [interaction.id for interaction, _ in interactions]
+    accepted = accepted_counts(db, ids)
+    answers = _answers_by_interaction(db, ids)
+    scored = [q for q in spec.questionnaires_for("interaction") if q.scored]
+    rows = []
+    for interaction, code in interactions:
+        row: dict[str, Any] = {
+            "participant": code,
+            "condition": interaction.condition,
+            "position": interaction.position,
+            "accepted": accepted[interaction.id],
+        }
+        for questionnaire in scored:
+            row[questionnaire.id] = questionnaire_score(
+                questionnaire, answers[interaction.id][questionnaire.id]
+            )
+        rows.append(row)
+    return rows

@@ -1,0 +1,57 @@
+"""`chameleons export`: the study's tidy tables, codebook and config into a directory."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+from sqlalchemy.exc import SQLAlchemyError
+
+from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.export.selection import StudyNotFoundError
+from chameleons.backend.export.service import (
+    FORMATS,
+    ExportFormat,
+    ExportRequest,
+    export_to_directory,
+)
+from chameleons.cli.common import load_settings
+
+
+@click.command("export")
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Directory to write into (created if missing; files there are overwritten).",
+)
+@click.option(
+    "--format",
+    "formats",
+    type=click.Choice(FORMATS),
+    multiple=True,
+    help="Extra format besides CSV (CSV is always written); repeat for several.",
+)
+@click.option("--include-rehearsal", is_flag=True, help="Include sessions marked as rehearsals.")
+@click.option("--study", "study_id", type=int, help="Study id (default: the newest active).")
+def export(
+    out: Path, formats: tuple[ExportFormat, ...], include_rehearsal: bool, study_id: int | None
+) -> None:
+    """Export participants, interactions, suggestions, questionnaire, scores and events."""
+    settings = load_settings()
+    engine = build_engine(settings.effective_database_url)
+    request = ExportRequest(
+        study_id=study_id, formats=("csv", *formats), include_rehearsal=include_rehearsal
+    )
+    try:
+        with build_sessionmaker(engine)() as db:
+            plan = export_to_directory(db, request, out)
+    except StudyNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    except SQLAlchemyError as exc:
+        raise click.ClickException(f"could not read the database: {exc}") from exc
+    finally:
+        engine.dispose()
+    counts = ", ".join(f"{name} {count[0]}" for name, count in plan.row_counts.items())
+    click.echo(f"exported study {plan.study.id} ({plan.study.name}) to {out}: {counts} rows")
