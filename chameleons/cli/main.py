@@ -5,7 +5,14 @@ from __future__ import annotations
 import click
 
 from chameleons import __version__
-from chameleons.cli import db_commands, demo_command, plan_command, serve_command, user_commands
+from chameleons.cli import (
+    db_commands,
+    demo_command,
+    export_command,
+    plan_command,
+    serve_command,
+    user_commands,
+)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -18,6 +25,7 @@ cli.add_command(db_commands.db)
 cli.add_command(demo_command.demo)
 cli.add_command(serve_command.serve)
 cli.add_command(user_commands.user)
+cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
 
 
