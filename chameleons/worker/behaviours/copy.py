@@ -1,0 +1,54 @@
+"""``copy``: the participant's face exactly ``delay`` seconds ago (default 4.000 s).
+
+The output at local time ``t`` is the participant's face interpolated linearly between the
+two captured frames around ``t - delay`` (capture clock mapped to the local clock, see
+:class:`~chameleons.worker.behaviours.history.ClockMapper`). Until ``delay`` has elapsed
+since the first frame it holds the neutral face. The frames live in the context's bounded
+history, so switching to ``copy`` mid-stream starts copying at once.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from chameleons.worker.behaviours.base import (
+    Behaviour,
+    BehaviourContext,
+    BehaviourError,
+    number_param,
+    reject_unknown,
+)
+from chameleons.worker.behaviours.registry import register_behaviour
+from chameleons.worker.frames import F32Array
+
+DEFAULT_DELAY = 4.0
+
+
+@register_behaviour("copy")
+class CopyBehaviour(Behaviour):
+    def __init__(self, context: BehaviourContext, delay: float = DEFAULT_DELAY) -> None:
+        super().__init__(context)
+        if not math.isfinite(delay) or delay < 0:
+            raise BehaviourError(f"delay must be a non-negative number, got {delay}")
+        self.delay = delay
+
+    @classmethod
+    def from_params(cls, context: BehaviourContext, params: Mapping[str, Any]) -> Behaviour:
+        reject_unknown(params, {"delay"})
+        return cls(
+            context,
+            number_param(
+                params, "delay", DEFAULT_DELAY, low=0.0, high=context.history_seconds - 0.5
+            ),
+        )
+
+    def sample(self, t: float, out: F32Array) -> float:
+        used = self.context.history.sample(t - self.delay, out)
+        if math.isnan(used):
+            out[:] = self.context.neutral
+        return used
+
+    def describe(self) -> dict[str, Any]:
+        return {"delay": self.delay}

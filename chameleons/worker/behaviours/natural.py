@@ -1,0 +1,83 @@
+"""``natural``: replays recorded face motion (a Live Link take or another participant's
+recorded stream — the yoked control), looping, starting at a chosen offset.
+
+The loop seam is crossfaded: with period ``P = duration - seam``, the first ``seam``
+seconds of each pass blend the clip's tail into its head, so output is continuous.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from chameleons.worker.behaviours.base import (
+    NO_INPUT,
+    VECTOR_SIZE,
+    Behaviour,
+    BehaviourContext,
+    BehaviourError,
+    number_param,
+    reject_unknown,
+)
+from chameleons.worker.behaviours.clips import MotionClip, load_clip
+from chameleons.worker.behaviours.registry import register_behaviour
+from chameleons.worker.frames import F32Array
+
+MAX_SEAM = 0.5
+
+
+@register_behaviour("natural")
+class NaturalBehaviour(Behaviour):
+    def __init__(
+        self, context: BehaviourContext, clip: MotionClip, *, offset: float = 0.0,
+        loop: bool = True, source: str = "",
+    ) -> None:  # fmt: skip
+        super().__init__(context)
+        if not math.isfinite(offset) or offset < 0:
+            raise BehaviourError(f"offset must be a non-negative number, got {offset}")
+        self.clip = clip
+        self.offset = offset
+        self.loop = loop
+        self.source = source
+        self.seam = min(MAX_SEAM, clip.duration / 4)
+        self._period = clip.duration - self.seam
+        self._start = math.nan
+        self._tail = np.zeros(VECTOR_SIZE, dtype=np.float32)
+
+    @classmethod
+    def from_params(cls, context: BehaviourContext, params: Mapping[str, Any]) -> Behaviour:
+        reject_unknown(params, {"path", "offset", "loop"})
+        path = params.get("path")
+        if not isinstance(path, str) or not path:
+            raise BehaviourError("natural needs a 'path' to a take CSV, Parquet or .npz clip")
+        loop = params.get("loop", True)
+        if not isinstance(loop, bool):
+            raise BehaviourError(f"loop must be true or false, got {loop!r}")
+        offset = number_param(params, "offset", 0.0, low=0.0, high=1e6)
+        return cls(context, load_clip(path), offset=offset, loop=loop, source=path)
+
+    def start(self, t: float) -> None:
+        self._start = t
+
+    def sample(self, t: float, out: F32Array) -> float:
+        if math.isnan(self._start):
+            self._start = t
+        u = t - self._start + self.offset
+        if not self.loop:
+            self.clip.sample(u, out)
+            return NO_INPUT
+        phase = u % self._period
+        self.clip.sample(phase, out)
+        if phase < self.seam:  # blend in the tail of the previous pass
+            self.clip.sample(phase + self._period, self._tail)
+            w = np.float32(phase / self.seam)
+            out *= w
+            out += self._tail * (1 - w)
+        return NO_INPUT
+
+    def describe(self) -> dict[str, Any]:
+        return {"offset": self.offset, "loop": self.loop, "source": self.source,
+                "duration": self.clip.duration}  # fmt: skip

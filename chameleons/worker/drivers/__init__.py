@@ -1,0 +1,57 @@
+"""Robot drivers: ``virtual``, ``furhat``, ``record``, ``null``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from chameleons.worker.drivers.base import (
+    ROBOT_STATE,
+    SPEECH_END,
+    SPEECH_START,
+    Driver,
+    DriverEvent,
+)
+from chameleons.worker.drivers.furhat import DEFAULT_URL, FurhatDriver
+from chameleons.worker.drivers.null import NullDriver
+from chameleons.worker.drivers.record import RecordDriver
+from chameleons.worker.drivers.virtual import Publish, VirtualDriver
+
+DRIVER_NAMES = ("virtual", "furhat", "record", "null")
+
+
+@dataclass(frozen=True, slots=True)
+class DriverOptions:
+    booth: str = "booth-1"
+    robot_url: str = DEFAULT_URL
+    robot_key: str | None = None
+    record_path: Path = Path("data/driver-record.jsonl")
+
+
+def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver:
+    """A driver by name; ``publish`` sends an envelope up the worker's PUB (virtual)."""
+    if name == "virtual":
+        return VirtualDriver(options.booth, publish)
+    if name == "furhat":
+        return FurhatDriver(options.robot_url, key=options.robot_key)
+    if name == "record":
+        return RecordDriver(options.record_path)
+    if name == "null":
+        return NullDriver()
+    raise ValueError(f"unknown driver {name!r} (choose from {', '.join(DRIVER_NAMES)})")
+
+
+__all__ = [
+    "DRIVER_NAMES",
+    "ROBOT_STATE",
+    "SPEECH_END",
+    "SPEECH_START",
+    "Driver",
+    "DriverEvent",
+    "DriverOptions",
+    "FurhatDriver",
+    "NullDriver",
+    "RecordDriver",
+    "VirtualDriver",
+    "create_driver",
+]

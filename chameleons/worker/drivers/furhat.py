@@ -1,0 +1,228 @@
+"""``furhat``: the Furhat Realtime API over WebSocket (protocols.md section 4a).
+
+The renderer's calls only append to bounded deques and wake the sender; one asyncio task in
+the driver's own thread drains them, so a slow or absent robot never blocks a tick. Face
+frames and head poses that pile up are stale: only the newest of each is sent (the rest are
+counted as dropped). The connection is retried with exponential backoff; its state is
+reported as an event (``connecting``, ``connected``, ``disconnected``, ``closed``).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import threading
+from collections import deque
+from typing import Any
+
+import numpy as np
+from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import WebSocketException
+
+from chameleons.worker.drivers.base import SPEECH_END, SPEECH_START, Driver
+from chameleons.worker.frames import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, F32Array, upper_snake
+
+log = logging.getLogger(__name__)
+DEFAULT_URL = "ws://127.0.0.1:9000/v1/events"
+# TONGUE_OUT is not confirmed to exist on the robot's ARKit face: left out unless asked for.
+DEFAULT_EXCLUDED = ("tongueOut",)
+
+
+class FurhatDriver(Driver):
+    name = "furhat"
+
+    def __init__(
+        self, url: str = DEFAULT_URL, *, key: str | None = None, face_id: str | None = None,
+        excluded: tuple[str, ...] = DEFAULT_EXCLUDED, backoff_initial: float = 0.25,
+        backoff_max: float = 8.0, auth_timeout: float = 3.0, queue_size: int = 8,
+    ) -> None:  # fmt: skip
+        super().__init__()
+        self.url, self.key, self.face_id = url, key, face_id
+        self.backoff_initial, self.backoff_max, self.auth_timeout = (
+            backoff_initial, backoff_max, auth_timeout,
+        )  # fmt: skip
+        kept = [n for n in BLENDSHAPE_NAMES if n not in excluded]
+        self._indices = np.array([BLENDSHAPE_INDEX[n] for n in kept])
+        self._names = tuple(upper_snake(n) for n in kept)
+        self._stream: deque[tuple[str, Any]] = deque(maxlen=queue_size)
+        self._control: deque[dict[str, Any]] = deque(maxlen=64)
+        self._prompt: str | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._wake: asyncio.Event | None = None
+        self._stopping = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.dropped = 0
+        self.connects = 0
+
+    # --- called from the renderer's thread -------------------------------------------------
+    def start(self) -> None:
+        self.set_state("connecting")
+        self._thread = threading.Thread(target=self._thread_main, name="furhat-driver", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stopping.set()
+        self._notify()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+        self.set_state("closed")
+
+    def send_face(self, blendshapes: F32Array) -> None:
+        self._queue_stream("face", blendshapes[self._indices])
+        self.faces_sent += 1
+
+    def send_head(self, yaw: float, pitch: float, roll: float) -> None:
+        self._queue_stream("head", (yaw, pitch, roll))
+        self.heads_sent += 1
+
+    def play_audio(self, prompt_id: str, url: str) -> None:
+        if not self.connected:  # nothing will ever answer: end the speech at once
+            self.emit(SPEECH_END, prompt_id=prompt_id, error="robot not connected")
+            return
+        self._prompt = prompt_id
+        self._queue_control({"type": "request.speak.audio", "url": url, "lipsync": False})
+
+    def stop_audio(self) -> None:
+        self._queue_control({"type": "request.speak.stop"})
+
+    def set_face(self, face_id: str) -> None:
+        self.face_id = face_id
+        self._queue_control(self._face_config())
+
+    def stats(self) -> dict[str, Any]:
+        return {**super().stats(), "dropped": self.dropped, "connects": self.connects}
+
+    def _queue_stream(self, kind: str, data: Any) -> None:
+        if len(self._stream) == self._stream.maxlen:
+            self.dropped += 1
+        self._stream.append((kind, data))
+        self._notify()
+
+    def _queue_control(self, message: dict[str, Any]) -> None:
+        self._control.append(message)
+        self._notify()
+
+    def _notify(self) -> None:
+        loop, wake = self._loop, self._wake
+        if loop is not None and wake is not None:
+            with contextlib.suppress(RuntimeError):  # the loop is closing
+                loop.call_soon_threadsafe(wake.set)
+
+    # --- the driver's own thread -----------------------------------------------------------
+    def _thread_main(self) -> None:
+        asyncio.run(self._main())
+
+    async def _main(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        self._wake = asyncio.Event()
+        delay = self.backoff_initial
+        while not self._stopping.is_set():
+            self.set_state("connecting")
+            try:
+                async with connect(self.url, open_timeout=self.auth_timeout) as ws:
+                    await self._handshake(ws)
+                    delay = self.backoff_initial
+                    await self._session(ws)
+            except (OSError, TimeoutError, WebSocketException, ValueError) as exc:
+                log.info("furhat connection to %s failed: %s", self.url, exc)
+            if self._prompt is not None:  # a prompt that was playing will never report its end
+                self.emit(SPEECH_END, prompt_id=self._prompt, error="robot disconnected")
+                self._prompt = None
+            if self._stopping.is_set():
+                break
+            self.set_state("disconnected", retry_in=delay)
+            await self._sleep(delay)
+            delay = min(delay * 2, self.backoff_max)
+
+    async def _sleep(self, seconds: float) -> None:
+        assert self._wake is not None
+        end = asyncio.get_running_loop().time() + seconds
+        while not self._stopping.is_set():
+            remaining = end - asyncio.get_running_loop().time()
+            if remaining <= 0:
+                return
+            self._wake.clear()
+            try:
+                await asyncio.wait_for(self._wake.wait(), remaining)
+            except TimeoutError:
+                return
+
+    def _face_config(self) -> dict[str, Any]:
+        config: dict[str, Any] = {"type": "request.face.config", "visibility": True,
+                                  "microexpressions": False, "blinking": False,
+                                  "head_sway": False}  # fmt: skip
+        if self.face_id:
+            config["face_id"] = self.face_id
+        return config
+
+    async def _handshake(self, ws: ClientConnection) -> None:
+        auth: dict[str, Any] = {"type": "request.auth"}
+        if self.key:
+            auth["key"] = self.key
+        await ws.send(json.dumps(auth))
+        async with asyncio.timeout(self.auth_timeout):
+            while True:
+                reply = _decode(await ws.recv())
+                if reply.get("type") == "response.auth":
+                    break
+        if reply.get("error") or reply.get("success") is False or reply.get("ok") is False:
+            raise ValueError(f"robot refused authentication: {reply}")
+        await ws.send(json.dumps(self._face_config()))
+        self._stream.clear()  # whatever queued while disconnected is stale
+        self._control.clear()
+        self.connects += 1
+        self.set_state("connected")
+
+    async def _session(self, ws: ClientConnection) -> None:
+        sender = asyncio.create_task(self._send_loop(ws))
+        receiver = asyncio.create_task(self._receive_loop(ws))
+        done, pending = await asyncio.wait({sender, receiver}, return_when="FIRST_COMPLETED")
+        for task in pending:
+            task.cancel()
+        await asyncio.gather(*pending, return_exceptions=True)
+        for task in done:
+            task.result()  # re-raise a connection error for the caller
+
+    async def _send_loop(self, ws: ClientConnection) -> None:
+        assert self._wake is not None
+        while not self._stopping.is_set():
+            await self._wake.wait()
+            self._wake.clear()
+            while self._control:
+                await ws.send(json.dumps(self._control.popleft()))
+            latest: dict[str, Any] = {}
+            while self._stream:
+                kind, data = self._stream.popleft()
+                if kind in latest:
+                    self.dropped += 1  # stale: a newer one is queued
+                latest[kind] = data
+            for kind, data in latest.items():
+                await ws.send(self._stream_message(kind, data))
+
+    def _stream_message(self, kind: str, data: Any) -> str:
+        if kind == "head":
+            yaw, pitch, roll = data
+            return json.dumps({"type": "request.face.headpose", "yaw": round(yaw, 3),
+                               "pitch": round(pitch, 3), "roll": round(roll, 3),
+                               "relative": False})  # fmt: skip
+        params = {name: round(float(v), 4) for name, v in zip(self._names, data, strict=True)}
+        return json.dumps({"type": "request.face.params", "params": params})
+
+    async def _receive_loop(self, ws: ClientConnection) -> None:
+        async for raw in ws:
+            kind = _decode(raw).get("type")
+            if kind == "response.speak.start":
+                self.emit(SPEECH_START, prompt_id=self._prompt)
+            elif kind == "response.speak.end":
+                self.emit(SPEECH_END, prompt_id=self._prompt)
+                self._prompt = None
+
+
+def _decode(raw: str | bytes) -> dict[str, Any]:
+    try:
+        message = json.loads(raw)
+    except ValueError:
+        return {}
+    return message if isinstance(message, dict) else {}
