@@ -95,8 +95,11 @@ class FaceFrame:
     """One face sample.
 
     ``capture_time`` is the sender's clock where it gives one, else the receive time;
-    ``receive_time`` is this host's ``time.monotonic()``. Blendshapes are clamped to 0..1;
-    head (yaw, pitch, roll) and eyes (left yaw/pitch/roll, right yaw/pitch/roll) in degrees.
+    ``receive_time`` is this host's ``time.monotonic()``. The ingest receivers map the
+    sender's clock onto this host's monotonic clock (``ingest.stats.ClockAligner``), so a
+    published frame has ``capture_time <= receive_time`` on one clock. Blendshapes are
+    clamped to 0..1; head (yaw, pitch, roll) and eyes (left yaw/pitch/roll, right
+    yaw/pitch/roll) in degrees.
     """
 
     capture_time: float

@@ -1,0 +1,97 @@
+"""Ingest bookkeeping: per-reason drop counters, the input frame rate, the sender's clock."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import Counter, deque
+from collections.abc import Callable
+from typing import Any
+
+
+class CaptureStats:
+    """Thread-safe counters a receiver updates and telemetry reads (:meth:`snapshot`)."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic, window_s: float = 2.0) -> None:
+        self._clock, self._window = clock, window_s
+        self._lock = threading.Lock()
+        self._drops: Counter[str] = Counter()
+        self._times: deque[float] = deque(maxlen=1024)
+        self.frames = 0
+        self.unknown_names = 0
+        self.bad_fields = 0
+        self.connections = 0
+        self.connected = False
+
+    def count_frame(self, receive_time: float) -> None:
+        with self._lock:
+            self.frames += 1
+            self._times.append(receive_time)
+
+    def count_drop(self, reason: str, n: int = 1) -> None:
+        with self._lock:
+            self._drops[reason] += n
+
+    def count_unknown(self, names: int, bad_fields: int) -> None:
+        with self._lock:
+            self.unknown_names += names
+            self.bad_fields += bad_fields
+
+    def set_connected(self, connected: bool) -> None:
+        with self._lock:
+            self.connections += int(connected)
+            self.connected = connected
+
+    @property
+    def drops(self) -> dict[str, int]:
+        with self._lock:
+            return dict(self._drops)
+
+    @property
+    def input_fps(self) -> float:
+        """Frames per second over the last ``window_s`` seconds (0 when the input stopped)."""
+        now = self._clock()
+        with self._lock:
+            recent = [t for t in self._times if now - t <= self._window]
+        if len(recent) < 2 or recent[-1] <= recent[0]:
+            return 0.0
+        return (len(recent) - 1) / (recent[-1] - recent[0])
+
+    def snapshot(self) -> dict[str, Any]:
+        fps, drops = self.input_fps, self.drops
+        with self._lock:
+            return {
+                "frames": self.frames,
+                "input_fps": fps,
+                "drops": drops,
+                "dropped": sum(drops.values()),
+                "unknown_names": self.unknown_names,
+                "bad_fields": self.bad_fields,
+                "connected": self.connected,
+                "connections": self.connections,
+            }
+
+
+class ClockAligner:
+    """Maps the sender's clock onto this host's monotonic clock: ``local = sender + offset``.
+
+    The offset follows the least-delayed frame (the smallest ``receive - sender``), so network
+    jitter stays out of capture times and ``capture_time <= receive_time``. It may creep up
+    by ``max_drift`` seconds per second (clock drift) and restarts when the sender's clock
+    jumps by more than ``jump_s`` (app restart, timecode wrapping at midnight).
+    """
+
+    def __init__(self, jump_s: float = 1.0, max_drift: float = 1e-3) -> None:
+        self.jump_s, self.max_drift = jump_s, max_drift
+        self.offset: float | None = None
+        self._last_receive = 0.0
+
+    def align(self, sender_time: float, receive_time: float) -> float:
+        delay = receive_time - sender_time
+        if self.offset is None or abs(delay - self.offset) > self.jump_s:
+            self.offset = delay
+        else:
+            allowed = self.offset + self.max_drift * max(0.0, receive_time - self._last_receive)
+            self.offset = min(delay, allowed)
+        self._last_receive = receive_time
+        return sender_time + self.offset

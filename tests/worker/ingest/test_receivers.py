@@ -1,0 +1,243 @@
+"""The receivers on real sockets: UDP/TCP on 127.0.0.1 (free ports) -> ZeroMQ SUB."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import socket
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+import pytest
+import zmq
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from chameleons.settings import Settings
+from chameleons.worker.frames import BLENDSHAPE_INDEX, FaceFrame
+from chameleons.worker.ingest.inputs import start_capture
+from chameleons.worker.ingest.receivers import FaceCaptureXReceiver, LiveLinkReceiver
+from chameleons.worker.ingest.transform import FrameTransform
+from chameleons.worker.ingest.wire import (
+    build_facecapturex_frame,
+    build_livelink_packet,
+    livelink_values,
+)
+from tests.worker.face_subscriber import FaceSubscriber
+
+HOST = "127.0.0.1"
+SMILE = BLENDSHAPE_INDEX["mouthSmileLeft"]
+SYNC = 0.875  # smile value of the frames sent only to get the subscription going
+
+
+def smile(value: float = 0.5) -> np.ndarray:
+    shapes = np.zeros(52, dtype=np.float32)
+    shapes[SMILE] = value
+    return shapes
+
+
+def not_sync(frame: FaceFrame) -> bool:
+    return float(frame.blendshapes[SMILE]) != SYNC
+
+
+@contextlib.contextmanager
+def udp_receiver(
+    ctx: zmq.Context[zmq.Socket[bytes]], sub: FaceSubscriber, **kwargs
+) -> Iterator[tuple[LiveLinkReceiver, Callable[[bytes], object]]]:
+    receiver = LiveLinkReceiver(
+        host=HOST, port=0, publish_endpoint=sub.endpoint, context=ctx, **kwargs
+    )
+    receiver.start()
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        yield receiver, lambda data: sock.sendto(data, (HOST, receiver.port))
+    finally:
+        receiver.stop()
+        sock.close()
+
+
+def sync_livelink(sub: FaceSubscriber, send: Callable[[bytes], object]) -> None:
+    packet = build_livelink_packet(livelink_values(smile(SYNC)))
+    sub.receive(1, send=lambda: send(packet))
+
+
+def test_livelink_frames_arrive_normalised_after_garbage(zmq_context, face_sub) -> None:
+    transform = FrameTransform(mirror=True)
+    with udp_receiver(zmq_context, face_sub, transform=transform) as (receiver, send):
+        assert receiver.port > 0
+        sync_livelink(face_sub, send)
+        good = build_livelink_packet(livelink_values(smile(), (30.0, -10.0, 5.0)), frame_number=60)
+        nan = bytearray(good)
+        nan[-4:] = b"\x7f\xc0\x00\x00"
+        for junk in [b"", b"\x06garbage", good[:100], b"\x05" + good[1:], good + b"\0" * 3000]:
+            send(junk)
+        send(bytes(nan))
+        send(good)
+        [frame] = face_sub.receive(1, accept=not_sync)
+        stats = receiver.stats.snapshot()
+    # mirrored: the subject's left smile becomes the right, yaw and roll change sign
+    assert frame.blendshapes[BLENDSHAPE_INDEX["mouthSmileRight"]] == pytest.approx(0.5)
+    assert frame.blendshapes[SMILE] == 0.0
+    np.testing.assert_allclose(frame.head, [-30.0, -10.0, -5.0], atol=1e-4)
+    assert frame.source == "livelink"
+    assert frame.capture_time <= frame.receive_time <= time.monotonic()
+    assert stats["drops"] == {
+        "truncated": 2, "bad_length": 1, "wrong_version": 1, "oversized": 1, "non_finite": 1,
+    }  # fmt: skip
+    assert stats["frames"] >= 2
+
+
+def test_capture_times_keep_the_sender_spacing_despite_arrival_jitter(
+    zmq_context, face_sub
+) -> None:
+    with udp_receiver(zmq_context, face_sub) as (receiver, send):
+        sync_livelink(face_sub, send)
+        values = livelink_values(smile(0.25))
+        # the newest frame arrives first; the 29 before it were held up in the network
+        send(build_livelink_packet(values, frame_number=60_029))
+        for i in range(29):
+            send(build_livelink_packet(values, frame_number=60_000 + i))
+        frames = face_sub.receive(30, accept=not_sync)
+        fps = receiver.stats.input_fps
+    captures = np.array([f.capture_time for f in frames])
+    # the offset may creep by 1 ms per second of clock drift: microseconds here
+    np.testing.assert_allclose(np.diff(captures[1:]), 1 / 60, atol=2e-5)
+    assert captures[0] == pytest.approx(captures[-1] + 1 / 60, abs=2e-5)
+    assert all(f.capture_time <= f.receive_time for f in frames)
+    assert fps > 0
+
+
+def test_receiver_survives_fuzzed_datagrams(zmq_context, face_sub) -> None:
+    with udp_receiver(zmq_context, face_sub) as (receiver, send):
+
+        @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+        @given(st.binary(max_size=700))
+        def fuzz(data: bytes) -> None:
+            send(data)
+
+        fuzz()
+        good = build_livelink_packet(livelink_values(smile()))
+        face_sub.receive(3, send=lambda: send(good), accept=not_sync)
+        assert receiver.running
+        assert receiver.stats.snapshot()["drops"].get("internal_error", 0) == 0
+    assert not receiver.running
+
+
+def test_stop_is_clean_and_frees_the_port(zmq_context, face_sub) -> None:
+    with udp_receiver(zmq_context, face_sub) as (receiver, _):
+        port = receiver.port
+    assert not receiver.running
+    again = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    again.bind((HOST, port))
+    again.close()
+
+
+def test_bind_errors_surface_on_start(zmq_context, face_sub) -> None:
+    taken = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    taken.bind((HOST, 0))
+    try:
+        receiver = LiveLinkReceiver(
+            host=HOST, port=taken.getsockname()[1], publish_endpoint=face_sub.endpoint,
+            context=zmq_context,
+        )  # fmt: skip
+        with pytest.raises(OSError, match="in use"):
+            receiver.start()
+        receiver.stop()  # harmless after a failed start
+    finally:
+        taken.close()
+
+
+# --- FaceCaptureX over TCP ----------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def tcp_receiver(
+    ctx: zmq.Context[zmq.Socket[bytes]], sub: FaceSubscriber, **kwargs
+) -> Iterator[FaceCaptureXReceiver]:
+    receiver = FaceCaptureXReceiver(
+        host=HOST, port=0, publish_endpoint=sub.endpoint, context=ctx, **kwargs
+    )
+    receiver.start()
+    try:
+        yield receiver
+    finally:
+        receiver.stop()
+
+
+@contextlib.contextmanager
+def phone(port: int) -> Iterator[socket.socket]:
+    client = socket.create_connection((HOST, port), timeout=5)
+    try:
+        assert client.recv(1) == b"s"  # the server greets after accept
+        yield client
+    finally:
+        client.close()
+
+
+SYNC_FRAME = build_facecapturex_frame(smile(SYNC))
+
+
+def test_facecapturex_stream_with_garbage_split_reads_and_reconnects(zmq_context, face_sub) -> None:
+    yaws = [0.0, 10.0, -20.0, 30.0]
+    frames = [build_facecapturex_frame(smile(0.25), (y, 0.0, 0.0)) for y in yaws]
+    with tcp_receiver(zmq_context, face_sub) as receiver:
+        with phone(receiver.port) as client:
+            face_sub.receive(1, send=lambda: client.sendall(SYNC_FRAME))
+            # a garbage frame first, then real frames in awkward pieces
+            stream = b"1:2:3~not:a:transform:0.5a" + b"".join(frames)
+            for start in range(0, len(stream), 37):
+                client.sendall(stream[start : start + 37])
+            got = face_sub.receive(4, accept=not_sync)
+            client.sendall(b"z")
+            assert client.recv(1) == b""  # the server ends the connection after z
+        with phone(receiver.port) as second:  # the next phone, in sequence
+            second.sendall(frames[1])
+            got += face_sub.receive(1, accept=not_sync)
+        stats = receiver.stats.snapshot()
+    np.testing.assert_allclose([f.head[0] for f in got], [*yaws, 10.0], atol=1e-3)
+    assert all(f.source == "facecapturex" for f in got)
+    assert stats["drops"] == {"bad_transform": 1}
+    assert stats["connections"] == 2
+
+
+def test_facecapturex_oversized_and_replaced_connection(zmq_context, face_sub) -> None:
+    small = build_facecapturex_frame(smile(0.5), (5.0, 0.0, 0.0))
+    huge = build_facecapturex_frame(smile(0.5), mesh=np.full((3000, 3), 0.125))
+    assert len(huge) > 20_000
+    receiving = tcp_receiver(zmq_context, face_sub, max_frame_bytes=20_000)
+    with receiving as receiver, phone(receiver.port) as stale, phone(receiver.port) as fresh:
+        stale.sendall(small[:50])  # half a frame from a phone that then went silent
+        assert stale.recv(1) == b""  # replaced: the old connection is closed
+        face_sub.receive(1, send=lambda: fresh.sendall(SYNC_FRAME))
+        fresh.sendall(huge + small)
+        [frame] = face_sub.receive(1, accept=not_sync)
+        stats = receiver.stats.snapshot()
+    assert frame.head[0] == pytest.approx(5.0, abs=1e-3)
+    assert stats["drops"] == {"oversized": 1, "replaced_connection": 1}
+    assert stats["connected"] is True
+    assert stats["unknown_names"] == 0
+
+
+def test_start_capture_from_settings_runs_both_inputs(zmq_context, face_sub) -> None:
+    settings = Settings(mirror=False, livelink_rotation_scale="radians")
+    inputs = start_capture(
+        settings, publish_endpoint=face_sub.endpoint, context=zmq_context, host=HOST,
+        livelink_port=0, facecapturex_port=0,
+    )  # fmt: skip
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        packet = build_livelink_packet(livelink_values(smile(), (45.0, 0, 0), rotation_factor=1.0))
+        [udp] = face_sub.receive(1, send=lambda: sock.sendto(packet, (HOST, inputs.livelink.port)))
+        with phone(inputs.facecapturex.port) as client:
+            client.sendall(build_facecapturex_frame(smile(), (-7.0, 0.0, 0.0)))
+            [tcp] = face_sub.receive(1, accept=lambda f: f.source == "facecapturex")
+        telemetry = inputs.telemetry()
+    finally:
+        inputs.stop()
+        sock.close()
+    assert udp.head[0] == pytest.approx(45.0 * 180 / math.pi, rel=1e-5)  # radians setting
+    assert tcp.head[0] == pytest.approx(-7.0, abs=1e-3)
+    assert telemetry["livelink"]["frames"] >= 1
+    assert telemetry["facecapturex"]["frames"] == 1
+    assert telemetry["facecapturex"]["port"] == inputs.facecapturex.port
