@@ -22,6 +22,7 @@ from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
+from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.settings import Settings
 
 FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
@@ -72,6 +73,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         auth_pages.router,
         auth_endpoints.router,
         export_endpoints.router,
+        withdrawal_endpoints.router,
     ):
         app.include_router(router)
     return app

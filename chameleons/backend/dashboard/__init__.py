@@ -1,0 +1,1 @@
+"""The PI dashboard: study progress, live balance, sessions with data-quality flags."""

@@ -1,0 +1,1 @@
+"""Withdrawing a participant (all their data and files deleted) and rehearsal marking."""
