@@ -21,7 +21,14 @@ from chameleons.backend.auth.dependencies import LoginRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.export import endpoints as export_endpoints
+from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.health import endpoints as health_endpoints
+from chameleons.backend.phone import endpoints as phone_endpoints
+from chameleons.backend.phone import pages as phone_pages
+from chameleons.backend.sessions import endpoints as session_endpoints
+from chameleons.backend.sessions import live as session_live
+from chameleons.backend.studies import endpoints as study_endpoints
+from chameleons.backend.studies import pages as study_pages
 from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.settings import Settings
 
@@ -50,6 +57,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.engine = engine
     app.state.sessionmaker = build_sessionmaker(engine)
     app.state.templates = build_templates()
+    app.state.live_hub = LiveHub()
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
     )
@@ -72,6 +80,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         health_endpoints.router,
         auth_pages.router,
         auth_endpoints.router,
+        study_endpoints.router,
+        study_pages.router,
+        session_endpoints.router,
+        session_live.router,
+        phone_endpoints.router,
+        phone_pages.router,
         export_endpoints.router,
         withdrawal_endpoints.router,
     ):

@@ -1,0 +1,108 @@
+"""An in-process publish/subscribe hub for live updates (phone and wizard WebSockets).
+
+Publishing never blocks: it may be called from the event loop or from a worker thread (sync
+endpoints run in a thread pool), and it hands the message to the loop with
+``call_soon_threadsafe``. Each subscriber has a bounded queue; a subscriber that falls
+behind loses its backlog and receives one ``{"type": "resync"}`` instead, so it re-reads the
+state from the database rather than slowing the publisher down.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections import Counter, defaultdict
+from collections.abc import AsyncIterator, Iterator
+from typing import Any
+
+Message = dict[str, Any]
+RESYNC: Message = {"type": "resync"}
+
+
+def session_channel(session_id: int) -> str:
+    return f"session:{session_id}"
+
+
+class Subscription:
+    """One listener's queue. ``get`` waits for the next message."""
+
+    def __init__(self, channel: str, size: int) -> None:
+        self.channel = channel
+        self._queue: asyncio.Queue[Message] = asyncio.Queue(maxsize=size)
+
+    def offer(self, message: Message) -> None:
+        if self._queue.full():
+            # Drop the backlog rather than block the publisher; the listener re-reads state.
+            while not self._queue.empty():
+                self._queue.get_nowait()
+            self._queue.put_nowait(RESYNC)
+            return
+        self._queue.put_nowait(message)
+
+    async def get(self) -> Message:
+        return await self._queue.get()
+
+    def drain(self) -> list[Message]:
+        """Messages already waiting, without waiting for more."""
+        pending: list[Message] = []
+        while not self._queue.empty():
+            pending.append(self._queue.get_nowait())
+        return pending
+
+
+class LiveHub:
+    def __init__(self, queue_size: int = 256) -> None:
+        self._queue_size = queue_size
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._subscribers: dict[str, set[Subscription]] = defaultdict(set)
+        self._present: Counter[str] = Counter()
+
+    def publish(self, channel: str, message: Message) -> None:
+        """Deliver ``message`` to the channel's subscribers; safe from any thread."""
+        loop = self._loop
+        if loop is None or loop.is_closed():
+            return  # nobody has ever subscribed in a running loop
+        try:
+            running: asyncio.AbstractEventLoop | None = asyncio.get_running_loop()
+        except RuntimeError:
+            running = None
+        if running is loop:
+            self._deliver(channel, message)
+            return
+        with contextlib.suppress(RuntimeError):  # the loop closed meanwhile: nobody listens
+            loop.call_soon_threadsafe(self._deliver, channel, message)
+
+    def subscriber_count(self, channel: str) -> int:
+        return len(self._subscribers.get(channel, ()))
+
+    @contextlib.asynccontextmanager
+    async def subscribe(self, channel: str) -> AsyncIterator[Subscription]:
+        self._loop = asyncio.get_running_loop()
+        subscription = Subscription(channel, self._queue_size)
+        self._subscribers[channel].add(subscription)
+        try:
+            yield subscription
+        finally:
+            listeners = self._subscribers.get(channel)
+            if listeners is not None:
+                listeners.discard(subscription)
+                if not listeners:
+                    del self._subscribers[channel]
+
+    @contextlib.contextmanager
+    def presence(self, key: str) -> Iterator[None]:
+        """Count a connection (e.g. the participant's phone) while it lasts."""
+        self._present[key] += 1
+        try:
+            yield
+        finally:
+            self._present[key] -= 1
+            if self._present[key] <= 0:
+                del self._present[key]
+
+    def present(self, key: str) -> int:
+        return self._present.get(key, 0)
+
+    def _deliver(self, channel: str, message: Message) -> None:
+        for subscription in list(self._subscribers.get(channel, ())):
+            subscription.offer(message)

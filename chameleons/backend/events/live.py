@@ -1,0 +1,63 @@
+"""Serving a hub subscription over a WebSocket until the client goes away.
+
+Used by the phone and the wizard WebSockets: changes arrive in batches (everything queued
+at that moment), incoming client messages are answered (``ping`` -> ``pong``), and a
+client that disconnects ends the loop without leaving tasks behind.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from collections.abc import Awaitable, Callable
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from chameleons.backend.events.hub import Message, Subscription
+
+OnChange = Callable[[list[Message]], Awaitable[None]]
+
+
+async def send_json(websocket: WebSocket, message: Message) -> None:
+    await websocket.send_text(json.dumps(message, separators=(",", ":")))
+
+
+async def _answer_incoming(websocket: WebSocket) -> None:
+    """Reply to pings; return when the client disconnects."""
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            text = await websocket.receive_text()
+            try:
+                message = json.loads(text)
+            except ValueError:
+                continue
+            if isinstance(message, dict) and message.get("type") == "ping":
+                await send_json(websocket, {"type": "pong"})
+
+
+async def serve(websocket: WebSocket, subscription: Subscription, on_change: OnChange) -> None:
+    receiver = asyncio.create_task(_answer_incoming(websocket))
+    try:
+        while True:
+            getter = asyncio.create_task(subscription.get())
+            done, _ = await asyncio.wait({receiver, getter}, return_when=asyncio.FIRST_COMPLETED)
+            if receiver in done:
+                getter.cancel()
+                return
+            await on_change([getter.result(), *subscription.drain()])
+    except (WebSocketDisconnect, RuntimeError):
+        return
+    finally:
+        receiver.cancel()
+        with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+            await receiver
+
+
+def same_origin(websocket: WebSocket) -> bool:
+    """Browsers send cookies with cross-site WebSocket handshakes: refuse other origins."""
+    origin = websocket.headers.get("origin")
+    if origin is None:
+        return True  # not a browser (scripts, the rehearsal bot)
+    host = websocket.headers.get("host", "")
+    return origin.split("://", 1)[-1].rstrip("/") == host

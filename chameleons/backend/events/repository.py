@@ -1,0 +1,81 @@
+"""Append-only events. ``record`` flushes the row and queues it for live publishing, which
+happens only after the transaction commits (see :mod:`.unit_of_work`)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from chameleons.backend.models import Event
+from chameleons.backend.models.base import utcnow
+
+OUTBOX_KEY = "live_outbox"
+
+
+def record(
+    db: Session,
+    kind: str,
+    *,
+    source: str,
+    study_id: int | None = None,
+    session_id: int | None = None,
+    interaction_id: int | None = None,
+    payload: dict[str, Any] | None = None,
+    worker_time: float | None = None,
+    client_id: str | None = None,
+    at: datetime | None = None,
+) -> Event:
+    event = Event(
+        kind=kind,
+        source=source,
+        study_id=study_id,
+        session_id=session_id,
+        interaction_id=interaction_id,
+        payload=payload or {},
+        worker_time=worker_time,
+        client_id=client_id,
+        server_time=at or utcnow(),
+    )
+    db.add(event)
+    db.flush()
+    db.info.setdefault(OUTBOX_KEY, []).append(event)
+    return event
+
+
+def find_by_client_id(db: Session, session_id: int, client_id: str) -> Event | None:
+    return db.scalars(
+        select(Event).where(Event.session_id == session_id, Event.client_id == client_id)
+    ).first()
+
+
+def for_session(db: Session, session_id: int, after_id: int = 0, limit: int = 1000) -> list[Event]:
+    query = (
+        select(Event)
+        .where(Event.session_id == session_id, Event.id > after_id)
+        .order_by(Event.id)
+        .limit(limit)
+    )
+    return list(db.scalars(query))
+
+
+def last_id(db: Session, session_id: int) -> int:
+    """The newest event's id: a version number of the session that only grows."""
+    value = db.scalar(select(func.max(Event.id)).where(Event.session_id == session_id))
+    return int(value or 0)
+
+
+def to_dict(event: Event) -> dict[str, Any]:
+    return {
+        "id": event.id,
+        "kind": event.kind,
+        "source": event.source,
+        "session_id": event.session_id,
+        "interaction_id": event.interaction_id,
+        "server_time": event.server_time.isoformat(),
+        "worker_time": event.worker_time,
+        "client_id": event.client_id,
+        "payload": event.payload,
+    }

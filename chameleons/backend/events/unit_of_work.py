@@ -1,0 +1,70 @@
+"""The write transaction of a request, committed before the response is sent.
+
+The shared ``DbSession`` dependency commits after the response has gone out, so a client
+could read stale state right after a "saved" answer (or be told "saved" for a commit that
+then fails). Writes that a client acts on use ``WriteDb`` instead: its exit runs before
+the response. After the commit, the events recorded in the transaction go to the live hub.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import AbstractContextManager, contextmanager
+from typing import Annotated
+
+from fastapi import Depends, Request
+from sqlalchemy import event as sa_event
+from sqlalchemy.orm import Session, sessionmaker
+
+from chameleons.backend.events.hub import LiveHub, session_channel
+from chameleons.backend.events.repository import OUTBOX_KEY, to_dict
+from chameleons.backend.models import Event
+
+
+def get_hub(request: Request) -> LiveHub:
+    hub: LiveHub = request.app.state.live_hub
+    return hub
+
+
+def attach_hub(db: Session, hub: LiveHub) -> None:
+    """Publish the events recorded in ``db`` after each commit; forget them on rollback."""
+
+    def after_commit(session: Session) -> None:
+        published: list[Event] = session.info.pop(OUTBOX_KEY, [])
+        for event in published:
+            if event.session_id is not None:
+                hub.publish(
+                    session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
+                )
+
+    def after_rollback(session: Session) -> None:
+        session.info.pop(OUTBOX_KEY, None)
+
+    sa_event.listen(db, "after_commit", after_commit)
+    sa_event.listen(db, "after_rollback", after_rollback)
+
+
+def write_scope(factory: sessionmaker[Session], hub: LiveHub) -> Iterator[Session]:
+    db = factory()
+    attach_hub(db, hub)
+    try:
+        yield db
+        db.commit()
+    except BaseException:
+        db.rollback()
+        raise
+    finally:
+        db.close()
+
+
+def write_session(factory: sessionmaker[Session], hub: LiveHub) -> AbstractContextManager[Session]:
+    """``with write_session(factory, hub) as db:`` outside requests (WebSockets, scripts)."""
+    return contextmanager(write_scope)(factory, hub)
+
+
+def get_write_db(request: Request) -> Iterator[Session]:
+    yield from write_scope(request.app.state.sessionmaker, get_hub(request))
+
+
+WriteDb = Annotated[Session, Depends(get_write_db, scope="function")]
+Hub = Annotated[LiveHub, Depends(get_hub)]

@@ -1,0 +1,116 @@
+"""The participant's JSON API and WebSocket, addressed by the session's phone token.
+
+No login: the token (256 random bits) is the credential, and it opens only its own session.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from fastapi import APIRouter, WebSocket
+from fastapi.concurrency import run_in_threadpool
+from sqlalchemy.orm import Session, sessionmaker
+
+from chameleons.backend.dependencies import DbSession
+from chameleons.backend.events import live
+from chameleons.backend.events import repository as events
+from chameleons.backend.events.hub import LiveHub, Message, session_channel
+from chameleons.backend.events.unit_of_work import WriteDb, write_session
+from chameleons.backend.phone.schemas import QuestionnaireSubmission, RankingSubmission
+from chameleons.backend.phone.submissions import Receipt, submit
+from chameleons.backend.phone.view import PhoneState, phone_state
+from chameleons.backend.sessions.answers import submit_questionnaire, submit_ranking
+from chameleons.backend.sessions.flow import load_by_token
+from chameleons.backend.sessions.snapshot import phone_presence_key
+from chameleons.backend.studies.errors import GoneError, NotFoundError, http_errors
+
+router = APIRouter(tags=["phone"])
+ENDED_MESSAGE = "This session has ended. Thank you for taking part!"
+
+
+@router.get("/api/phone/{token}/state")
+def get_state(token: str, db: DbSession) -> PhoneState:
+    with http_errors():
+        flow = load_by_token(db, token, lock=False)
+        if flow.session.state == "complete":
+            raise GoneError(ENDED_MESSAGE)
+        return phone_state(flow)
+
+
+@router.post("/api/phone/{token}/ranking")
+def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
+    with http_errors():
+        return submit(
+            db,
+            token,
+            data.client_id,
+            lambda flow: submit_ranking(flow, data.client_id, data.position, data.ranking),
+        )
+
+
+@router.post("/api/phone/{token}/questionnaire")
+def post_questionnaire(token: str, data: QuestionnaireSubmission, db: WriteDb) -> Receipt:
+    answers = {key: value for key, value in data.answers.items() if value is not None}
+    with http_errors():
+        return submit(
+            db,
+            token,
+            data.client_id,
+            lambda flow: submit_questionnaire(
+                flow, data.client_id, data.position, data.questionnaire, answers
+            ),
+        )
+
+
+def _read_state(factory: sessionmaker[Session], hub: LiveHub, token: str) -> tuple[int, Message]:
+    """(session id, message) for the phone; ``ended`` when the session is complete."""
+    with write_session(factory, hub) as db:
+        flow = load_by_token(db, token, lock=False)
+        return flow.session.id, {"type": "state", "state": phone_state(flow)}
+
+
+def _log_connection(factory: sessionmaker[Session], hub: LiveHub, token: str, kind: str) -> None:
+    with write_session(factory, hub) as db:
+        flow = load_by_token(db, token, lock=False)
+        if flow.session.state != "complete":
+            events.record(
+                db,
+                kind,
+                source="participant",
+                study_id=flow.session.study_id,
+                session_id=flow.session.id,
+            )
+
+
+@router.websocket("/ws/p/{token}")
+async def phone_socket(websocket: WebSocket, token: str) -> None:
+    factory = websocket.app.state.sessionmaker
+    hub: LiveHub = websocket.app.state.live_hub
+    try:
+        session_id, first = await run_in_threadpool(_read_state, factory, hub, token)
+    except NotFoundError:
+        await websocket.close(code=4404)
+        return
+    await websocket.accept()
+    async with hub.subscribe(session_channel(session_id)) as subscription:
+        await live.send_json(websocket, first)
+        if first["state"]["view"] == "ended":
+            await websocket.close(code=4410)
+            return
+
+        async def on_change(_messages: list[Message]) -> None:
+            # Whatever was published, the phone gets only its own whitelisted view.
+            _id, message = await run_in_threadpool(_read_state, factory, hub, token)
+            await live.send_json(websocket, message)
+
+        try:
+            with hub.presence(phone_presence_key(session_id)):
+                await run_in_threadpool(_log_connection, factory, hub, token, "phone.connected")
+                await live.serve(websocket, subscription, on_change)
+        finally:
+            # Out of the presence count first, so the wizard's snapshot says "disconnected".
+            with contextlib.suppress(Exception):  # the server may be shutting down
+                await run_in_threadpool(_log_connection, factory, hub, token, "phone.disconnected")
+
+
+__all__ = ["ENDED_MESSAGE", "http_errors", "router"]

@@ -1,0 +1,102 @@
+"""The participant's pages: the session page behind the phone link, and ``/join`` where
+the short code can be typed instead of scanning the QR code."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Form, Request, status
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from sqlalchemy import select
+
+from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.dependencies import DbSession, Templates
+from chameleons.backend.models import Session as SessionRow
+from chameleons.backend.phone.endpoints import ENDED_MESSAGE
+from chameleons.backend.phone.view import phone_state
+from chameleons.backend.sessions.flow import load_by_token
+from chameleons.backend.sessions.service import SHORT_CODE_ALPHABET, SHORT_CODE_LENGTH
+from chameleons.backend.studies.errors import NotFoundError
+
+router = APIRouter(tags=["phone"])
+# Participants' pages must not be cached or indexed, and never sent to other sites.
+PRIVATE_HEADERS = {
+    "Cache-Control": "no-store",
+    "Referrer-Policy": "no-referrer",
+    "X-Robots-Tag": "noindex",
+}
+
+
+def _message(request: Request, templates: Templates, title: str, text: str, code: int) -> Response:
+    return templates.TemplateResponse(
+        request,
+        "phone/message.html",
+        {"title": title, "text": text},
+        status_code=code,
+        headers=PRIVATE_HEADERS,
+    )
+
+
+@router.get("/p/{token}", response_class=HTMLResponse)
+def session_page(token: str, request: Request, db: DbSession, templates: Templates) -> Response:
+    try:
+        flow = load_by_token(db, token, lock=False)
+    except NotFoundError as exc:
+        return _message(
+            request, templates, "Link not valid", exc.message, status.HTTP_404_NOT_FOUND
+        )
+    if flow.session.state == "complete":
+        return _message(request, templates, "Thank you!", ENDED_MESSAGE, status.HTTP_410_GONE)
+    return templates.TemplateResponse(
+        request,
+        "phone/session.html",
+        {"token": token, "state": phone_state(flow)},
+        headers=PRIVATE_HEADERS,
+    )
+
+
+@router.get("/join", response_class=HTMLResponse)
+def join_form(request: Request, templates: Templates) -> Response:
+    return _join(request, templates, None, status.HTTP_200_OK)
+
+
+def _join(request: Request, templates: Templates, error: str | None, code: int) -> Response:
+    return templates.TemplateResponse(
+        request,
+        "phone/join.html",
+        {"error": error, "length": SHORT_CODE_LENGTH},
+        status_code=code,
+        headers=PRIVATE_HEADERS,
+    )
+
+
+def normalise_code(text: str) -> str:
+    cleaned = "".join(ch for ch in text.upper() if ch.isalnum())
+    return cleaned if all(ch in SHORT_CODE_ALPHABET for ch in cleaned) else ""
+
+
+@router.post("/join", response_class=HTMLResponse)
+def join(
+    request: Request,
+    db: DbSession,
+    templates: Templates,
+    code: Annotated[str, Form(max_length=32)] = "",
+) -> Response:
+    throttle: LoginThrottle = request.app.state.login_throttle
+    key = f"join:{request.client.host if request.client else 'unknown'}"
+    wait = throttle.retry_after(key)
+    if wait > 0:
+        text = f"Too many wrong codes. Please wait {int(wait) + 1} seconds and try again."
+        return _join(request, templates, text, status.HTTP_429_TOO_MANY_REQUESTS)
+    cleaned = normalise_code(code)
+    session = (
+        db.scalars(select(SessionRow).where(SessionRow.short_code == cleaned)).first()
+        if len(cleaned) == SHORT_CODE_LENGTH
+        else None
+    )
+    if session is None or session.state == "complete":
+        throttle.record_failure(key)
+        text = "That code does not belong to a running session. Please check it and try again."
+        return _join(request, templates, text, status.HTTP_404_NOT_FOUND)
+    throttle.reset(key)
+    return RedirectResponse(f"/p/{session.phone_token}", status_code=status.HTTP_303_SEE_OTHER)

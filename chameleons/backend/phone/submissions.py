@@ -1,0 +1,52 @@
+"""Idempotent participant submissions.
+
+The stored event with the submission's client id is the receipt: a resubmission (the
+phone retrying after a lost response, a reload, a reconnect) gets that receipt back and
+nothing is stored twice. Two copies racing each other are serialised by the session row
+lock (PostgreSQL) or the single writer (SQLite); the unique (session, client id)
+constraint is the last line of defence, and its violation is answered with the receipt.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from chameleons.backend.events import repository as events
+from chameleons.backend.models import Event
+from chameleons.backend.phone.view import phone_state
+from chameleons.backend.sessions.flow import Flow, load_by_token
+
+Receipt = dict[str, Any]
+
+
+def submit(db: Session, token: str, client_id: str, store: Callable[[Flow], Event]) -> Receipt:
+    flow = load_by_token(db, token)
+    stored = events.find_by_client_id(db, flow.session.id, client_id)
+    if stored is not None:
+        return _receipt(flow, stored, duplicate=True)
+    try:
+        event = store(flow)
+    except IntegrityError:
+        db.rollback()
+        flow = load_by_token(db, token)
+        stored = events.find_by_client_id(db, flow.session.id, client_id)
+        if stored is None:
+            raise
+        return _receipt(flow, stored, duplicate=True)
+    return _receipt(flow, event, duplicate=False)
+
+
+def _receipt(flow: Flow, event: Event, duplicate: bool) -> Receipt:
+    return {
+        "saved": True,
+        "duplicate": duplicate,
+        "client_id": event.client_id,
+        "kind": event.kind,
+        "stored": event.payload,
+        "saved_at": event.server_time.isoformat(),
+        "state": phone_state(flow),
+    }

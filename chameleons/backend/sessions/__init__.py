@@ -1,0 +1,1 @@
+"""The server-enforced session state machine and the wizard's JSON API and live feed."""

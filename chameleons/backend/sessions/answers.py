@@ -1,0 +1,195 @@
+"""The participant's submissions: the ranking and the questionnaires.
+
+Each submission carries a client-generated id. The id is stored with the submission's
+event in the same transaction (unique per session), so a resubmission finds the stored
+result instead of storing twice. Bad input (422) and a submission at the wrong moment
+(409) change nothing.
+"""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+from typing import Any
+
+from sqlalchemy import select
+
+from chameleons.backend.models import Event, Interaction, QuestionnaireResponse
+from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.studies.errors import ConflictError, GoneError, InvalidInputError
+from chameleons.experiment.model import Questionnaire, QuestionnaireItem
+
+MAX_TEXT_LENGTH = 5000
+FINAL_POSITION = 0
+
+
+def submit_ranking(flow: Flow, client_id: str, position: int, ranking: list[str]) -> Event:
+    _check_open(flow)
+    interaction = flow.interaction(position)
+    if interaction.initial_ranking is not None:
+        raise ConflictError("Your ranking for this round was already saved.")
+    if flow.session.state != "running" or interaction.state != "ranking":
+        raise ConflictError("The ranking is not open at the moment.")
+    _check_permutation(ranking, interaction.presented_order)
+    interaction.initial_ranking = list(ranking)
+    interaction.current_ranking = list(ranking)
+    flow.db.flush()
+    return flow.log(
+        "ranking.submitted",
+        source="participant",
+        interaction=interaction,
+        client_id=client_id,
+        payload={"position": position, "ranking": list(ranking)},
+    )
+
+
+def _check_permutation(ranking: list[str], presented: list[Any]) -> None:
+    expected = [str(item) for item in presented]
+    if len(ranking) != len(expected) or sorted(ranking) != sorted(expected):
+        raise InvalidInputError(
+            f"The ranking must contain each of the {len(expected)} items exactly once."
+        )
+
+
+def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
+    return flow.spec.questionnaires_for("final" if position == FINAL_POSITION else "interaction")
+
+
+def answered(flow: Flow, position: int) -> set[str]:
+    """Ids of the questionnaires of this position already stored."""
+    query = select(QuestionnaireResponse.questionnaire).where(
+        QuestionnaireResponse.session_id == flow.session.id,
+        QuestionnaireResponse.position == position,
+    )
+    return set(flow.db.scalars(query))
+
+
+def submit_questionnaire(
+    flow: Flow, client_id: str, position: int, questionnaire_id: str, answers: dict[str, Any]
+) -> Event:
+    _check_open(flow)
+    interaction = _questionnaire_target(flow, position)
+    questionnaire = next(
+        (q for q in questionnaires_for(flow, position) if q.id == questionnaire_id), None
+    )
+    if questionnaire is None:
+        raise InvalidInputError("These questions do not belong to this part of the study.")
+    if questionnaire.id in answered(flow, position):
+        raise ConflictError("You have already answered these questions.")
+    values = _validated(questionnaire, answers)
+    for item_id, value in values.items():
+        flow.db.add(
+            QuestionnaireResponse(
+                session_id=flow.session.id,
+                interaction_id=interaction.id if interaction else None,
+                position=position,
+                questionnaire=questionnaire.id,
+                version=questionnaire.version,
+                item=item_id,
+                value=value if isinstance(value, int) else None,
+                text=value if isinstance(value, str) else None,
+            )
+        )
+    flow.db.flush()
+    event = flow.log(
+        "questionnaire.submitted",
+        source="participant",
+        interaction=interaction,
+        client_id=client_id,
+        payload={
+            "position": position,
+            "questionnaire": questionnaire.id,
+            "version": questionnaire.version,
+            "items": len(values),
+        },
+    )
+    if interaction is not None:
+        finish_interaction_if_answered(flow, interaction)
+    else:
+        _complete_if_answered(flow)
+    return event
+
+
+def _check_open(flow: Flow) -> None:
+    if flow.session.state == "complete":
+        raise GoneError("This session has ended. Thank you for taking part!")
+
+
+def _questionnaire_target(flow: Flow, position: int) -> Interaction | None:
+    if position == FINAL_POSITION:
+        if flow.session.state != "final_questionnaire":
+            raise ConflictError("The final questions are not open yet.")
+        return None
+    interaction = flow.interaction(position)
+    if flow.session.state != "running" or interaction.state != "questionnaire":
+        if interaction.state == "done":
+            raise ConflictError("You have already answered these questions.")
+        raise ConflictError("These questions are not open at the moment.")
+    return interaction
+
+
+def _validated(questionnaire: Questionnaire, answers: dict[str, Any]) -> dict[str, int | str]:
+    known = {item.id for item in questionnaire.items}
+    unknown = sorted(set(answers) - known)
+    if unknown:
+        raise InvalidInputError(f"Unknown question(s): {', '.join(unknown)}.")
+    values: dict[str, int | str] = {}
+    for number, item in enumerate(questionnaire.items, start=1):
+        values[item.id] = _value(questionnaire, item, number, answers.get(item.id))
+    return values
+
+
+def _value(
+    questionnaire: Questionnaire, item: QuestionnaireItem, number: int, raw: Any
+) -> int | str:
+    if item.numeric:
+        points = questionnaire.points
+        if raw is None or raw == "":
+            raise InvalidInputError(f"Please answer question {number}.")
+        if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= points:
+            raise InvalidInputError(
+                f"The answer to question {number} must be a whole number from 1 to {points}."
+            )
+        return int(raw)
+    text = raw.strip() if isinstance(raw, str) else ""
+    if not text:
+        raise InvalidInputError(f"Please answer question {number}.")
+    if len(text) > MAX_TEXT_LENGTH:
+        raise InvalidInputError(
+            f"The answer to question {number} is longer than {MAX_TEXT_LENGTH} characters."
+        )
+    return text
+
+
+def finish_interaction_if_answered(flow: Flow, interaction: Interaction) -> None:
+    """All of the interaction's questionnaires stored: the interaction is done; after the
+    last interaction the final questionnaire opens (or the session completes without one)."""
+    if interaction.state != "questionnaire":
+        return
+    needed = {q.id for q in questionnaires_for(flow, interaction.position)}
+    if not needed <= answered(flow, interaction.position):
+        return
+    interaction.state = "done"
+    interaction.ended_at = datetime.now(UTC)
+    flow.db.flush()
+    flow.log(
+        "interaction.advanced",
+        source="participant",
+        interaction=interaction,
+        payload={"position": interaction.position, "from": "questionnaire", "to": "done"},
+    )
+    if interaction.position == len(flow.interactions):
+        flow.session.state = "final_questionnaire"
+        flow.db.flush()
+        flow.log("session.final_questionnaire", source="participant")
+        _complete_if_answered(flow)
+
+
+def _complete_if_answered(flow: Flow) -> None:
+    needed = {q.id for q in questionnaires_for(flow, FINAL_POSITION)}
+    if flow.session.state != "final_questionnaire" or not needed <= answered(flow, FINAL_POSITION):
+        return
+    flow.session.state = "complete"
+    flow.session.completed_at = datetime.now(UTC)
+    flow.participant.status = "complete"
+    flow.db.flush()
+    flow.log("session.completed", source="participant")

@@ -1,0 +1,259 @@
+"""Scripted wizard and participant that drive a whole session through the public HTTP API,
+exactly as the wizard console and the phone do (staff login + CSRF header; the phone link).
+
+Used by the tests and by rehearsals. Works with any ``httpx.Client`` (a live server's URL,
+or Starlette's ``TestClient``, which is one).
+"""
+
+from __future__ import annotations
+
+import random
+import re
+import secrets
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+from urllib.parse import urlsplit
+
+import httpx
+
+CSRF_PATTERN = re.compile(r'name="csrf_token" value="([^"]+)"')
+Json = dict[str, Any]
+
+
+class ApiError(Exception):
+    def __init__(self, status: int, detail: Any) -> None:
+        super().__init__(f"HTTP {status}: {detail}")
+        self.status = status
+        self.detail = detail
+
+
+def _json(response: httpx.Response) -> Any:
+    if response.status_code >= 400:
+        try:
+            detail = response.json().get("detail")
+        except ValueError:
+            detail = response.text
+        raise ApiError(response.status_code, detail)
+    return response.json()
+
+
+def new_client_id() -> str:
+    return secrets.token_urlsafe(16)
+
+
+class StaffApi:
+    """A logged-in staff member's JSON calls (CSRF header on unsafe methods)."""
+
+    def __init__(self, http: httpx.Client) -> None:
+        self.http = http
+        self.csrf = ""
+
+    def login(self, username: str, password: str) -> StaffApi:
+        form = self.http.get("/login").text
+        token = _csrf(form)
+        response = self.http.post(
+            "/login",
+            data={"username": username, "password": password, "csrf_token": token, "next": "/"},
+            follow_redirects=False,
+        )
+        if response.status_code != 303:
+            raise ApiError(response.status_code, "login failed")
+        self.csrf = _csrf(self.http.get("/").text)
+        return self
+
+    def get(self, path: str) -> Any:
+        return _json(self.http.get(path))
+
+    def post(self, path: str, body: Json | None = None) -> Any:
+        return _json(self.http.post(path, json=body or {}, headers={"X-CSRF-Token": self.csrf}))
+
+
+def _csrf(html: str) -> str:
+    match = CSRF_PATTERN.search(html)
+    if match is None:
+        raise ApiError(0, "no CSRF token on the page")
+    return match.group(1)
+
+
+@dataclass
+class WizardBot:
+    staff: StaffApi
+    session_id: int
+    snapshot: Json = field(default_factory=dict)
+
+    @classmethod
+    def create(
+        cls,
+        staff: StaffApi,
+        study_id: int,
+        participant_code: str | None = None,
+        booth: str = "booth-1",
+        rehearsal: bool = False,
+    ) -> WizardBot:
+        body = {
+            "study_id": study_id,
+            "participant_code": participant_code,
+            "booth": booth,
+            "rehearsal": rehearsal,
+        }
+        snapshot = staff.post("/api/sessions", body)
+        return cls(staff, snapshot["id"], snapshot)
+
+    @property
+    def phone_path(self) -> str:
+        return str(urlsplit(self.snapshot["phone"]["url"]).path)
+
+    @property
+    def token(self) -> str:
+        return self.phone_path.rsplit("/", 1)[-1]
+
+    def _do(self, action: str, body: Json | None = None) -> Json:
+        self.snapshot = self.staff.post(f"/api/sessions/{self.session_id}/{action}", body)
+        return self.snapshot
+
+    def refresh(self) -> Json:
+        self.snapshot = self.staff.get(f"/api/sessions/{self.session_id}")
+        return self.snapshot
+
+    def start(self) -> Json:
+        return self._do("start")
+
+    def advance(self, position: int, to: str) -> Json:
+        return self._do("advance", {"position": position, "to": to})
+
+    def decide(self, position: int, index: int, accepted: bool) -> Json:
+        return self._do("decide", {"position": position, "index": index, "accepted": accepted})
+
+    def undo(self, position: int, index: int) -> Json:
+        return self._do("undo", {"position": position, "index": index})
+
+    def switch_condition(self, condition: str, position: int | None = None) -> Json:
+        return self._do("condition", {"condition": condition, "position": position})
+
+    def interaction(self, position: int) -> Json:
+        interaction: Json = self.snapshot["interactions"][position - 1]
+        return interaction
+
+    def negotiate(self, position: int, accept: Callable[[Json], bool]) -> list[bool]:
+        """Decide every suggestion of the interaction; ``accept`` sees each suggestion."""
+        decisions: list[bool] = []
+        while True:
+            pending = [
+                s for s in self.interaction(position)["suggestions"] if s["accepted"] is None
+            ]
+            if not pending:
+                return decisions
+            decision = accept(pending[0])
+            self.decide(position, pending[0]["index"], decision)
+            decisions.append(decision)
+
+
+@dataclass
+class ParticipantBot:
+    """The phone: only the session's token, no login."""
+
+    http: httpx.Client
+    token: str
+    sent: list[Json] = field(default_factory=list)
+
+    def state(self) -> Json:
+        """The phone's view; ``{"view": "ended"}`` once the link has stopped working."""
+        response = self.http.get(f"/api/phone/{self.token}/state")
+        if response.status_code == 410:
+            return {"view": "ended"}
+        result: Json = _json(response)
+        return result
+
+    def _send(self, kind: str, body: Json) -> Json:
+        self.sent.append({"kind": kind, **body})
+        receipt: Json = _json(self.http.post(f"/api/phone/{self.token}/{kind}", json=body))
+        return receipt
+
+    def submit_ranking(
+        self, position: int, ranking: list[str], client_id: str | None = None
+    ) -> Json:
+        body = {"client_id": client_id or new_client_id(), "position": position, "ranking": ranking}
+        return self._send("ranking", body)
+
+    def submit_questionnaire(
+        self, position: int, questionnaire: str, answers: Json, client_id: str | None = None
+    ) -> Json:
+        body = {
+            "client_id": client_id or new_client_id(),
+            "position": position,
+            "questionnaire": questionnaire,
+            "answers": answers,
+        }
+        return self._send("questionnaire", body)
+
+    def rank(self, rng: random.Random) -> Json:
+        state = self.state()
+        if state["view"] != "ranking":
+            raise ApiError(0, f"the phone shows {state['view']!r}, not the ranking")
+        ranking = [item["id"] for item in state["items"]]
+        rng.shuffle(ranking)
+        return self.submit_ranking(state["position"], ranking)
+
+    def answer_questionnaires(self, position: int, rng: random.Random) -> int:
+        """Answer every questionnaire page of ``position`` (0: the final one) the phone shows
+        now; returns the number of pages answered."""
+        pages = 0
+        state = self.state()
+        while state["view"] == "questionnaire" and state["position"] == position:
+            questionnaire = state["questionnaire"]
+            answers = answers_for(questionnaire, rng)
+            receipt = self.submit_questionnaire(position, questionnaire["id"], answers)
+            pages += 1
+            state = receipt["state"]
+            if state["view"] == "ended":
+                break
+        return pages
+
+
+def answers_for(questionnaire: Json, rng: random.Random) -> Json:
+    return {
+        item["id"]: (
+            f"Answer {rng.randint(1, 999)} to {item['id']}."
+            if item["type"] == "text"
+            else rng.randint(1, questionnaire["points"])
+        )
+        for item in questionnaire["items"]
+    }
+
+
+@dataclass
+class SessionResult:
+    session_id: int
+    participant_code: str
+    decisions: list[list[bool]]
+    snapshot: Json
+
+
+def run_session(
+    staff: StaffApi,
+    phone: httpx.Client,
+    study_id: int,
+    rng: random.Random,
+    accept_probability: float = 0.5,
+    rehearsal: bool = False,
+    booth: str = "booth-1",
+) -> SessionResult:
+    """A whole session: every interaction in plan order, then the final questionnaire."""
+    wizard = WizardBot.create(staff, study_id, rehearsal=rehearsal, booth=booth)
+    participant = ParticipantBot(phone, wizard.token)
+    wizard.start()
+    decisions = []
+    for position in range(1, wizard.snapshot["interaction_count"] + 1):
+        wizard.advance(position, "discussion")
+        wizard.advance(position, "ranking")
+        participant.rank(rng)
+        wizard.advance(position, "negotiation")
+        decisions.append(wizard.negotiate(position, lambda _s: rng.random() < accept_probability))
+        wizard.advance(position, "questionnaire")
+        participant.answer_questionnaires(position, rng)
+    participant.answer_questionnaires(0, rng)
+    snapshot = wizard.refresh()
+    if snapshot["state"] != "complete":
+        raise ApiError(0, f"the session ended in state {snapshot['state']!r}")
+    return SessionResult(wizard.session_id, snapshot["participant"]["code"], decisions, snapshot)

@@ -1,0 +1,202 @@
+"""The wizard's JSON API: create and drive a session. Any logged-in staff member may.
+
+Every change answers with the session's full snapshot (see ``snapshot.py``); an illegal
+step answers 409 with a sentence saying why and what is allowed now.
+"""
+
+from __future__ import annotations
+
+import io
+
+import segno
+from fastapi import APIRouter, Depends, Request, Response, status
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from chameleons.backend.auth.csrf import verify_csrf
+from chameleons.backend.auth.dependencies import CurrentStaff
+from chameleons.backend.dependencies import DbSession
+from chameleons.backend.events import repository as events
+from chameleons.backend.events.hub import LiveHub
+from chameleons.backend.events.unit_of_work import Hub, WriteDb
+from chameleons.backend.models import Participant
+from chameleons.backend.models import Session as SessionRow
+from chameleons.backend.sessions import negotiation, service
+from chameleons.backend.sessions.flow import Flow, load
+from chameleons.backend.sessions.schemas import (
+    AdvanceRequest,
+    ConditionRequest,
+    DecisionRequest,
+    NoteRequest,
+    SessionCreate,
+    SessionSummary,
+    StartRequest,
+    UndoRequest,
+)
+from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.studies import service as studies
+from chameleons.backend.studies.errors import http_errors
+
+router = APIRouter(prefix="/api/sessions", tags=["sessions"])
+WRITE = [Depends(verify_csrf)]
+Snapshot = dict[str, object]
+
+
+def base_url(request: Request) -> str:
+    configured = request.app.state.settings.public_url
+    return str(configured or request.base_url).rstrip("/")
+
+
+def snapshot_of(flow: Flow, request: Request, hub: LiveHub) -> Snapshot:
+    connections = hub.present(phone_presence_key(flow.session.id))
+    return session_snapshot(flow, base_url(request), connections)
+
+
+@router.post("", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
+def create_session(
+    data: SessionCreate, request: Request, _user: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    with http_errors():
+        study = studies.get_study(db, data.study_id)
+        if data.participant_code is None:
+            participant = studies.register_participant(db, study, data.rehearsal)
+        else:
+            participant = studies.participant_by_code(db, study, data.participant_code)
+        flow = service.create_session(db, study, participant, data.booth)
+        return snapshot_of(flow, request, hub)
+
+
+@router.get("")
+def list_sessions(
+    _user: CurrentStaff, db: DbSession, study_id: int | None = None, state: str | None = None
+) -> list[SessionSummary]:
+    query = select(SessionRow, Participant.code).join(
+        Participant, Participant.id == SessionRow.participant_id
+    )
+    if study_id is not None:
+        query = query.where(SessionRow.study_id == study_id)
+    if state is not None:
+        query = query.where(SessionRow.state == state)
+    return [
+        SessionSummary(
+            id=row.id,
+            study_id=row.study_id,
+            participant_code=code,
+            state=row.state,
+            current_position=row.current_position,
+            booth=row.booth,
+            is_rehearsal=row.is_rehearsal,
+            created_at=row.created_at.isoformat(),
+        )
+        for row, code in db.execute(query.order_by(SessionRow.id)).tuples()
+    ]
+
+
+@router.get("/{session_id}")
+def get_session(
+    session_id: int, request: Request, _user: CurrentStaff, db: DbSession, hub: Hub
+) -> Snapshot:
+    with http_errors():
+        return snapshot_of(load(db, session_id, lock=False), request, hub)
+
+
+@router.post("/{session_id}/start", dependencies=WRITE)
+def start(
+    session_id: int, data: StartRequest, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        service.start(flow, data.worker_time)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/advance", dependencies=WRITE)
+def advance(
+    session_id: int, data: AdvanceRequest, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        service.advance(flow, data.position, data.to, data.worker_time)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/decide", dependencies=WRITE)
+def decide(
+    session_id: int,
+    data: DecisionRequest,
+    request: Request,
+    _u: CurrentStaff,
+    db: WriteDb,
+    hub: Hub,
+) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        negotiation.decide(flow, data.position, data.index, data.accepted, data.worker_time)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/undo", dependencies=WRITE)
+def undo(
+    session_id: int, data: UndoRequest, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        negotiation.undo(flow, data.position, data.index)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/condition", dependencies=WRITE)
+def switch_condition(
+    session_id: int,
+    data: ConditionRequest,
+    request: Request,
+    _u: CurrentStaff,
+    db: WriteDb,
+    hub: Hub,
+) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        service.switch_condition(flow, data.condition, data.position, data.worker_time)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/events", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
+def add_note(
+    session_id: int, data: NoteRequest, _u: CurrentStaff, db: WriteDb
+) -> dict[str, object]:
+    with http_errors():
+        flow = load(db, session_id)
+        service.log_note(flow, data.kind, data.payload, data.position, data.worker_time)
+        return events.to_dict(events.for_session(db, session_id, limit=1_000_000)[-1])
+
+
+@router.get("/{session_id}/events")
+def list_events(
+    session_id: int, _u: CurrentStaff, db: DbSession, after: int = 0, limit: int = 1000
+) -> list[dict[str, object]]:
+    with http_errors():
+        load(db, session_id, lock=False)
+    return [events.to_dict(e) for e in events.for_session(db, session_id, after, min(limit, 5000))]
+
+
+@router.get("/{session_id}/phone-qr.svg")
+def phone_qr(session_id: int, request: Request, _u: CurrentStaff, db: DbSession) -> Response:
+    with http_errors():
+        flow = load(db, session_id, lock=False)
+    return Response(
+        qr_svg(f"{base_url(request)}/p/{flow.session.phone_token}"),
+        media_type="image/svg+xml",
+        headers={"Cache-Control": "no-store"},
+    )
+
+
+def qr_svg(url: str) -> bytes:
+    buffer = io.BytesIO()
+    segno.make_qr(url, error="m").save(
+        buffer, kind="svg", scale=6, border=2, xmldecl=False, title="Phone link"
+    )
+    return buffer.getvalue()
+
+
+def session_row(db: Session, session_id: int) -> SessionRow | None:
+    return db.get(SessionRow, session_id)

@@ -1,0 +1,187 @@
+"""Loading a session for a change (row-locked) and what may happen next.
+
+``Flow`` bundles the session, its interactions in plan order and the study spec, so the
+service functions stay short. ``allowed_actions`` is the single source of "what is legal
+now": the 409 sentences and the wizard console's buttons both come from it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from chameleons.backend.events import repository as events
+from chameleons.backend.models import Event, Interaction, Participant, PlanRow, Suggestion
+from chameleons.backend.models import Session as SessionRow
+from chameleons.backend.models import Study as StudyRow
+from chameleons.backend.sessions.states import (
+    NEXT_STEP,
+    UNDO_WINDOW_SECONDS,
+    Action,
+    allowed_sentence,
+)
+from chameleons.backend.studies.errors import ConflictError, InvalidInputError, NotFoundError
+from chameleons.backend.studies.specs import spec_of
+from chameleons.experiment.model import Study
+
+
+def as_utc(moment: datetime) -> datetime:
+    """SQLite returns naive datetimes for timezone-aware columns; they are UTC."""
+    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)
+
+
+@dataclass
+class Flow:
+    db: Session
+    session: SessionRow
+    study: StudyRow
+    spec: Study
+    participant: Participant
+    interactions: list[Interaction]
+
+    def interaction(self, position: int) -> Interaction:
+        for interaction in self.interactions:
+            if interaction.position == position:
+                return interaction
+        raise InvalidInputError(
+            f"There is no interaction {position}; this session has {len(self.interactions)}."
+        )
+
+    @property
+    def current(self) -> Interaction:
+        return self.interaction(self.session.current_position)
+
+    @property
+    def is_last(self) -> bool:
+        return self.session.current_position >= len(self.interactions)
+
+    def suggestions(self, interaction: Interaction) -> list[Suggestion]:
+        query = (
+            select(Suggestion)
+            .where(Suggestion.interaction_id == interaction.id)
+            .order_by(Suggestion.index)
+        )
+        return list(self.db.scalars(query))
+
+    def row_number(self) -> int:
+        row = self.db.get(PlanRow, self.session.plan_row_id)
+        return row.row_number if row else 0
+
+    def log(
+        self,
+        kind: str,
+        *,
+        source: str = "wizard",
+        interaction: Interaction | None = None,
+        payload: dict[str, object] | None = None,
+        worker_time: float | None = None,
+        client_id: str | None = None,
+    ) -> Event:
+        return events.record(
+            self.db,
+            kind,
+            source=source,
+            study_id=self.session.study_id,
+            session_id=self.session.id,
+            interaction_id=interaction.id if interaction else None,
+            payload=dict(payload or {}),
+            worker_time=worker_time,
+            client_id=client_id,
+        )
+
+    def refuse(self, why: str) -> ConflictError:
+        """A 409 with the reason and what is allowed now."""
+        return ConflictError(f"{why} {allowed_sentence(allowed_actions(self))}")
+
+
+def load(db: Session, session_id: int, *, lock: bool = True) -> Flow:
+    query = select(SessionRow).where(SessionRow.id == session_id)
+    if lock:
+        # Serialises changes of one session (wizard and phone at once) on PostgreSQL;
+        # SQLite serialises writers anyway.
+        query = query.with_for_update()
+    session = db.scalars(query).first()
+    if session is None:
+        raise NotFoundError(f"There is no session {session_id}.")
+    return _flow(db, session)
+
+
+def load_by_token(db: Session, token: str, *, lock: bool = True) -> Flow:
+    query = select(SessionRow).where(SessionRow.phone_token == token)
+    if lock:
+        query = query.with_for_update()
+    session = db.scalars(query).first()
+    if session is None:
+        raise NotFoundError("This link is not valid. Please ask the experimenter for help.")
+    return _flow(db, session)
+
+
+def _flow(db: Session, session: SessionRow) -> Flow:
+    study = db.get(StudyRow, session.study_id)
+    participant = db.get(Participant, session.participant_id)
+    if study is None or participant is None:
+        raise NotFoundError(f"Session {session.id} has lost its study or participant.")
+    interactions = list(
+        db.scalars(
+            select(Interaction)
+            .where(Interaction.session_id == session.id)
+            .order_by(Interaction.position)
+        )
+    )
+    return Flow(db, session, study, spec_of(study), participant, interactions)
+
+
+def undo_deadline(suggestion: Suggestion) -> datetime | None:
+    if suggestion.decided_at is None:
+        return None
+    return as_utc(suggestion.decided_at) + timedelta(seconds=UNDO_WINDOW_SECONDS)
+
+
+def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
+    state = flow.session.state
+    if state == "pending":
+        return [{"action": "start"}]
+    if state == "final_questionnaire":
+        return [{"action": "wait", "for": "final_questionnaire"}]
+    if state == "complete":
+        return [{"action": "none"}]
+    current = flow.current
+    position = current.position
+    step = current.state
+    if step == "done":
+        return [{"action": "advance", "position": position + 1, "to": "discussion"}]
+    if step == "ranking" and current.initial_ranking is None:
+        return [{"action": "wait", "for": "ranking", "position": position}]
+    if step == "questionnaire":
+        return [{"action": "wait", "for": "questionnaire", "position": position}]
+    if step == "negotiation":
+        return _negotiation_actions(flow, current, now or datetime.now(UTC))
+    return [{"action": "advance", "position": position, "to": NEXT_STEP[step]}]
+
+
+def _negotiation_actions(flow: Flow, current: Interaction, now: datetime) -> list[Action]:
+    suggestions = flow.suggestions(current)
+    actions: list[Action] = []
+    pending = [s for s in suggestions if s.accepted is None]
+    if pending:
+        actions.append(
+            {"action": "decide", "position": current.position, "index": pending[0].index}
+        )
+    else:
+        actions.append({"action": "advance", "position": current.position, "to": "questionnaire"})
+    decided = [s for s in suggestions if s.accepted is not None]
+    if decided:
+        deadline = undo_deadline(decided[-1])
+        if deadline is not None and now <= deadline:
+            actions.append(
+                {
+                    "action": "undo",
+                    "position": current.position,
+                    "index": decided[-1].index,
+                    "until": deadline.isoformat(),
+                }
+            )
+    return actions

@@ -1,0 +1,78 @@
+"""The wizard console's live feed: ``/ws/sessions/{id}`` (staff login via the cookie).
+
+On connect: ``{"type": "snapshot", "session": ...}``. Then, for every committed change, each
+new event as ``{"type": "event", "event": ...}`` followed by a fresh snapshot; anything else
+published on the session's channel (e.g. worker telemetry) is forwarded as it is.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, WebSocket
+from fastapi.concurrency import run_in_threadpool
+from sqlalchemy.orm import Session, sessionmaker
+
+from chameleons.backend.auth import repository as staff
+from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.events import live
+from chameleons.backend.events.hub import LiveHub, Message, session_channel
+from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.sessions.flow import load
+from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.studies.errors import NotFoundError
+
+router = APIRouter(tags=["sessions"])
+
+
+def _is_staff(factory: sessionmaker[Session], user_id: Any) -> bool:
+    if not isinstance(user_id, int):
+        return False
+    with factory() as db:
+        user = staff.get_by_id(db, user_id)
+        return user is not None and user.is_active
+
+
+def _snapshot(
+    factory: sessionmaker[Session], hub: LiveHub, session_id: int, base_url: str
+) -> Message:
+    with write_session(factory, hub) as db:
+        flow = load(db, session_id, lock=False)
+        connections = hub.present(phone_presence_key(session_id))
+        return {"type": "snapshot", "session": session_snapshot(flow, base_url, connections)}
+
+
+def _base_url(websocket: WebSocket) -> str:
+    configured = websocket.app.state.settings.public_url
+    if configured:
+        return str(configured).rstrip("/")
+    scheme = "https" if websocket.url.scheme == "wss" else "http"
+    return f"{scheme}://{websocket.headers.get('host', 'localhost')}"
+
+
+@router.websocket("/ws/sessions/{session_id}")
+async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
+    factory = websocket.app.state.sessionmaker
+    hub: LiveHub = websocket.app.state.live_hub
+    user_id = websocket.session.get(SESSION_USER_KEY)
+    if not live.same_origin(websocket) or not await run_in_threadpool(_is_staff, factory, user_id):
+        await websocket.close(code=4401)
+        return
+    base_url = _base_url(websocket)
+    try:
+        first = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
+    except NotFoundError:
+        await websocket.close(code=4404)
+        return
+    await websocket.accept()
+    async with hub.subscribe(session_channel(session_id)) as subscription:
+        await live.send_json(websocket, first)
+
+        async def on_change(messages: list[Message]) -> None:
+            for message in messages:
+                if message.get("type") != "resync":
+                    await live.send_json(websocket, message)
+            snapshot = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
+            await live.send_json(websocket, snapshot)
+
+        await live.serve(websocket, subscription, on_change)

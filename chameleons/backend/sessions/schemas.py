@@ -1,0 +1,62 @@
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, Field
+
+WorkerTime = Field(default=None, description="The worker's clock for this action, if known")
+
+
+class SessionCreate(BaseModel):
+    study_id: int
+    participant_code: str | None = Field(
+        default=None, max_length=32, description="Omitted: register a new participant"
+    )
+    booth: str = Field(default="booth-1", min_length=1, max_length=64)
+    rehearsal: bool = False
+
+
+class StartRequest(BaseModel):
+    worker_time: float | None = WorkerTime
+
+
+class AdvanceRequest(BaseModel):
+    position: int = Field(ge=1, le=100)
+    to: str = Field(max_length=32)
+    worker_time: float | None = WorkerTime
+
+
+class DecisionRequest(BaseModel):
+    position: int = Field(ge=1, le=100)
+    index: int = Field(ge=1, le=100)
+    accepted: bool
+    worker_time: float | None = WorkerTime
+
+
+class UndoRequest(BaseModel):
+    position: int = Field(ge=1, le=100)
+    index: int = Field(ge=1, le=100)
+
+
+class ConditionRequest(BaseModel):
+    condition: str = Field(max_length=64)
+    position: int | None = Field(default=None, ge=1, le=100)
+    worker_time: float | None = WorkerTime
+
+
+class NoteRequest(BaseModel):
+    kind: str = Field(pattern=r"^[a-z][a-z0-9_]*(\.[a-z0-9_]+)*$", max_length=48)
+    payload: dict[str, Any] = Field(default_factory=dict)
+    position: int | None = Field(default=None, ge=1, le=100)
+    worker_time: float | None = WorkerTime
+
+
+class SessionSummary(BaseModel):
+    id: int
+    study_id: int
+    participant_code: str
+    state: str
+    current_position: int
+    booth: str
+    is_rehearsal: bool
+    created_at: str

@@ -1,0 +1,118 @@
+"""The wizard's view of a session as JSON: everything the console shows, in one object."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from chameleons.backend.events import repository as events
+from chameleons.backend.models import Interaction, Suggestion
+from chameleons.backend.sessions.answers import FINAL_POSITION, answered, questionnaires_for
+from chameleons.backend.sessions.flow import Flow, allowed_actions, undo_deadline
+from chameleons.backend.sessions.states import allowed_sentence
+from chameleons.backend.studies.specs import item_key
+
+
+def phone_presence_key(session_id: int) -> str:
+    return f"phone:{session_id}"
+
+
+def _time(moment: datetime | None) -> str | None:
+    return moment.isoformat() if moment else None
+
+
+def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[str, Any]:
+    session = flow.session
+    actions = allowed_actions(flow)
+    return {
+        "id": session.id,
+        "study_id": session.study_id,
+        "config_hash": flow.study.config_hash,
+        "state": session.state,
+        "current_position": session.current_position,
+        "interaction_count": len(flow.interactions),
+        "booth": session.booth,
+        "is_rehearsal": session.is_rehearsal,
+        "created_at": _time(session.created_at),
+        "started_at": _time(session.started_at),
+        "completed_at": _time(session.completed_at),
+        "participant": {"id": flow.participant.id, "code": flow.participant.code},
+        "phone": {
+            "url": f"{base_url}/p/{session.phone_token}",
+            "join_url": f"{base_url}/join",
+            "short_code": session.short_code,
+            "qr_svg": f"/api/sessions/{session.id}/phone-qr.svg",
+            "connected": phone_connections > 0,
+            "connections": phone_connections,
+        },
+        "conditions": list(flow.spec.condition_ids),
+        "interactions": [_interaction(flow, interaction) for interaction in flow.interactions],
+        "final_questionnaire": _progress(flow, FINAL_POSITION),
+        "allowed": actions,
+        "allowed_sentence": allowed_sentence(actions),
+        "version": events.last_id(flow.db, session.id),
+    }
+
+
+def _interaction(flow: Flow, interaction: Interaction) -> dict[str, Any]:
+    task = flow.spec.task(interaction.task)
+    items = [task.item(item_key(str(item_id))) for item_id in interaction.presented_order]
+    suggestions = flow.suggestions(interaction)
+    return {
+        "position": interaction.position,
+        "state": interaction.state,
+        "planned_condition": interaction.planned_condition,
+        "condition": interaction.condition,
+        "deviates_from_plan": interaction.condition != interaction.planned_condition,
+        "actor": interaction.actor,
+        "robot_name": interaction.robot_name,
+        "face": interaction.face,
+        "task": interaction.task,
+        "task_name": task.name,
+        "item_set": interaction.item_set,
+        "scenario": f"{interaction.task}-{interaction.item_set}",
+        "items": [
+            {
+                "id": str(item_id),
+                "name": item.name,
+                "description": item.description,
+                "expert_rank": item.expert_rank,
+            }
+            for item_id, item in zip(interaction.presented_order, items, strict=True)
+        ],
+        "presented_order": list(interaction.presented_order),
+        "expert_order": flow.spec.expert_order(
+            interaction.task, [str(i) for i in interaction.presented_order]
+        ),
+        "initial_ranking": interaction.initial_ranking,
+        "current_ranking": interaction.current_ranking,
+        "final_ranking": interaction.final_ranking,
+        "started_at": _time(interaction.started_at),
+        "ended_at": _time(interaction.ended_at),
+        "suggestions": [_suggestion(flow, interaction, s) for s in suggestions],
+        "accepted": sum(1 for s in suggestions if s.accepted),
+        "questionnaires": _progress(flow, interaction.position),
+    }
+
+
+def _suggestion(flow: Flow, interaction: Interaction, suggestion: Suggestion) -> dict[str, Any]:
+    deadline = undo_deadline(suggestion)
+    item = flow.spec.task(interaction.task).item(item_key(suggestion.item))
+    return {
+        "index": suggestion.index,
+        "item": suggestion.item,
+        "item_name": item.name,
+        "from_rank": suggestion.from_rank,
+        "to_rank": suggestion.to_rank,
+        "kind": suggestion.kind,
+        "accepted": suggestion.accepted,
+        "proposed_at": _time(suggestion.proposed_at),
+        "decided_at": _time(suggestion.decided_at),
+        "undo_until": _time(deadline),
+    }
+
+
+def _progress(flow: Flow, position: int) -> dict[str, Any]:
+    required = [q.id for q in questionnaires_for(flow, position)]
+    done = answered(flow, position)
+    return {"required": required, "answered": [q for q in required if q in done]}

@@ -1,0 +1,1 @@
+"""Studies (config snapshot + hash), their counterbalancing plan rows, and participants."""

@@ -1,0 +1,50 @@
+"""Errors of the study/session flow, each with the HTTP status it maps to.
+
+Messages are whole sentences meant for people: the wizard console and the phone show them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from fastapi import HTTPException, status
+
+
+class FlowError(Exception):
+    status_code = status.HTTP_400_BAD_REQUEST
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+
+class NotFoundError(FlowError):
+    status_code = status.HTTP_404_NOT_FOUND
+
+
+class ConflictError(FlowError):
+    """The request is well-formed but not allowed in the current state (HTTP 409)."""
+
+    status_code = status.HTTP_409_CONFLICT
+
+
+class InvalidInputError(FlowError):
+    """The request's content is wrong (HTTP 422); nothing was changed."""
+
+    status_code = status.HTTP_422_UNPROCESSABLE_CONTENT
+
+
+class GoneError(FlowError):
+    """The session is over; its phone link no longer works (HTTP 410)."""
+
+    status_code = status.HTTP_410_GONE
+
+
+@contextmanager
+def http_errors() -> Iterator[None]:
+    """Turn flow errors into HTTP errors (the write transaction then rolls back)."""
+    try:
+        yield
+    except FlowError as exc:
+        raise HTTPException(exc.status_code, exc.message) from exc

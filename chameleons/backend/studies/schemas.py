@@ -1,0 +1,49 @@
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from pydantic import BaseModel, Field
+
+
+class StudyCreate(BaseModel):
+    yaml: str | None = Field(
+        default=None, max_length=1_000_000, description="Study YAML; omitted: the default study"
+    )
+    plan_seed: int | None = Field(default=None, ge=0, le=2**31 - 1)
+
+
+class StudyRead(BaseModel):
+    id: int
+    name: str
+    config_hash: str
+    plan_seed: int
+    is_active: bool
+    created_at: datetime
+    plan_rows: int
+    participants: int
+
+
+class PlanRequest(BaseModel):
+    participants: int = Field(ge=1, le=1000)
+    seed: int | None = Field(default=None, ge=0, le=2**31 - 1)
+
+
+class PlanRowRead(BaseModel):
+    id: int
+    row_number: int
+    withdrawals: int
+    participant_code: str | None
+    interactions: list[dict[str, Any]]
+
+
+class ParticipantCreate(BaseModel):
+    rehearsal: bool = False
+
+
+class ParticipantRead(BaseModel):
+    id: int
+    code: str
+    status: str
+    is_rehearsal: bool
+    row_number: int | None
