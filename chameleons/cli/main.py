@@ -11,6 +11,7 @@ from chameleons.cli import (
     export_command,
     plan_command,
     serve_command,
+    simulate_face_command,
     user_commands,
 )
 
@@ -24,6 +25,7 @@ def cli() -> None:
 cli.add_command(db_commands.db)
 cli.add_command(demo_command.demo)
 cli.add_command(serve_command.serve)
+cli.add_command(simulate_face_command.simulate_face)
 cli.add_command(user_commands.user)
 cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)

@@ -284,6 +284,9 @@ class FaceCaptureXReceiver(_Receiver):
             data = self._client.recv(_TCP_READ)
         except BlockingIOError:
             return
+        except ConnectionResetError:
+            # The app never reads our "s", so its close often arrives as a reset: an end.
+            data = b""
         except OSError as exc:
             self._drop(IngestError("socket_error", str(exc)))
             data = b""
