@@ -6,6 +6,7 @@ import click
 
 from chameleons import __version__
 from chameleons.cli import (
+    analyze_command,
     db_commands,
     demo_command,
     export_command,
@@ -29,6 +30,7 @@ cli.add_command(simulate_face_command.simulate_face)
 cli.add_command(user_commands.user)
 cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
+cli.add_command(analyze_command.analyze_command)
 
 
 def main() -> None:

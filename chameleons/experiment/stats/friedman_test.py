@@ -1,0 +1,139 @@
+"""The Friedman test, written out from its formula, with an exact / permutation p-value.
+
+For ``n`` blocks (participants) and ``k`` treatments (conditions), values are ranked within
+each block (ties get their average rank) and ``R_j`` is the rank sum of treatment ``j``::
+
+    chi2 = (12 / (n k (k + 1)) * sum_j R_j^2 - 3 n (k + 1)) / C
+    C    = 1 - sum_blocks sum_tie_groups (t^3 - t) / (n k (k^2 - 1))
+
+(the tie correction of R's ``friedman.test`` and SciPy's ``friedmanchisquare``). The
+asymptotic p-value is the chi-squared tail with ``k - 1`` degrees of freedom; Kendall's
+``W = chi2 / (n (k - 1))``. When every block is entirely tied, ``C = 0``: nothing
+distinguishes the treatments and the statistic is *undefined* (``None``), never 0.
+
+The permutation p-value conditions on the observed within-block ranks: under the null
+hypothesis every ordering of a block's ranks is equally likely. It is computed *exactly*
+by convolving the blocks' rank vectors when the number of distinct rank-sum vectors stays
+small (always for 3 conditions), otherwise by Monte Carlo with a seeded generator
+(``p = (1 + #{S* >= S}) / (1 + resamples)``).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from math import factorial
+
+import numpy as np
+from scipy.stats import chi2 as chi2_distribution
+
+MAX_EXACT_STATES = 200_000
+
+
+@dataclass(frozen=True)
+class FriedmanResult:
+    n: int
+    k: int
+    chi2: float | None  # None: undefined (every block tied, or no complete block)
+    df: int
+    p: float | None
+    kendall_w: float | None
+
+
+@dataclass(frozen=True)
+class PermutationResult:
+    p: float | None
+    method: str  # "exact" or "monte-carlo"
+    resamples: int | None  # Monte Carlo only
+    seed: int | None  # Monte Carlo only
+
+
+def average_ranks(values: Sequence[float]) -> list[float]:
+    """Ranks 1..len(values); tied values share the mean of the ranks they occupy."""
+    order = sorted(range(len(values)), key=lambda i: values[i])
+    ranks = [0.0] * len(values)
+    start = 0
+    while start < len(order):
+        end = start
+        while end + 1 < len(order) and values[order[end + 1]] == values[order[start]]:
+            end += 1
+        for position in range(start, end + 1):
+            ranks[order[position]] = (start + end) / 2 + 1
+        start = end + 1
+    return ranks
+
+
+def friedman(blocks: Sequence[Sequence[float]]) -> FriedmanResult:
+    """Friedman test over ``blocks`` (one row per participant, one column per condition)."""
+    n = len(blocks)
+    k = len(blocks[0]) if blocks else 0
+    if any(len(block) != k for block in blocks):
+        raise ValueError("every block needs one value per condition")
+    df = max(k - 1, 0)
+    if n == 0 or k < 2:
+        return FriedmanResult(n, k, None, df, None, None)
+    ranks = [average_ranks(block) for block in blocks]
+    rank_sums = [sum(column) for column in zip(*ranks, strict=True)]
+    ties = sum(t**3 - t for block in blocks for t in Counter(block).values())
+    correction = 1 - ties / (n * k * (k * k - 1))
+    if correction <= 1e-12:
+        return FriedmanResult(n, k, None, df, None, None)
+    spread = 12 / (n * k * (k + 1)) * sum(r * r for r in rank_sums) - 3 * n * (k + 1)
+    chi2 = max(spread / correction, 0.0)  # rounding must not make it negative
+    p = float(chi2_distribution.sf(chi2, df))
+    return FriedmanResult(n, k, chi2, df, p, chi2 / (n * (k - 1)))
+
+
+def permutation_p(
+    blocks: Sequence[Sequence[float]], *, resamples: int = 10_000, seed: int = 0
+) -> PermutationResult:
+    """P(S >= observed S) for ``S = sum_j R_j^2`` under within-block permutation (exact
+    when feasible, else Monte Carlo). Undefined (``None``) when the test is."""
+    if friedman(blocks).chi2 is None:
+        return PermutationResult(None, "exact", None, None)
+    doubled = [tuple(round(2 * r) for r in average_ranks(block)) for block in blocks]
+    observed = sum(s * s for s in map(sum, zip(*doubled, strict=True)))
+    exact = _exact_p(doubled, observed)
+    if exact is not None:
+        return PermutationResult(exact, "exact", None, None)
+    return PermutationResult(
+        _monte_carlo_p(doubled, observed, resamples, seed), "monte-carlo", resamples, seed
+    )
+
+
+def _exact_p(doubled: list[tuple[int, ...]], observed: int) -> float | None:
+    """Convolve the distribution of rank-sum vectors block by block (integer counts)."""
+    k = len(doubled[0])
+    states: Counter[tuple[int, ...]] = Counter({(0,) * k: 1})
+    for block in doubled:
+        arrangements = Counter(itertools.permutations(block))
+        following: Counter[tuple[int, ...]] = Counter()
+        for state, count in states.items():
+            for arrangement, ways in arrangements.items():
+                key = tuple(a + b for a, b in zip(state, arrangement, strict=True))
+                following[key] += count * ways
+        if len(following) > MAX_EXACT_STATES:
+            return None
+        states = following
+    total = factorial(k) ** len(doubled)
+    extreme = sum(count for state, count in states.items() if sum(s * s for s in state) >= observed)
+    return float(Fraction(extreme, total))
+
+
+def _monte_carlo_p(
+    doubled: list[tuple[int, ...]], observed: int, resamples: int, seed: int
+) -> float:
+    rng = np.random.default_rng(seed)
+    ranks = np.array(doubled, dtype=np.int64)
+    n, k = ranks.shape
+    at_least = 0
+    for start in range(0, resamples, 2_000):  # chunks keep memory small
+        size = min(2_000, resamples - start)
+        order = rng.random((size, n, k)).argsort(axis=2)
+        shuffled = np.take_along_axis(np.broadcast_to(ranks, (size, n, k)), order, axis=2)
+        sums = shuffled.sum(axis=1)
+        at_least += int(((sums * sums).sum(axis=1) >= observed).sum())
+    return (1 + at_least) / (1 + resamples)

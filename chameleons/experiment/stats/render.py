@@ -1,0 +1,162 @@
+"""An analysis as readable text, or as LaTeX in the layout of the paper's Table I."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Literal
+
+from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
+from chameleons.experiment.stats.descriptive import Descriptive
+
+MEASURE_LABELS = {
+    "accepted": "Accepted robot suggestions",
+    "credibility": "Credibility",
+    "likeability": "Likeability",
+    "trust": "Trust",
+}
+MEASURE_RANGES = {"accepted": "0-3", "credibility": "1-7", "likeability": "1-7", "trust": "1-7"}
+CONDITION_LABELS = {"natural": "Natural movement", "copy": "Copy", "still": "Still"}
+UNDEFINED = "undefined"
+
+
+def render_text(analysis: Analysis, condition_labels: Mapping[str, str] | None = None) -> str:
+    labels = {**CONDITION_LABELS, **(condition_labels or {})}
+    conditions = analysis.conditions
+    header = f"{'measure (median, mean ± SD)':<34}" + "".join(
+        f"{labels.get(c, c):<22}" for c in conditions
+    )
+    lines = [header, "-" * len(header)]
+    for measure, result in analysis.measures.items():
+        name = f"{MEASURE_LABELS.get(measure, measure)} ({MEASURE_RANGES.get(measure, '')})"
+        cells = "".join(f"{_cell(result.conditions[c], '±'):<22}" for c in conditions)
+        lines.append(f"{name.replace(' ()', ''):<34}{cells}")
+    lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
+    lines += [f"  {m:<12} {_friedman_text(r)}" for m, r in analysis.measures.items()]
+    lines += ["", "Post-hoc pairwise tests:"]
+    for measure, result in analysis.measures.items():
+        if not result.posthoc:
+            lines.append(f"  {measure:<12} {result.posthoc_note}")
+        for test in result.posthoc:
+            lines.append(
+                f"  {measure:<12} {test.a} vs {test.b}: W = {_num(test.statistic, 1)}, "
+                f"p = {_p(test.p)}, Bonferroni p = {_p(test.p_bonferroni)}, n = {test.n}"
+                + (f" ({test.note})" if test.note else "")
+            )
+    notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
+    lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
+    return "\n".join(lines)
+
+
+def render_latex(
+    analysis: Analysis,
+    condition_labels: Mapping[str, str] | None = None,
+    *,
+    layout: Literal["paper", "wide"] = "paper",
+) -> str:
+    """``paper``: Table I's layout (a multirow block per measure, a row per condition with
+    median and mean $\\pm$ SD; needs ``\\usepackage{multirow}``). ``wide``: a row per
+    measure, a column per condition, cells "median, mean $\\pm$ SD"."""
+    labels = {**CONDITION_LABELS, **(condition_labels or {})}
+    body = _paper_body(analysis, labels) if layout == "paper" else _wide_body(analysis, labels)
+    comments = [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
+    return "\n".join(
+        [
+            *comments,
+            r"\begin{table}[]",
+            r"    \centering",
+            r"    \caption{Median and mean $\pm$ SD per condition of the accepted robot "
+            r"suggestions (0-3) and the questionnaire scores (1-7).}",
+            *body,
+            r"    \label{tab:stats}",
+            r"\end{table}",
+        ]
+    )
+
+
+def _paper_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    k = len(analysis.conditions)
+    lines = [
+        r"    \begin{tabular}{ |c|c|c|c| }",
+        r"    \hline",
+        r"    Measure & Condition & Median & Average \\",
+        r"    \hline",
+    ]
+    for measure, result in analysis.measures.items():
+        lines.append(rf"    \multirow{{{k}}}*{{{_tex(MEASURE_LABELS.get(measure, measure))}}}")
+        for condition in analysis.conditions:
+            d = result.conditions[condition]
+            lines.append(
+                rf"    & {_tex(labels.get(condition, condition))} & {_num(d.median, 1, '--')} & "
+                rf"{_mean_sd_tex(d)} \\"
+            )
+        lines.append(r"    \hline")
+    lines.append(r"    \end{tabular}")
+    return lines
+
+
+def _wide_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    columns = "|l|" + "c|" * len(analysis.conditions)
+    heads = " & ".join(_tex(labels.get(c, c)) for c in analysis.conditions)
+    lines = [rf"    \begin{{tabular}}{{{columns}}}", r"    \hline", rf"    Measure & {heads} \\"]
+    lines.append(r"    \hline")
+    for measure, result in analysis.measures.items():
+        cells = " & ".join(
+            f"{_num(result.conditions[c].median, 1, '--')}, {_mean_sd_tex(result.conditions[c])}"
+            for c in analysis.conditions
+        )
+        lines.append(rf"    {_tex(MEASURE_LABELS.get(measure, measure))} & {cells} \\")
+    lines += [r"    \hline", r"    \end{tabular}"]
+    return lines
+
+
+def _friedman_text(result: MeasureAnalysis) -> str:
+    test = result.friedman
+    if test.chi2 is None:
+        return f"chi2 {UNDEFINED} (n = {test.n}; every participant's values tied or no data)"
+    text = (
+        f"chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}, Bonferroni p = "
+        f"{_p(result.p_bonferroni)}, Kendall's W = {_num(test.kendall_w, 3)}, n = {test.n}"
+    )
+    if result.permutation is not None:
+        perm = result.permutation
+        how = (
+            "exact"
+            if perm.method == "exact"
+            else f"Monte Carlo, {perm.resamples} resamples, seed {perm.seed}"
+        )
+        text += (
+            f"; permutation p ({how}) = {_p(perm.p)}, Bonferroni "
+            f"{_p(result.permutation_p_bonferroni)}"
+        )
+    return text
+
+
+def _cell(d: Descriptive, plus_minus: str) -> str:
+    if d.n == 0:
+        return "no data"
+    return f"{_num(d.median, 1)}, {_num(d.mean, 1)} {plus_minus} {_num(d.sd, 1)}"
+
+
+def _mean_sd_tex(d: Descriptive) -> str:
+    if d.mean is None:
+        return "--"
+    return rf"${d.mean:.1f}\pm{_num(d.sd, 1, '--')}$"
+
+
+def _num(value: float | None, digits: int, missing: str = UNDEFINED) -> str:
+    return missing if value is None else f"{value:.{digits}f}"
+
+
+def _p(value: float | None) -> str:
+    if value is None:
+        return UNDEFINED
+    return "< 0.0001" if value < 0.0001 else f"{value:.4f}"
+
+
+def _tex(text: str) -> str:
+    for char, escaped in [
+        ("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
+        ("#", r"\#"), ("_", r"\_"), ("{", r"\{"), ("}", r"\}"),
+    ]:  # fmt: skip
+        text = text.replace(char, escaped)
+    return text

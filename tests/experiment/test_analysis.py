@@ -1,0 +1,205 @@
+"""The analysis from score rows: descriptives, corrections, exclusions, post-hoc, rendering."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from chameleons.experiment.stats import (
+    AnalysisError,
+    analyze,
+    error_score_table,
+    render_latex,
+    render_text,
+    score_questionnaire,
+)
+from chameleons.experiment.study import load_default_study
+
+CONDITIONS = ("natural", "copy", "still")
+# Accepted suggestions constructed to be consistent with the paper's Table I row
+# (medians 1.0/1.0/1.5, means 1.4/1.5/1.6, SDs 0.9) and its chi2 = 0.25.
+ACCEPTED = {
+    "natural": [2, 2, 1, 1, 3, 1, 3, 1, 1, 1, 1, 0],
+    "copy": [1, 3, 1, 1, 2, 0, 1, 3, 2, 2, 1, 1],
+    "still": [1, 2, 1, 1, 2, 2, 0, 2, 1, 3, 1, 3],
+}
+
+
+def score_rows(seed: int = 0, trust_shift: float = 0.0) -> list[dict[str, Any]]:
+    """12 participants x 3 conditions; ``trust_shift`` makes copy's trust clearly higher."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for p in range(12):
+        for condition in CONDITIONS:
+            bonus = trust_shift * (condition == "copy") + trust_shift / 2 * (condition == "still")
+            rows.append(
+                {
+                    "participant": str(p + 1),
+                    "condition": condition,
+                    "accepted": ACCEPTED[condition][p],
+                    "credibility": round(float(rng.uniform(2, 6)), 3),
+                    "likeability": round(float(rng.uniform(2, 6)), 3),
+                    "trust": round(float(rng.uniform(1, 3)) + bonus + p * 0.01, 3),
+                }
+            )
+    return rows
+
+
+def column(rows: list[dict[str, Any]], measure: str) -> np.ndarray:
+    return np.array([[r[measure] for r in rows if r["condition"] == c] for c in CONDITIONS]).T
+
+
+def test_descriptives_and_friedman_per_measure() -> None:
+    rows = score_rows()
+    analysis = analyze(rows)
+    assert analysis.conditions == list(CONDITIONS)
+    for measure in ("accepted", "credibility", "likeability", "trust"):
+        data = column(rows, measure)
+        result = analysis.measures[measure]
+        for j, condition in enumerate(CONDITIONS):
+            d = result.conditions[condition]
+            assert d.n == 12
+            assert d.median == pytest.approx(np.median(data[:, j]))
+            assert d.mean == pytest.approx(np.mean(data[:, j]))
+            assert d.sd == pytest.approx(np.std(data[:, j], ddof=1))
+        reference = stats.friedmanchisquare(*data.T)
+        assert result.friedman.chi2 == pytest.approx(reference.statistic)
+        assert result.p_bonferroni == pytest.approx(min(1.0, 4 * reference.pvalue))
+        assert result.friedman.kendall_w == pytest.approx(reference.statistic / 24)
+
+
+def test_accepted_row_in_table_one_layout() -> None:
+    analysis = analyze(score_rows())
+    accepted = analysis.measures["accepted"]
+    assert accepted.friedman.chi2 == pytest.approx(0.25)
+    assert accepted.p_bonferroni == 1.0
+    latex = render_latex(analysis)
+    assert r"\multirow{3}*{Accepted robot suggestions}" in latex
+    assert r"& Natural movement & 1.0 & $1.4\pm0.9$ \\" in latex
+    assert r"& Copy & 1.0 & $1.5\pm0.9$ \\" in latex
+    assert r"& Still & 1.5 & $1.6\pm0.9$ \\" in latex
+    assert latex.index("Natural movement") < latex.index("Copy") < latex.index("Still")
+    wide = render_latex(analysis, layout="wide")
+    assert r"Accepted robot suggestions & 1.0, $1.4\pm0.9$ & 1.0, $1.5\pm0.9$" in wide
+
+
+def test_posthoc_only_where_the_corrected_test_is_significant() -> None:
+    rows = score_rows(trust_shift=3.0)
+    analysis = analyze(rows)
+    trust = analysis.measures["trust"]
+    assert trust.p_bonferroni is not None
+    assert trust.p_bonferroni < 0.05
+    data = column(rows, "trust")
+    assert [(t.a, t.b) for t in trust.posthoc] == [
+        ("natural", "copy"), ("natural", "still"), ("copy", "still")
+    ]  # fmt: skip
+    for test, (i, j) in zip(trust.posthoc, [(0, 1), (0, 2), (1, 2)], strict=True):
+        reference = stats.wilcoxon(data[:, i], data[:, j])
+        assert test.p == pytest.approx(reference.pvalue)
+        assert test.p_bonferroni == pytest.approx(min(1.0, 3 * reference.pvalue))
+    assert analysis.measures["accepted"].posthoc == []
+    assert "not done" in analysis.measures["accepted"].posthoc_note
+
+
+def test_participant_missing_a_condition_is_excluded_with_a_note() -> None:
+    rows = [r for r in score_rows() if not (r["participant"] == "7" and r["condition"] == "copy")]
+    rows[0]["trust"] = ""  # participant 1's natural trust is missing too
+    analysis = analyze(rows)
+    accepted, trust = analysis.measures["accepted"], analysis.measures["trust"]
+    assert accepted.friedman.n == 11
+    assert accepted.excluded == ["7"]
+    assert any("participant 7 excluded" in note for note in accepted.notes)
+    assert trust.excluded == ["1", "7"]
+    assert trust.conditions["still"].n == 10
+
+
+def test_all_tied_measure_is_undefined_everywhere() -> None:
+    rows = score_rows()
+    for row in rows:
+        row["accepted"] = 2
+    analysis = analyze(rows)
+    accepted = analysis.measures["accepted"]
+    assert accepted.friedman.chi2 is None
+    assert accepted.p_bonferroni is None
+    data = analysis.to_dict()["measures"]["accepted"]["friedman"]
+    assert data["chi2"] is None
+    assert data["defined"] is False
+    assert "chi2 undefined" in render_text(analysis)
+
+
+def test_json_shape_and_permutation_p() -> None:
+    data = analyze(score_rows(), permutations=500).to_dict()
+    json.dumps(data)
+    accepted = data["measures"]["accepted"]
+    assert set(accepted["conditions"]["copy"]) == {"n", "median", "mean", "sd"}
+    friedman = accepted["friedman"]
+    assert {"n", "chi2", "df", "p", "p_bonferroni", "kendall_w"} <= set(friedman)
+    assert friedman["permutation"]["method"] == "exact"
+    assert 0 < friedman["permutation"]["p"] <= 1
+    assert isinstance(accepted["posthoc"], list)
+
+
+def test_text_rendering_has_the_table_and_the_tests() -> None:
+    text = render_text(analyze(score_rows(), permutations=100))
+    assert "Natural movement" in text
+    assert "1.0, 1.4 ± 0.9" in text
+    assert "chi2(2) = 0.25" in text
+    assert "permutation p (exact)" in text
+
+
+def test_bad_rows_are_refused_readably() -> None:
+    with pytest.raises(AnalysisError, match="row 1, trust: 'high' is not a number"):
+        analyze([{"participant": "1", "condition": "copy", "trust": "high"}])
+    with pytest.raises(AnalysisError, match="has copy twice"):
+        analyze([{"participant": "1", "condition": "copy", "trust": 1}] * 2)
+    with pytest.raises(AnalysisError, match="no measure columns"):
+        analyze([{"participant": "1", "condition": "copy"}])
+
+
+def test_questionnaire_scores_reverse_keyed_items() -> None:
+    credibility = load_default_study().questionnaire("credibility")
+    reverse = {item.id for item in credibility.items if item.reverse}
+    assert 0 < len(reverse) < 12
+    # Always ticking the favourable end: 7 on normal items, 1 on reverse-keyed ones.
+    favourable = {item.id: 1 if item.id in reverse else 7 for item in credibility.items}
+    assert score_questionnaire(credibility, favourable) == 7.0
+    all_fours = dict.fromkeys(favourable, 4)
+    assert score_questionnaire(credibility, all_fours) == 4.0
+    all_sevens = dict.fromkeys(favourable, 7)
+    expected = (7 * (12 - len(reverse)) + 1 * len(reverse)) / 12
+    assert score_questionnaire(credibility, all_sevens) == pytest.approx(expected)
+
+
+def test_questionnaire_scoring_refuses_bad_answers() -> None:
+    study = load_default_study()
+    trust = study.questionnaire("trust")
+    answers = {item.id: 5 for item in trust.items}
+    with pytest.raises(ValueError, match="unanswered"):
+        score_questionnaire(trust, dict(list(answers.items())[1:]))
+    partial = dict(list(answers.items())[2:])
+    assert score_questionnaire(trust, partial, allow_missing=True) == pytest.approx(
+        sum(8 - 5 if i.reverse else 5 for i in trust.items[2:]) / 4
+    )
+    with pytest.raises(ValueError, match=r"outside 1\.\.7"):
+        score_questionnaire(trust, {**answers, "moral": 8})
+    with pytest.raises(ValueError, match="not numeric items"):
+        score_questionnaire(trust, {**answers, "experience": 3})
+    with pytest.raises(ValueError, match="no numeric items"):
+        score_questionnaire(study.questionnaire("experience"), {})
+
+
+def test_error_score_table() -> None:
+    rows = [
+        {"condition": "copy", "initial_error": 6, "final_error": 2},
+        {"condition": "copy", "initial_error": 4, "final_error": 4},
+        {"condition": "still", "initial_error": 8, "final_error": ""},
+    ]
+    table = error_score_table(rows)
+    assert table["initial_error"]["copy"].mean == 5
+    assert table["error_change"]["copy"].mean == -2
+    assert table["error_change"]["still"].n == 0
+    assert list(table["final_error"]) == ["copy", "still"]
