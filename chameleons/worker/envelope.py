@@ -67,7 +67,7 @@ def deserialize(frames: list[bytes]) -> Message:
     try:
         topic = bytes(topic_raw).decode()
         header = json.loads(bytes(header_raw), parse_constant=_reject_constant)
-    except (UnicodeDecodeError, ValueError) as exc:
+    except (ValueError, RecursionError) as exc:  # RecursionError: absurdly nested JSON
         raise EnvelopeError("bad_header", str(exc)) from exc
     if not isinstance(header, dict) or set(header) != _HEADER_KEYS:
         raise EnvelopeError("bad_header", "header must have exactly " + ", ".join(_HEADER_KEYS))
