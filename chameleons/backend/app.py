@@ -30,6 +30,9 @@ from chameleons.backend.sessions import live as session_live
 from chameleons.backend.studies import endpoints as study_endpoints
 from chameleons.backend.studies import pages as study_pages
 from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
+from chameleons.backend.wizard import endpoints as wizard_endpoints
+from chameleons.backend.wizard import live as wizard_live
+from chameleons.backend.wizard import pages as wizard_pages
 from chameleons.settings import Settings
 
 FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
@@ -88,6 +91,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         phone_pages.router,
         export_endpoints.router,
         withdrawal_endpoints.router,
+        wizard_pages.router,
+        wizard_endpoints.router,
+        wizard_live.router,
     ):
         app.include_router(router)
     return app

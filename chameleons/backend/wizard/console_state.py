@@ -1,0 +1,72 @@
+"""Everything the console shows, read from the database in one go (the page is rebuilt from
+this after a reload, a reconnect or a live change, so nothing lives only in the browser).
+
+The session itself is the session flow's snapshot; the console adds its timeline, the
+interaction whose prompts are on the buttons, and the prompt groups that phrase the
+pending suggestion.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from chameleons.backend.events import repository as events
+from chameleons.backend.events.hub import LiveHub
+from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.sessions.flow import load as load_flow
+from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.studies.specs import item_key
+from chameleons.backend.wizard import layout
+from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
+from chameleons.backend.wizard.repository import PLAYED
+
+TIMELINE_LIMIT = 5000
+
+
+def console_state(db: Session, app_state: Any, session_id: int, base_url: str) -> dict[str, Any]:
+    """Raises the session flow's ``NotFoundError`` for an unknown session."""
+    flow = load_flow(db, session_id, lock=False)
+    hub: LiveHub = app_state.live_hub
+    snapshot = session_snapshot(flow, base_url, hub.present(phone_presence_key(session_id)))
+    position = prompt_position(flow)
+    timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
+    return {
+        "session": snapshot,
+        "prompt_position": position,
+        "suggestion_prompts": _suggestion_prompts(app_state, snapshot, position),
+        "events": [events.to_dict(event) for event in timeline],
+        "last_event_id": timeline[-1].id if timeline else 0,
+        "last_play_id": next((e.id for e in reversed(timeline) if e.kind == PLAYED), None),
+        "worker": {"bridge": getattr(app_state, "bridge", None) is not None},
+    }
+
+
+def prompt_position(flow: Flow) -> int:
+    """The interaction whose prompts the wizard needs: the current one, or the next once the
+    current one is done (the session flow's own rule for "upcoming")."""
+    current = flow.current
+    if current.state == "done" and not flow.is_last:
+        return current.position + 1
+    return current.position
+
+
+def _suggestion_prompts(app_state: Any, snapshot: dict[str, Any], position: int) -> list[str]:
+    """Groups phrasing the pending suggestion of ``position``, best first (may be empty)."""
+    interaction = next(i for i in snapshot["interactions"] if i["position"] == position)
+    pending = next((s for s in interaction["suggestions"] if s["accepted"] is None), None)
+    if pending is None or interaction["state"] != "negotiation":
+        return []
+    try:
+        catalogue = catalogue_for(app_state, interaction["actor"])
+    except MissingCatalogueError:
+        return []
+    ranking = interaction["current_ranking"] or interaction["initial_ranking"] or []
+    return layout.suggestion_groups(
+        catalogue,
+        interaction["task"],
+        item_key(pending["item"]),
+        pending["to_rank"],
+        [item_key(item) for item in ranking],
+    )

@@ -1,0 +1,134 @@
+"""The robot's health as the console's strip shows it: checks from the worker's telemetry,
+each ok or failing, and since when it has been failing.
+
+``HealthTracker`` keeps the "failing since" moments per booth on ``app.state``, so a
+reloaded console still shows how long an alarm has been on.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+STALE_AFTER_SECONDS = 3.0  # heartbeats come at 1 Hz: three missed ones mean "gone"
+MIN_INPUT_FPS = 20.0
+MIN_TICK_RATIO = 0.9  # of the nominal tick rate
+MAX_JITTER_P99_MS = 2.0
+NOMINAL_TICK_HZ = 125.0
+
+CHECKS = ("worker", "input", "tick", "jitter", "robot")
+LABELS = {
+    "worker": "Worker",
+    "input": "Face stream",
+    "tick": "Renderer",
+    "jitter": "Jitter",
+    "robot": "Robot",
+    "speaking": "Speaking",
+}
+
+
+@dataclass
+class Check:
+    id: str
+    ok: bool
+    value: str
+    failing_for: float | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "label": LABELS[self.id],
+            "ok": self.ok,
+            "value": self.value,
+            "failing_for": None if self.failing_for is None else round(self.failing_for, 1),
+        }
+
+
+def _number(data: Mapping[str, Any], *names: str) -> float | None:
+    """The first of ``names`` present as a number (dots walk into nested mappings)."""
+    for name in names:
+        value: Any = data
+        for part in name.split("."):
+            value = value.get(part) if isinstance(value, Mapping) else None
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return float(value)
+    return None
+
+
+def _flag(data: Mapping[str, Any], *names: str) -> bool | None:
+    for name in names:
+        value = data.get(name)
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str):
+            return value in ("connected", "open", "ok", "true")
+    return None
+
+
+def evaluate(telemetry: Mapping[str, Any] | None, age: float | None) -> dict[str, Check]:
+    """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds."""
+    if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
+        why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
+        checks = {name: Check(name, False, "unknown") for name in CHECKS}
+        checks["worker"] = Check("worker", False, why)
+        checks["speaking"] = Check("speaking", True, "unknown")
+        return checks
+    fps = _number(telemetry, "input_fps", "input_frame_rate", "ingest.fps")
+    tick = _number(telemetry, "tick_rate", "tick_hz", "renderer.tick_rate")
+    nominal = _number(telemetry, "tick_target", "nominal_tick_rate") or NOMINAL_TICK_HZ
+    jitter = _number(telemetry, "jitter_p99_ms", "tick_jitter_ms.p99", "jitter.p99")
+    robot = _flag(telemetry, "robot_connected", "driver_connected", "robot")
+    speaking = _flag(telemetry, "speaking")
+    tick_ok = tick is not None and tick >= MIN_TICK_RATIO * nominal
+    jitter_ok = jitter is not None and jitter <= MAX_JITTER_P99_MS
+    return {
+        "worker": Check("worker", True, "connected"),
+        "input": Check("input", fps is not None and fps >= MIN_INPUT_FPS, _fmt(fps, "fps")),
+        "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
+        "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
+        "robot": Check("robot", robot is True, "connected" if robot else "disconnected"),
+        "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
+    }
+
+
+def _fmt(value: float | None, unit: str, digits: int = 1) -> str:
+    return "unknown" if value is None else f"{value:.{digits}f} {unit}"
+
+
+@dataclass
+class HealthTracker:
+    """When each check of each booth started failing (monotonic seconds)."""
+
+    since: dict[tuple[str, str], float] = field(default_factory=dict)
+
+    def snapshot(
+        self,
+        booth: str,
+        telemetry: Mapping[str, Any] | None,
+        age: float | None,
+        now: float | None = None,
+    ) -> dict[str, Any]:
+        moment = time.monotonic() if now is None else now
+        checks = evaluate(telemetry, age)
+        for check in checks.values():
+            key = (booth, check.id)
+            if check.ok:
+                self.since.pop(key, None)
+            else:
+                check.failing_for = moment - self.since.setdefault(key, moment)
+        return {
+            "type": "health",
+            "booth": booth,
+            "ok": all(check.ok for check in checks.values()),
+            "checks": [checks[name].as_dict() for name in (*CHECKS, "speaking")],
+            "telemetry": dict(telemetry) if telemetry is not None else None,
+        }
+
+
+def tracker_of(state: Any) -> HealthTracker:
+    tracker: HealthTracker | None = getattr(state, "wizard_health", None)
+    if tracker is None:
+        tracker = state.wizard_health = HealthTracker()
+    return tracker

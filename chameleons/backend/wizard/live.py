@@ -1,0 +1,110 @@
+"""The console's WebSocket ``/ws/wizard/sessions/{id}`` (staff login via the cookie).
+
+On connect ``{"type": "console", ...}`` (the whole console state); then, per batch of
+committed changes, each new event as ``{"type": "event", ...}`` followed by a fresh console
+state; and once a second the robot's health as ``{"type": "health", ...}``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from typing import Any
+
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from starlette.concurrency import run_in_threadpool
+
+from chameleons.backend.auth import repository as staff
+from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.events import live
+from chameleons.backend.events.hub import LiveHub, Message, session_channel
+from chameleons.backend.studies.errors import NotFoundError
+from chameleons.backend.wizard import health, worker_link
+from chameleons.backend.wizard.console_state import console_state
+from chameleons.backend.wizard.playback import read
+
+router = APIRouter(tags=["wizard"])
+HEALTH_INTERVAL_SECONDS = 1.0
+UNAUTHORIZED = 4401
+NOT_FOUND = 4404
+
+
+class Sender:
+    """Two tasks write to one socket; a lock keeps whole messages apart."""
+
+    def __init__(self, websocket: WebSocket) -> None:
+        self._websocket = websocket
+        self._lock = asyncio.Lock()
+
+    async def send(self, message: Message) -> None:
+        async with self._lock:
+            await live.send_json(self._websocket, message)
+
+
+def _is_staff(db: Any, user_id: Any) -> bool:
+    user = staff.get_by_id(db, user_id) if isinstance(user_id, int) else None
+    return user is not None and user.is_active
+
+
+def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Message:
+    return {"type": "console", **console_state(db, state, session_id, base_url)}
+
+
+def _base_url(websocket: WebSocket) -> str:
+    configured = websocket.app.state.settings.public_url
+    if configured:
+        return str(configured).rstrip("/")
+    scheme = "https" if websocket.url.scheme == "wss" else "http"
+    return f"{scheme}://{websocket.headers.get('host', 'localhost')}"
+
+
+@router.websocket("/ws/wizard/sessions/{session_id}")
+async def console_feed(websocket: WebSocket, session_id: int) -> None:
+    state = websocket.app.state
+    user_id = websocket.session.get(SESSION_USER_KEY)
+    if not live.same_origin(websocket) or not await run_in_threadpool(
+        read, state, _is_staff, user_id
+    ):
+        await websocket.close(code=UNAUTHORIZED)
+        return
+    base_url = _base_url(websocket)
+    try:
+        first = await run_in_threadpool(read, state, _state_message, state, session_id, base_url)
+    except NotFoundError:
+        await websocket.close(code=NOT_FOUND)
+        return
+    await websocket.accept()
+    sender = Sender(websocket)
+    hub: LiveHub = state.live_hub
+    booth = str(first["session"]["booth"])
+    async with hub.subscribe(session_channel(session_id)) as subscription:
+        await sender.send(first)
+
+        async def on_change(messages: list[Message]) -> None:
+            for message in messages:
+                if message.get("type") != "resync":
+                    await sender.send(message)
+            fresh = await run_in_threadpool(
+                read, state, _state_message, state, session_id, base_url
+            )
+            await sender.send(fresh)
+
+        beat = asyncio.create_task(_forward_health(sender, state, booth))
+        try:
+            await live.serve(websocket, subscription, on_change)
+        finally:
+            beat.cancel()
+            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                await beat
+
+
+async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
+    tracker = health.tracker_of(state)
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            bridge = worker_link.bridge_of(state)
+            telemetry, age = worker_link.latest_telemetry(bridge, booth)
+            snapshot = tracker.snapshot(booth, telemetry, age)
+            snapshot["bridge"] = bridge is not None
+            await sender.send(snapshot)
+            await asyncio.sleep(HEALTH_INTERVAL_SECONDS)

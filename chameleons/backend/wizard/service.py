@@ -1,0 +1,217 @@
+"""Playing and stopping prompts: the database side (choose the variant, log every step).
+
+Flushes only; the caller's write scope commits (and then publishes the events live). The
+timeline of one play: ``prompt.played`` (the wizard's click, server time) ->
+``prompt.acked`` with the click->ack latency, or ``prompt.not_sent`` with the reason ->
+``prompt.speech_start`` with the worker's timestamp and the click->speech latency ->
+``prompt.speech_end``.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from chameleons.backend.events import repository as events
+from chameleons.backend.models import Event
+from chameleons.backend.models.base import utcnow
+from chameleons.backend.studies.errors import ConflictError, NotFoundError
+from chameleons.backend.wizard import repository
+from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
+from chameleons.prompts import Catalogue, Prompt, pick_variant
+
+ACKED = "prompt.acked"
+NOT_SENT = "prompt.not_sent"
+SPEECH_START = "prompt.speech_start"
+SPEECH_END = "prompt.speech_end"
+STOPPED = "prompt.stopped"
+
+
+@dataclass(frozen=True)
+class Cue:
+    """One play, as decided and logged at the click."""
+
+    event_id: int
+    study_id: int
+    session_id: int
+    interaction_id: int
+    booth: str
+    actor: str
+    prompt: Prompt
+    duration: float
+    clicked_at: datetime
+    audio: str | None
+    lipsync: str | None
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "event_id": self.event_id,
+            "prompt_id": self.prompt.id,
+            "group": self.prompt.group,
+            "text": self.prompt.text,
+            "duration": self.duration,
+            "clicked_at": self.clicked_at.isoformat(),
+        }
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What the worker said (or why nothing was said)."""
+
+    sent: bool
+    reason: str = ""
+    detail: str = ""
+    result: dict[str, Any] | None = None
+
+
+def start_play(
+    db: Session, state: Any, session_id: int, group_name: str, rng: random.Random | None = None
+) -> Cue:
+    """Pick a variant of ``group_name`` (never the one played last) and log the click."""
+    clicked_at = utcnow()
+    view = _running(db, session_id)
+    interaction = view.current
+    if interaction is None:
+        raise ConflictError("This session has no current interaction to play prompts in.")
+    catalogue = _catalogue(state, interaction.actor)
+    try:
+        group = catalogue.group(group_name)
+    except KeyError:
+        raise NotFoundError(
+            f"Actor {interaction.actor!r} has no prompt group {group_name!r}."
+        ) from None
+    last = repository.last_played_variant(db, session_id, group_name)
+    prompt = pick_variant(group, last, rng)
+    duration = round(catalogue.duration(prompt), 2)
+    event = events.record(
+        db,
+        repository.PLAYED,
+        source="wizard",
+        study_id=view.session.study_id,
+        session_id=session_id,
+        interaction_id=interaction.id,
+        at=clicked_at,
+        payload={
+            "prompt_id": prompt.id,
+            "group": prompt.group,
+            "stage": prompt.stage.value,
+            "item": prompt.item,
+            "other_item": prompt.other_item,
+            "text": prompt.text,
+            "duration": duration,
+            "has_audio": prompt.audio is not None,
+            "actor": interaction.actor,
+            "position": interaction.position,
+        },
+    )
+    return Cue(
+        event_id=event.id,
+        study_id=view.session.study_id,
+        session_id=session_id,
+        interaction_id=interaction.id,
+        booth=view.session.booth,
+        actor=interaction.actor,
+        prompt=prompt,
+        duration=duration,
+        clicked_at=clicked_at,
+        audio=str(prompt.audio) if prompt.audio else None,
+        lipsync=str(catalogue.lipsync_file(prompt)) if prompt.lipsync else None,
+    )
+
+
+def record_outcome(db: Session, cue: Cue, outcome: Outcome, acked_at: datetime) -> Event:
+    """Log the worker's acknowledgement (with the click->ack latency) or why it was not sent."""
+    payload: dict[str, Any] = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id}
+    if outcome.sent:
+        payload["click_to_ack_ms"] = _ms_between(cue.clicked_at, acked_at)
+        payload["result"] = outcome.result or {}
+        kind, source = ACKED, "worker"
+    else:
+        payload.update(reason=outcome.reason, detail=outcome.detail)
+        kind, source = NOT_SENT, "server"
+    return _log(db, cue, kind, source, payload, at=acked_at)
+
+
+def record_speech(
+    db: Session, cue: Cue, started: bool, received_at: datetime, worker_time: float | None
+) -> Event:
+    """Log a speech start/end the worker reported for this play."""
+    payload: dict[str, Any] = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id}
+    if started:
+        payload["click_to_speech_ms"] = _ms_between(cue.clicked_at, received_at)
+    kind = SPEECH_START if started else SPEECH_END
+    return _log(db, cue, kind, "worker", payload, at=received_at, worker_time=worker_time)
+
+
+def record_stop(db: Session, session_id: int, outcome: Outcome) -> Event:
+    view = _running(db, session_id)
+    last = repository.last_played(db, session_id)
+    current = view.current
+    payload: dict[str, Any] = {
+        "prompt_id": last.payload.get("prompt_id") if last else None,
+        "play_event_id": last.id if last else None,
+        "sent": outcome.sent,
+    }
+    if not outcome.sent:
+        payload.update(reason=outcome.reason, detail=outcome.detail)
+    return events.record(
+        db,
+        STOPPED,
+        source="wizard",
+        study_id=view.session.study_id,
+        session_id=session_id,
+        interaction_id=current.id if current else None,
+        payload=payload,
+    )
+
+
+def booth_of(db: Session, session_id: int) -> str:
+    return _running(db, session_id).session.booth
+
+
+def _running(db: Session, session_id: int) -> repository.SessionView:
+    try:
+        view = repository.load_session(db, session_id)
+    except repository.SessionNotFoundError as exc:
+        raise NotFoundError(str(exc)) from None
+    if view.session.state == "complete":
+        raise ConflictError(f"Session {session_id} is complete; nothing more is played.")
+    return view
+
+
+def _catalogue(state: Any, actor: str) -> Catalogue:
+    try:
+        return catalogue_for(state, actor)
+    except MissingCatalogueError as exc:
+        raise ConflictError(str(exc)) from None
+
+
+def _log(
+    db: Session,
+    cue: Cue,
+    kind: str,
+    source: str,
+    payload: dict[str, Any],
+    *,
+    at: datetime,
+    worker_time: float | None = None,
+) -> Event:
+    return events.record(
+        db,
+        kind,
+        source=source,
+        study_id=cue.study_id,
+        session_id=cue.session_id,
+        interaction_id=cue.interaction_id,
+        payload=payload,
+        worker_time=worker_time,
+        at=at,
+    )
+
+
+def _ms_between(start: datetime, end: datetime) -> float:
+    return round((end - start).total_seconds() * 1000, 1)

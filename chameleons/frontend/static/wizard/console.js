@@ -1,0 +1,201 @@
+// The wizard console: state from the server (HTTP on load, then the live WebSocket),
+// rendered by the panels; every action goes to the server and comes back as events.
+
+import { createApi } from "./api.js";
+import { HealthStrip } from "./health.js";
+import { bindKeys } from "./keys.js";
+import { connectLive } from "./live.js";
+import { NowPlaying, playState } from "./nowplaying.js";
+import {
+  interactionAt,
+  itemNames,
+  primaryAction,
+  renderBar,
+  renderCondition,
+  renderNegotiation,
+  renderParticipant,
+  renderPrimary,
+  tickUndo,
+} from "./panels.js";
+import { PromptBoard } from "./prompts.js";
+import { Timeline } from "./timeline.js";
+
+const $ = (id) => document.getElementById(id);
+const root = $("console");
+const sessionId = Number(root.dataset.sessionId);
+const link = { server: true, live: false };
+const api = createApi(sessionId, root.dataset.csrf, (ok) => {
+  link.server = ok;
+  showLink();
+});
+
+let state = null;
+let promptsPosition = null;
+let sendingGroup = null;
+let flashTimer = null;
+
+const board = new PromptBoard($("prompt-sections"), $("prompt-search"), $("search-count"), play);
+const timeline = new Timeline($("timeline"), $("timeline-count"));
+const now = new NowPlaying($("now-playing"), $("now-label"), $("now-bar"), (s) =>
+  board.markPlaying(["playing", "sending"].includes(s.phase) ? s.group : null),
+);
+const health = new HealthStrip($("health"));
+
+function showLink() {
+  const banner = $("conn-banner");
+  const problems = [];
+  if (!link.server) problems.push("The server is unreachable: actions are not saved. Retrying…");
+  else if (!link.live) problems.push("Live updates interrupted: reconnecting… (the page may be out of date)");
+  banner.hidden = problems.length === 0;
+  banner.textContent = problems.join(" ");
+  root.classList.toggle("offline", problems.length > 0);
+}
+
+function flash(message, kind = "error") {
+  const node = $("flash");
+  node.textContent = message;
+  node.className = `wz-flash ${kind}`;
+  node.hidden = false;
+  clearTimeout(flashTimer);
+  flashTimer = setTimeout(() => (node.hidden = true), kind === "error" ? 9000 : 4000);
+}
+
+async function perform(what, run) {
+  try {
+    await run();
+    if (!link.live) await refresh();
+  } catch (error) {
+    flash(`${what}: ${error.message}`);
+  }
+}
+
+async function refresh() {
+  try {
+    apply(await api.console());
+  } catch (error) {
+    flash(`Could not load the session: ${error.message}`);
+  }
+}
+
+async function apply(next) {
+  state = next;
+  if (state.prompt_position !== promptsPosition) {
+    promptsPosition = state.prompt_position;
+    try {
+      board.render(await api.prompts(promptsPosition));
+    } catch (error) {
+      $("prompt-sections").textContent = `The prompts cannot be shown: ${error.message}`;
+    }
+  }
+  renderBar(state);
+  renderPrimary(state, api, perform);
+  renderCondition(state, requestSwitch);
+  renderNegotiation(state, board, act);
+  renderParticipant(state);
+  board.highlight(state.suggestion_prompts);
+  board.markPlayed(playedCounts(state));
+  timeline.sync(state.events, itemNames(state));
+  if (!sendingGroup) now.show(playState(state.events));
+}
+
+function playedCounts(current) {
+  const counts = new Map();
+  for (const event of current.events) {
+    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position) {
+      counts.set(event.payload.group, (counts.get(event.payload.group) || 0) + 1);
+    }
+  }
+  return counts;
+}
+
+async function play(group) {
+  const button = board.find(group);
+  sendingGroup = group;
+  now.sending(button ? button.text : group, group);
+  try {
+    const result = await api.play(group);
+    if (!result.sent) flash(`Not sent: ${result.detail}`, "warn");
+  } catch (error) {
+    flash(`Play failed: ${error.message}`);
+  } finally {
+    sendingGroup = null;
+  }
+  if (!link.live) await refresh();
+  else if (state) now.show(playState(state.events));
+}
+
+function act(what) {
+  if (!state) return;
+  const allowed = state.session.allowed;
+  const decide = allowed.find((a) => a.action === "decide");
+  const undo = allowed.find((a) => a.action === "undo");
+  if ((what === "accept" || what === "decline") && decide) {
+    perform(`${what} suggestion ${decide.index}`, () => api.decide(decide.position, decide.index, what === "accept"));
+  } else if (what === "undo" && undo && Date.parse(undo.until) > Date.now()) {
+    perform(`undo suggestion ${undo.index}`, () => api.undo(undo.position, undo.index));
+  } else {
+    flash(`Cannot ${what} now. ${state.session.allowed_sentence}`, "warn");
+  }
+}
+
+function requestSwitch(interaction, condition) {
+  if (condition === interaction.condition) return;
+  const run = () => perform("switch condition", () => api.condition(interaction.position, condition));
+  if (condition === interaction.planned_condition) {
+    run();
+    return;
+  }
+  const dialog = $("confirm-dialog");
+  $("confirm-text").textContent =
+    `Interaction ${interaction.position} is planned as "${interaction.planned_condition}". ` +
+    `Switch it to "${condition}"? This is logged as a deviation from the plan.`;
+  dialog.returnValue = "";
+  dialog.onclose = () => {
+    if (dialog.returnValue === "ok") run();
+  };
+  dialog.showModal();
+  $("confirm-ok").focus();
+}
+
+bindKeys({
+  stop: () => perform("stop", () => api.stop()),
+  search: () => $("prompt-search").focus(),
+  help: () => $("help-dialog").showModal(),
+  accept: () => act("accept"),
+  decline: () => act("decline"),
+  undo: () => act("undo"),
+  primary: () => {
+    const action = state && primaryAction(state, api);
+    if (action && action.run) perform(action.label, action.run);
+  },
+  suggestion: (index) => {
+    const group = state && state.suggestion_prompts[index];
+    if (group) play(group);
+  },
+  play: (code, shift) => {
+    const group = board.groupForKey(code, shift);
+    if (group) play(group);
+    return Boolean(group);
+  },
+  playFirstMatch: () => {
+    const group = board.firstVisible();
+    if (group) play(group);
+  },
+});
+
+$("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
+$("help-open").addEventListener("click", () => $("help-dialog").showModal());
+setInterval(() => state && tickUndo(state), 1000);
+
+connectLive(sessionId, {
+  onStatus(open) {
+    link.live = open;
+    if (open) link.server = true;
+    showLink();
+  },
+  onMessage(message) {
+    if (message.type === "console") apply(message);
+    else if (message.type === "health") health.update(message);
+  },
+});
+refresh();

@@ -1,0 +1,51 @@
+// The health strip: one chip per check from the worker's telemetry, an alarm when any fails.
+
+import { el, seconds } from "./dom.js";
+
+const SILENT_AFTER_MS = 3500;
+
+export class HealthStrip {
+  constructor(container) {
+    this.container = container;
+    this.lastAt = 0;
+    setInterval(() => this.checkSilence(), 1000);
+  }
+
+  update(message) {
+    this.lastAt = Date.now();
+    const failing = message.checks.filter((check) => !check.ok);
+    const chips = message.checks.map((check) =>
+      el(
+        "span",
+        {
+          class: `chip ${check.ok ? "ok" : "bad"}`,
+          dataset: { check: check.id },
+          title: check.ok ? "ok" : `failing for ${seconds(check.failing_for || 0)}`,
+        },
+        el("strong", { text: check.label }),
+        " ",
+        check.value,
+        check.ok ? null : el("span", { class: "since", text: ` · ${seconds(check.failing_for || 0)}` }),
+      ),
+    );
+    const alarm = failing.length
+      ? el(
+          "div",
+          { class: "alarm", role: "alert" },
+          message.bridge ? "Robot problem: " : "Worker unreachable (no bridge on this server). ",
+          failing.map((c) => `${c.label} ${c.value} for ${seconds(c.failing_for || 0)}`).join("; "),
+          message.bridge ? "" : " Prompts are logged but not sent.",
+        )
+      : null;
+    this.container.classList.toggle("failing", failing.length > 0);
+    this.container.replaceChildren(el("span", { class: "k", text: `Robot ${message.booth}` }), ...chips, alarm);
+  }
+
+  checkSilence() {
+    if (!this.lastAt || Date.now() - this.lastAt < SILENT_AFTER_MS) return;
+    this.container.classList.add("failing");
+    this.container.replaceChildren(
+      el("div", { class: "alarm", role: "alert", text: `No health data from the server for ${seconds((Date.now() - this.lastAt) / 1000)}.` }),
+    );
+  }
+}

@@ -1,0 +1,66 @@
+// Keyboard shortcuts. Letters and digits are matched by KeyboardEvent.code, so Shift+1 is
+// "Digit1 with Shift" whatever character the layout types.
+
+const TYPING = new Set(["INPUT", "TEXTAREA", "SELECT"]);
+const FIXED = {
+  KeyA: "accept",
+  KeyD: "decline",
+  KeyU: "undo",
+  Slash: "search",
+};
+const SUGGESTION_CODES = ["KeyM", "Comma", "Period"];
+
+export function bindKeys(handlers) {
+  document.addEventListener("keydown", (event) => {
+    if (document.querySelector("dialog[open]")) return;
+    const target = event.target;
+    if (TYPING.has(target.tagName)) {
+      if (target.id === "prompt-search") searchKeys(event, handlers);
+      return;
+    }
+    if (event.altKey || event.metaKey) return;
+    if (event.ctrlKey) {
+      if (event.key === "Enter") {
+        event.preventDefault();
+        handlers.primary();
+      }
+      return;
+    }
+    if (event.code === "Space" || event.key === "Escape") {
+      event.preventDefault();
+      handlers.stop();
+      return;
+    }
+    if (event.key === "?") {
+      event.preventDefault();
+      handlers.help();
+      return;
+    }
+    if (event.repeat) return;
+    const fixed = !event.shiftKey && FIXED[event.code];
+    if (fixed) {
+      event.preventDefault();
+      handlers[fixed]();
+      return;
+    }
+    const suggestion = SUGGESTION_CODES.indexOf(event.code);
+    if (suggestion >= 0 && !event.shiftKey) {
+      event.preventDefault();
+      handlers.suggestion(suggestion);
+      return;
+    }
+    if (handlers.play(event.code, event.shiftKey)) event.preventDefault();
+  });
+}
+
+function searchKeys(event, handlers) {
+  if (event.key === "Enter") {
+    event.preventDefault();
+    handlers.playFirstMatch();
+  } else if (event.key === "Escape") {
+    event.preventDefault();
+    event.target.value = "";
+    event.target.dispatchEvent(new Event("input"));
+    event.target.blur();
+  }
+}

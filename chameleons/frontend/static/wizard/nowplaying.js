@@ -1,0 +1,74 @@
+// The now-playing bar: what the robot says, its progress, and whether the worker got it.
+// Derived from the timeline (so a reload shows the same), plus "sending" while a click is
+// on its way.
+
+const DONE_MARGIN_MS = 1500;
+
+export function playState(events) {
+  let played = null;
+  for (let i = events.length - 1; i >= 0; i -= 1) {
+    if (events[i].kind === "prompt.played") {
+      played = events[i];
+      break;
+    }
+  }
+  if (!played) return { phase: "idle" };
+  const later = events.filter((e) => e.id > played.id);
+  const related = (kind) => later.find((e) => e.kind === kind && e.payload.play_event_id === played.id);
+  const base = { played, text: played.payload.text, group: played.payload.group, duration: played.payload.duration };
+  if (later.some((e) => e.kind === "prompt.stopped")) return { ...base, phase: "stopped" };
+  if (related("prompt.speech_end")) return { ...base, phase: "finished" };
+  const failed = related("prompt.not_sent");
+  if (failed) return { ...base, phase: "not-sent", detail: failed.payload.detail || failed.payload.reason };
+  const started = related("prompt.speech_start") || related("prompt.acked");
+  if (!started) return { ...base, phase: "sending" };
+  const startMs = Date.parse(started.server_time);
+  if (Date.now() - startMs > base.duration * 1000 + DONE_MARGIN_MS) return { ...base, phase: "finished" };
+  return { ...base, phase: "playing", startMs };
+}
+
+export class NowPlaying {
+  constructor(root, label, bar, onChange) {
+    this.root = root;
+    this.label = label;
+    this.bar = bar;
+    this.onChange = onChange;
+    this.state = { phase: "idle" };
+    this.frame = null;
+  }
+
+  sending(text, group) {
+    this.show({ phase: "sending", text, group, duration: 0 });
+  }
+
+  show(state) {
+    this.state = state;
+    this.root.className = `wz-now ${state.phase}`;
+    this.root.dataset.phase = state.phase;
+    const prefix = {
+      idle: "",
+      sending: "Sending… ",
+      playing: "Playing: ",
+      "not-sent": `NOT SENT (${state.detail}): `,
+      stopped: "Stopped: ",
+      finished: "Last: ",
+    }[state.phase];
+    this.label.textContent = state.phase === "idle" ? "Nothing playing." : `${prefix}${state.text}`;
+    this.label.className = state.phase === "finished" || state.phase === "stopped" ? "muted" : "";
+    cancelAnimationFrame(this.frame);
+    if (state.phase === "playing") this.tick();
+    else this.bar.style.width = state.phase === "not-sent" ? "100%" : "0%";
+    this.onChange(state);
+  }
+
+  tick() {
+    const { startMs, duration } = this.state;
+    const fraction = Math.min(1, (Date.now() - startMs) / Math.max(1, duration * 1000));
+    this.bar.style.width = `${(fraction * 100).toFixed(1)}%`;
+    if (Date.now() - startMs > duration * 1000 + DONE_MARGIN_MS) {
+      this.show({ ...this.state, phase: "finished" });
+      return;
+    }
+    this.frame = requestAnimationFrame(() => this.tick());
+  }
+}

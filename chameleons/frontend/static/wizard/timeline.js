@@ -1,0 +1,91 @@
+// The session timeline: every event, newest first, with per-prompt latencies.
+
+import { clock, el } from "./dom.js";
+
+function rankingText(ranking, names) {
+  return (ranking || []).map((id, i) => `${i + 1}. ${names.get(id) || id}`).join("  ");
+}
+
+export function describe(event, names) {
+  const p = event.payload || {};
+  const item = (id) => names.get(id) || id;
+  switch (event.kind) {
+    case "session.created": return `Session created for ${p.participant} (${p.booth})`;
+    case "session.started": return "Session started";
+    case "interaction.advanced": return `Interaction ${p.position}: ${p.from} → ${p.to}`;
+    case "ranking.submitted": return `Phone: ranking submitted — ${rankingText(p.ranking, names)}`;
+    case "questionnaire.submitted": return `Phone: questionnaire ${p.questionnaire || ""} answered (${p.position ? `interaction ${p.position}` : "final"})`;
+    case "suggestion.proposed": return `Suggestion ${p.index} proposed: ${item(p.item)} from ${p.from_rank} to ${p.to_rank} (${p.kind})`;
+    case "suggestion.decided": return `Suggestion ${p.index} ${p.accepted ? "ACCEPTED" : "DECLINED"}: ${item(p.item)}`;
+    case "suggestion.undone": return `Suggestion ${p.index}: decision undone (was ${p.was_accepted ? "accepted" : "declined"})`;
+    case "condition.switched": return `Condition of interaction ${p.position}: ${p.from} → ${p.to} (planned ${p.planned})`;
+    case "plan.deviation": return `DEVIATION from plan: interaction ${p.position} runs ${p.to}, planned ${p.planned}`;
+    case "prompt.played": return `▶ ${p.text}`;
+    case "prompt.acked": return `Worker acknowledged ${p.prompt_id} after ${p.click_to_ack_ms} ms`;
+    case "prompt.not_sent": return `Not sent: ${p.detail || p.reason}`;
+    case "prompt.speech_start": return `Speech started ${p.click_to_speech_ms} ms after the click`;
+    case "prompt.speech_end": return `Speech ended (${p.prompt_id})`;
+    case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
+    case "phone.connected": return "Phone connected";
+    case "phone.disconnected": return "Phone disconnected";
+    case "session.final_questionnaire": return "Final questionnaire started";
+    case "session.completed": return "Session complete";
+    default: return `${event.kind} ${JSON.stringify(p)}`;
+  }
+}
+
+export class Timeline {
+  constructor(list, counter) {
+    this.list = list;
+    this.counter = counter;
+    this.lastId = 0;
+    this.rows = new Map(); // event id -> row
+    this.count = 0;
+  }
+
+  sync(events, names) {
+    if (events.length && events[0].id < this.lastId && !this.rows.has(events[0].id)) this.reset();
+    for (const event of events) {
+      if (event.id <= this.lastId) continue;
+      this.add(event, names);
+    }
+  }
+
+  reset() {
+    this.list.replaceChildren();
+    this.rows.clear();
+    this.lastId = 0;
+    this.count = 0;
+  }
+
+  add(event, names) {
+    this.lastId = Math.max(this.lastId, event.id);
+    this.count += 1;
+    const worker = event.worker_time != null ? el("span", { class: "tl-worker", text: `worker ${event.worker_time.toFixed(3)}` }) : null;
+    const row = el(
+      "li",
+      { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id) } },
+      el("time", { datetime: event.server_time, text: clock(event.server_time) }),
+      el("span", { class: "tl-source", text: event.source }),
+      el("span", { class: "tl-text", text: describe(event, names) }),
+      worker,
+      el("span", { class: "tl-latency" }),
+    );
+    this.rows.set(event.id, row);
+    this.list.prepend(row);
+    this.counter.textContent = `(${this.count})`;
+    this.attachLatency(event);
+  }
+
+  attachLatency(event) {
+    const p = event.payload || {};
+    const played = p.play_event_id ? this.rows.get(p.play_event_id) : null;
+    if (!played) return;
+    const slot = played.querySelector(".tl-latency");
+    if (event.kind === "prompt.acked") slot.dataset.ack = `ack ${p.click_to_ack_ms} ms`;
+    if (event.kind === "prompt.speech_start") slot.dataset.speech = `speech ${p.click_to_speech_ms} ms`;
+    if (event.kind === "prompt.not_sent") slot.dataset.ack = "not sent";
+    slot.textContent = [slot.dataset.ack, slot.dataset.speech].filter(Boolean).join(" · ");
+    played.classList.toggle("tl-failed", event.kind === "prompt.not_sent");
+  }
+}
