@@ -73,12 +73,17 @@ def _numbers(values: Iterable[float]) -> str:
     return ":".join(f"{float(v):.7g}" for v in values)
 
 
+def format_mesh(mesh: npt.ArrayLike) -> str:
+    """Mesh vertices as ``x:y:z`` fields joined by ``~`` (format once, send many times)."""
+    return "~".join(_numbers(v) for v in np.asarray(mesh, dtype=np.float64).reshape(-1, 3))
+
+
 def build_facecapturex_frame(
     blendshapes: Mapping[str, float] | npt.ArrayLike,
     head_deg: Sequence[float] = (0.0, 0.0, 0.0),
     *,
     camera: npt.ArrayLike | None = None,
-    mesh: npt.ArrayLike | None = None,
+    mesh: npt.ArrayLike | str | None = None,
     timestamp: float | None = None,
     include_tongue: bool = True,
 ) -> bytes:
@@ -93,8 +98,10 @@ def build_facecapturex_frame(
     face = cam @ face_transform(head_deg)
     fields = [] if timestamp is None else [f"{timestamp:.6f}"]
     fields += [_numbers(cam.flatten(order="F")), _numbers(face.flatten(order="F"))]
-    if mesh is not None:
-        fields += [_numbers(v) for v in np.asarray(mesh, dtype=np.float64).reshape(-1, 3)]
+    if isinstance(mesh, str):
+        fields.append(mesh)
+    elif mesh is not None:
+        fields.append(format_mesh(mesh))
     if isinstance(blendshapes, Mapping):
         pairs = list(blendshapes.items())
     else:
