@@ -204,7 +204,8 @@ class LiveLinkReceiver(_Receiver):
         self._sock: socket.socket | None = None
 
     def _open(self) -> None:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
+        sock = socket.socket(family, socket.SOCK_DGRAM)
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)  # ride out bursts
             sock.bind((self.host, self.requested_port))

@@ -241,3 +241,23 @@ def test_start_capture_from_settings_runs_both_inputs(zmq_context, face_sub) -> 
     assert telemetry["livelink"]["frames"] >= 1
     assert telemetry["facecapturex"]["frames"] == 1
     assert telemetry["facecapturex"]["port"] == inputs.facecapturex.port
+
+
+@pytest.mark.skipif(not socket.has_ipv6, reason="no IPv6 on this host")
+def test_livelink_over_ipv6_loopback(zmq_context, face_sub) -> None:
+    try:
+        probe = socket.socket(socket.AF_INET6, socket.SOCK_DGRAM)
+        probe.bind(("::1", 0))
+    except OSError:
+        pytest.skip("IPv6 loopback not configured")
+    receiver = LiveLinkReceiver(
+        host="::1", port=0, publish_endpoint=face_sub.endpoint, context=zmq_context
+    )
+    receiver.start()
+    try:
+        packet = build_livelink_packet(livelink_values(smile()))
+        [frame] = face_sub.receive(1, send=lambda: probe.sendto(packet, ("::1", receiver.port)))
+    finally:
+        receiver.stop()
+        probe.close()
+    assert frame.blendshapes[SMILE] == 0.5
