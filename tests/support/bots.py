@@ -1,6 +1,12 @@
 """The scripted wizard and participant for tests (the code lives in the package so that
 rehearsals can use it too)."""
 
+import httpx
+from argon2 import PasswordHasher
+from sqlalchemy import Engine
+
+from chameleons.backend.db import build_sessionmaker, session_scope
+from chameleons.backend.models import StaffUser
 from chameleons.backend.sessions.bot import (
     ApiError,
     ParticipantBot,
@@ -11,7 +17,6 @@ from chameleons.backend.sessions.bot import (
     new_client_id,
     run_session,
 )
-from tests.backend.test_auth import add_user
 
 __all__ = [
     "ApiError",
@@ -25,13 +30,24 @@ __all__ = [
 ]
 
 
+# Tests store cheap argon2 parameters (a verify reads them from the hash): logins stay real
+# but take milliseconds instead of the production cost.
+_CHEAP_HASHER = PasswordHasher(time_cost=1, memory_cost=64, parallelism=1)
+PASSWORD = "a long password"
+
+
+def add_staff(engine: Engine, username: str, role: str) -> None:
+    for db in session_scope(build_sessionmaker(engine)):
+        db.add(StaffUser(username=username, password_hash=_CHEAP_HASHER.hash(PASSWORD), role=role))
+
+
 def staff_api(
-    client: object, engine: object, role: str = "wizard", name: str | None = None
+    http: httpx.Client, engine: Engine, role: str = "wizard", name: str | None = None
 ) -> StaffApi:
     """A staff member of ``role``, created in the database and logged in via the form."""
     username = name or f"{role}-user"
-    add_user(engine, username, "a long password", role)  # type: ignore[arg-type]
-    return StaffApi(client).login(username, "a long password")  # type: ignore[arg-type]
+    add_staff(engine, username, role)
+    return StaffApi(http).login(username, PASSWORD)
 
 
 def study_with_plan(pi: StaffApi, participants: int = 12, seed: int = 7) -> int:

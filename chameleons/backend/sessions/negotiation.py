@@ -12,7 +12,7 @@ from datetime import UTC, datetime
 
 from chameleons.backend.models import Interaction, Suggestion
 from chameleons.backend.sessions.flow import Flow, as_utc, undo_deadline
-from chameleons.backend.sessions.policy import move, propose
+from chameleons.backend.sessions.policy import accept, move, propose
 from chameleons.backend.studies.errors import InvalidInputError
 
 
@@ -74,7 +74,7 @@ def decide(
     chosen.decided_at = datetime.now(UTC)
     if accepted:
         ranking = list(interaction.current_ranking or [])
-        interaction.current_ranking = move(ranking, chosen.item, chosen.to_rank)
+        interaction.current_ranking = accept(ranking, chosen.item, chosen.from_rank, chosen.to_rank)
     flow.db.flush()
     flow.log(
         "suggestion.decided",

@@ -1,42 +1,33 @@
-"""The robot's suggestion policy, as the session flow uses it.
-
-ADAPTER: until ``chameleons.experiment.suggestions`` lands, this module implements the
-rule of study.md itself: propose the most important (by expert order) not-yet-declined
-item that the participant ranked lower than the expert did, moved up to its expert rank
-(``optimal``); when no such item exists, move a random item (not already first) to a
-random higher rank (``random``). Rankings are lists of item ids, most important first;
-ranks are 1-based.
+"""The robot's suggestion policy, as the session flow uses it: the experiment core's
+``next_suggestion``/``apply_suggestion`` (see ``chameleons.experiment.suggestions`` for
+the exact rule), seeded per interaction and suggestion so a replay gives the same move.
+Rankings are lists of item ids, most important first; ranks are 1-based.
 """
 
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
+
+from chameleons.experiment.suggestions import Suggestion, apply_suggestion, next_suggestion
+
+__all__ = ["Suggestion", "accept", "move", "propose"]
 
 
-@dataclass(frozen=True)
-class Proposal:
-    item: str
-    from_rank: int
-    to_rank: int
-    kind: str
-
-
-def propose(ranking: list[str], expert_order: list[str], declined: set[str], seed: str) -> Proposal:
+def propose(
+    ranking: list[str], expert_order: list[str], declined: set[str], seed: str
+) -> Suggestion:
     """The next suggestion, seeded deterministically (the same inputs give the same move)."""
-    rng = random.Random(seed)
-    for expert_rank, item in enumerate(expert_order, start=1):
-        current = ranking.index(item) + 1
-        if current > expert_rank and item not in declined:
-            return Proposal(item, current, expert_rank, "optimal")
-    movable = ranking[1:]
-    item = rng.choice(movable)
-    current = ranking.index(item) + 1
-    return Proposal(item, current, rng.randint(1, current - 1), "random")
+    return next_suggestion(ranking, expert_order, frozenset(declined), random.Random(seed))
+
+
+def accept(ranking: list[str], item: str, from_rank: int, to_rank: int) -> list[str]:
+    """The ranking after an accepted suggestion."""
+    return apply_suggestion(ranking, Suggestion(item, from_rank, to_rank, "optimal"))
 
 
 def move(ranking: list[str], item: str, to_rank: int) -> list[str]:
-    """The ranking with ``item`` moved to ``to_rank`` (the others keep their order)."""
+    """The ranking with ``item`` moved to ``to_rank`` (the others keep their order); an
+    undo uses it to put an accepted item back where it was."""
     rest = [other for other in ranking if other != item]
     rest.insert(to_rank - 1, item)
     return rest

@@ -94,13 +94,10 @@ def get_study(study_id: int, _user: CurrentStaff, db: DbSession) -> StudyRead:
 def get_plan(study_id: int, _user: CurrentStaff, db: DbSession) -> list[PlanRowRead]:
     with http_errors():
         study = service.get_study(db, study_id)
-    codes = dict(
-        db.execute(
-            select(Participant.plan_row_id, Participant.code).where(
-                Participant.study_id == study.id, Participant.plan_row_id.is_not(None)
-            )
-        ).tuples()
+    held = select(Participant.plan_row_id, Participant.code).where(
+        Participant.study_id == study.id, Participant.plan_row_id.is_not(None)
     )
+    codes = dict(db.execute(held).tuples().all())
     return [
         PlanRowRead(
             id=row.id,

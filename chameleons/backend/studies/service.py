@@ -17,6 +17,7 @@ from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.studies.errors import ConflictError, InvalidInputError, NotFoundError
 from chameleons.backend.studies.planner import planned_rows
 from chameleons.backend.studies.specs import spec_of
+from chameleons.experiment.design import PlanError
 from chameleons.experiment.model import Study
 
 MAX_PLAN_ROWS = 1000
@@ -84,7 +85,10 @@ def generate_plan(
         )
     if seed is not None:
         study.plan_seed = seed
-    rows = planned_rows(spec_of(study), participants, study.plan_seed)
+    try:
+        rows = planned_rows(spec_of(study), participants, study.plan_seed)
+    except PlanError as exc:
+        raise InvalidInputError(f"The study cannot be planned: {exc}") from exc
     for old, new in zip(existing, rows, strict=False):
         if old.interactions != new:
             raise ConflictError(
