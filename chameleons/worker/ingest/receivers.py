@@ -21,7 +21,7 @@ import threading
 import time
 from collections.abc import Callable
 from types import TracebackType
-from typing import Any
+from typing import Any, Self
 
 import zmq
 
@@ -104,7 +104,7 @@ class _Receiver:
         self._logged: set[str] = set()
 
     # -- lifecycle ---------------------------------------------------------------------
-    def start(self) -> _Receiver:
+    def start(self) -> Self:
         """Bind the capture socket and the publisher (errors surface here), then run."""
         if self._thread is not None:
             raise RuntimeError("receiver already started")
@@ -139,7 +139,7 @@ class _Receiver:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
-    def __enter__(self) -> _Receiver:
+    def __enter__(self) -> Self:
         return self.start()
 
     def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
