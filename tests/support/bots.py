@@ -1,7 +1,6 @@
 """The scripted wizard and participant for tests (the code lives in the package so that
 rehearsals can use it too)."""
 
-import httpx
 from argon2 import PasswordHasher
 from sqlalchemy import Engine
 
@@ -9,6 +8,7 @@ from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.models import StaffUser
 from chameleons.backend.sessions.bot import (
     ApiError,
+    HttpClient,
     ParticipantBot,
     SessionResult,
     StaffApi,
@@ -20,6 +20,7 @@ from chameleons.backend.sessions.bot import (
 
 __all__ = [
     "ApiError",
+    "HttpClient",
     "ParticipantBot",
     "SessionResult",
     "StaffApi",
@@ -42,7 +43,7 @@ def add_staff(engine: Engine, username: str, role: str) -> None:
 
 
 def staff_api(
-    http: httpx.Client, engine: Engine, role: str = "wizard", name: str | None = None
+    http: HttpClient, engine: Engine, role: str = "wizard", name: str | None = None
 ) -> StaffApi:
     """A staff member of ``role``, created in the database and logged in via the form."""
     username = name or f"{role}-user"

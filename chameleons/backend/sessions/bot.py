@@ -1,8 +1,8 @@
 """Scripted wizard and participant that drive a whole session through the public HTTP API,
 exactly as the wizard console and the phone do (staff login + CSRF header; the phone link).
 
-Used by the tests and by rehearsals. Works with any ``httpx.Client`` (a live server's URL,
-or Starlette's ``TestClient``, which is one).
+Used by the tests and by rehearsals. Works with an ``httpx.Client`` on a live server's URL,
+or with Starlette's ``TestClient`` (an ``httpx2.Client``).
 """
 
 from __future__ import annotations
@@ -16,9 +16,11 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import httpx
+import httpx2
 
 CSRF_PATTERN = re.compile(r'name="csrf_token" value="([^"]+)"')
 Json = dict[str, Any]
+HttpClient = httpx.Client | httpx2.Client
 
 
 class ApiError(Exception):
@@ -28,7 +30,7 @@ class ApiError(Exception):
         self.detail = detail
 
 
-def _json(response: httpx.Response) -> Any:
+def _json(response: httpx.Response | httpx2.Response) -> Any:
     if response.status_code >= 400:
         try:
             detail = response.json().get("detail")
@@ -45,7 +47,7 @@ def new_client_id() -> str:
 class StaffApi:
     """A logged-in staff member's JSON calls (CSRF header on unsafe methods)."""
 
-    def __init__(self, http: httpx.Client) -> None:
+    def __init__(self, http: HttpClient) -> None:
         self.http = http
         self.csrf = ""
 
@@ -153,7 +155,7 @@ class WizardBot:
 class ParticipantBot:
     """The phone: only the session's token, no login."""
 
-    http: httpx.Client
+    http: HttpClient
     token: str
     sent: list[Json] = field(default_factory=list)
 
@@ -232,7 +234,7 @@ class SessionResult:
 
 def run_session(
     staff: StaffApi,
-    phone: httpx.Client,
+    phone: HttpClient,
     study_id: int,
     rng: random.Random,
     accept_probability: float = 0.5,
