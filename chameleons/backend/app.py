@@ -19,9 +19,10 @@ from chameleons.backend.auth import pages as auth_pages
 from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.dashboard import pages as dashboard_pages
 from chameleons.backend.db import build_engine, build_sessionmaker
-from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.events.hub import LiveHub
+from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
 from chameleons.backend.phone import endpoints as phone_endpoints
 from chameleons.backend.phone import pages as phone_pages
@@ -90,6 +91,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         phone_endpoints.router,
         phone_pages.router,
         export_endpoints.router,
+        dashboard_pages.router,
         withdrawal_endpoints.router,
         wizard_pages.router,
         wizard_endpoints.router,

@@ -19,6 +19,7 @@ from typing import Any
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.models import (
@@ -114,22 +115,24 @@ def populate(
     recordings_dir: Path | None = None,
     spec: StudySpec | None = None,
 ) -> PopulatedStudy:
-    """A study with ``participants`` completed sessions, then ``rehearsals`` rehearsal ones,
-    and ``free_rows`` unused plan rows."""
+    """A study with ``participants`` completed sessions (codes P001...), then ``rehearsals``
+    rehearsal ones (R001..., on the next rows without holding them), and ``free_rows``
+    plan rows nobody used."""
     spec = spec or load_default_study()
     study = create_study(db, spec)
     rows = create_plan(db, study, spec, participants + rehearsals + free_rows)
     rng = random.Random(seed)
     result = PopulatedStudy(study_id=study.id, spec=spec)
     for number in range(1, participants + rehearsals + 1):
+        rehearsal = number > participants
         participant = add_completed_participant(
             db,
             study,
             spec,
             rows[number - 1],
-            code=f"P{number:03d}",
+            code=f"R{number - participants:03d}" if rehearsal else f"P{number:03d}",
             rng=rng,
-            rehearsal=number > participants,
+            rehearsal=rehearsal,
             recordings_dir=recordings_dir,
             result=result,
         )
@@ -152,10 +155,10 @@ def add_completed_participant(
     result: PopulatedStudy | None = None,
 ) -> Participant:
     start = START + timedelta(hours=row.row_number)
-    participant = Participant(
+    participant = Participant(  # a rehearsal borrows its row without holding it
         study_id=study.id,
         code=code,
-        plan_row_id=row.id,
+        plan_row_id=None if rehearsal else row.id,
         status="complete",
         is_rehearsal=rehearsal,
         consent_at=start,
@@ -400,12 +403,20 @@ def add_event(
     session_id: int,
     kind: str,
     payload: dict[str, Any],
-    interaction_id: int | None = None,
+    position: int | None = None,
     source: str = "test",
 ) -> Event:
-    """A single extra event (flags tests: deviations, outages, slow prompts)."""
+    """A single extra event (flags tests: deviations, outages, slow prompts), attached to the
+    session's interaction at ``position`` when given."""
     session = db.get(Session, session_id)
     assert session is not None
+    interaction_id = None
+    if position is not None:
+        interaction_id = db.scalars(
+            select(Interaction.id).where(
+                Interaction.session_id == session_id, Interaction.position == position
+            )
+        ).one()
     event = Event(
         study_id=session.study_id,
         session_id=session_id,

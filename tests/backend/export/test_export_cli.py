@@ -10,7 +10,7 @@ from pathlib import Path
 from click.testing import CliRunner
 
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
-from chameleons.cli.main import cli
+from chameleons.cli.export_command import export
 from tests.backend.test_cli import run_cli
 from tests.support.factories import populate
 
@@ -39,7 +39,7 @@ def test_export_command_writes_the_bundle(sqlite_template: Path, tmp_path: Path)
     metadata = json.loads((out / "metadata.json").read_text())
     assert metadata["rows"]["interactions"] == 12
     rehearsed = CliRunner(env=_env(database)).invoke(
-        cli, ["export", "--out", str(out), "--include-rehearsal"]
+        export, ["--out", str(out), "--include-rehearsal"]
     )
     assert "participants 5" in rehearsed.output
 

@@ -1,0 +1,114 @@
+"""PI dashboard pages: overview (progress, balance, sessions), session detail, export form,
+recording downloads; plus the overview as JSON."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, HTTPException, Request, status
+from fastapi.responses import FileResponse, HTMLResponse, Response
+
+from chameleons.backend.auth.dependencies import CurrentPI
+from chameleons.backend.dashboard.context import page_context, study_or_404
+from chameleons.backend.dashboard.progress import live_balance, plan_progress
+from chameleons.backend.dashboard.sessions import session_detail, session_summaries
+from chameleons.backend.dependencies import AppSettings, DbSession, Templates
+from chameleons.backend.models import Recording, Session, Study
+from chameleons.backend.withdrawal.files import recording_file
+from chameleons.experiment.study import study_from_config
+
+router = APIRouter(tags=["dashboard"])
+FLAG_LABELS = {
+    "missing_answers": "missing answers",
+    "deviation": "plan deviation",
+    "outage": "outage",
+    "latency": "slow wizard/worker",
+}
+
+
+def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str, Any]:
+    spec = study_from_config(study.config)
+    report, tables = live_balance(db, study, spec, include_rehearsal)
+    return {
+        "progress": plan_progress(db, study),
+        "balance": report,
+        "balance_tables": tables,
+        "sessions": session_summaries(db, study, spec),
+        "include_rehearsal": include_rehearsal,
+        "flag_labels": FLAG_LABELS,
+    }
+
+
+@router.get("/pi", response_class=HTMLResponse)
+def overview_page(
+    request: Request,
+    user: CurrentPI,
+    db: DbSession,
+    templates: Templates,
+    study: int | None = None,
+    include_rehearsal: bool = False,
+) -> Response:
+    found = study_or_404(db, study)
+    context = page_context(
+        request, user, found, "overview", **_overview(db, found, include_rehearsal)
+    )
+    return templates.TemplateResponse(request, "pi/overview.html", context)
+
+
+@router.get("/api/pi/overview")
+def overview_api(
+    _pi: CurrentPI, db: DbSession, study: int | None = None, include_rehearsal: bool = False
+) -> dict[str, Any]:
+    found = study_or_404(db, study)
+    data = _overview(db, found, include_rehearsal)
+    return {
+        "study": {"id": found.id, "name": found.name, "config_hash": found.config_hash},
+        "progress": data["progress"].__dict__,
+        "balance": data["balance"].to_dict(),
+        "sessions": [summary.to_dict() for summary in data["sessions"]],
+    }
+
+
+@router.get("/pi/sessions/{session_id}", response_class=HTMLResponse)
+def session_page(
+    request: Request,
+    session_id: int,
+    user: CurrentPI,
+    db: DbSession,
+    settings: AppSettings,
+    templates: Templates,
+) -> Response:
+    session = db.get(Session, session_id)
+    if session is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no session {session_id}.")
+    study = study_or_404(db, session.study_id)
+    spec = study_from_config(study.config)
+    detail = session_detail(db, spec, session_id, settings.data_dir)
+    context = page_context(
+        request, user, study, "overview", detail=detail, spec=spec, flag_labels=FLAG_LABELS
+    )
+    return templates.TemplateResponse(request, "pi/session.html", context)
+
+
+@router.get("/pi/recordings/{recording_id}")
+def recording_download(
+    recording_id: int, _pi: CurrentPI, db: DbSession, settings: AppSettings
+) -> Response:
+    recording = db.get(Recording, recording_id)
+    if recording is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no recording {recording_id}.")
+    path = recording_file(settings.data_dir, recording.path)
+    if not path.is_file():
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "The recording's file is missing.")
+    name = f"recording-{recording.id}-{recording.stream}{path.suffix}"
+    return FileResponse(path, filename=name, media_type="application/octet-stream")
+
+
+@router.get("/pi/export", response_class=HTMLResponse)
+def export_page(
+    request: Request, user: CurrentPI, db: DbSession, templates: Templates, study: int | None = None
+) -> Response:
+    found = study_or_404(db, study)
+    return templates.TemplateResponse(
+        request, "pi/export.html", page_context(request, user, found, "export")
+    )

@@ -1,0 +1,224 @@
+"""The sessions list and one session's detail, as the PI dashboard shows them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session as DbSession
+
+from chameleons.backend.dashboard.flags import SessionFlags, session_flags
+from chameleons.backend.export.scoring import error_score, questionnaire_score
+from chameleons.backend.export.selection import as_utc
+from chameleons.backend.models import (
+    Event,
+    Interaction,
+    Participant,
+    PlanRow,
+    QuestionnaireResponse,
+    Recording,
+    Session,
+    Study,
+    Suggestion,
+)
+from chameleons.backend.withdrawal.files import recording_file
+from chameleons.experiment.model import Study as StudySpec
+
+
+@dataclass
+class SessionSummary:
+    id: int
+    code: str
+    participant_status: str
+    state: str
+    booth: str
+    plan_row: int | None
+    rehearsal: bool
+    started_at: datetime | None
+    duration_s: float | None
+    flags: SessionFlags
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "session": self.id,
+            "participant": self.code,
+            "participant_status": self.participant_status,
+            "state": self.state,
+            "booth": self.booth,
+            "plan_row": self.plan_row,
+            "rehearsal": self.rehearsal,
+            "started_at": self.started_at.isoformat() if self.started_at else None,
+            "duration_s": self.duration_s,
+            "flags": [flag.__dict__ for flag in self.flags.flags],
+        }
+
+
+def _duration(session: Session) -> float | None:
+    start, end = as_utc(session.started_at), as_utc(session.completed_at)
+    return (end - start).total_seconds() if start and end else None
+
+
+def session_summaries(db: DbSession, study: Study, spec: StudySpec) -> list[SessionSummary]:
+    """Every session of the study (rehearsals included and marked), newest first."""
+    query = (
+        select(Session, Participant, PlanRow.row_number)
+        .join(Participant, Participant.id == Session.participant_id)
+        .outerjoin(PlanRow, PlanRow.id == Session.plan_row_id)
+        .where(Session.study_id == study.id)
+        .order_by(Session.created_at.desc(), Session.id.desc())
+    )
+    found = list(db.execute(query).tuples())
+    flags = session_flags(db, spec, [session for session, _, _ in found])
+    return [
+        SessionSummary(
+            session.id,
+            participant.code,
+            participant.status,
+            session.state,
+            session.booth,
+            row_number,
+            session.is_rehearsal or participant.is_rehearsal,
+            as_utc(session.started_at),
+            _duration(session),
+            flags[session.id],
+        )
+        for session, participant, row_number in found
+    ]
+
+
+@dataclass
+class RankedItem:
+    item: str
+    name: str
+    expert_rank: int | None
+
+
+@dataclass
+class InteractionDetail:
+    interaction: Interaction
+    deviates: bool
+    expert_order: list[RankedItem]
+    initial: list[RankedItem]
+    final: list[RankedItem]
+    initial_error: int | None
+    final_error: int | None
+    suggestions: list[Suggestion]
+    answers: dict[str, list[QuestionnaireResponse]]
+    scores: dict[str, float | None]
+    recordings: list[tuple[Recording, bool]]
+
+
+@dataclass
+class SessionDetail:
+    session: Session
+    participant: Participant
+    plan_row: int | None
+    summary_flags: SessionFlags
+    interactions: list[InteractionDetail] = field(default_factory=list)
+    final_answers: list[QuestionnaireResponse] = field(default_factory=list)
+    events: list[Event] = field(default_factory=list)
+
+
+def _ranked(spec: StudySpec, task: str, items: list[Any] | None) -> list[RankedItem]:
+    result = []
+    for item_id in items or []:
+        try:
+            item = spec.task(task).item(str(item_id))
+            result.append(RankedItem(item.id, item.name, item.expert_rank))
+        except KeyError:
+            result.append(RankedItem(str(item_id), str(item_id), None))
+    return result
+
+
+def session_detail(
+    db: DbSession, spec: StudySpec, session_id: int, data_dir: Path
+) -> SessionDetail | None:
+    session = db.get(Session, session_id)
+    if session is None:
+        return None
+    participant = db.get(Participant, session.participant_id)
+    assert participant is not None  # a foreign key guarantees it
+    row = db.get(PlanRow, session.plan_row_id)
+    answers = list(
+        db.scalars(
+            select(QuestionnaireResponse)
+            .where(QuestionnaireResponse.session_id == session.id)
+            .order_by(QuestionnaireResponse.id)
+        )
+    )
+    detail = SessionDetail(
+        session,
+        participant,
+        row.row_number if row else None,
+        session_flags(db, spec, [session])[session.id],
+        final_answers=[a for a in answers if a.position == 0],
+        events=list(
+            db.scalars(
+                select(Event)
+                .where(Event.session_id == session.id)
+                .order_by(Event.server_time, Event.id)
+            )
+        ),
+    )
+    interactions = db.scalars(
+        select(Interaction)
+        .where(Interaction.session_id == session.id)
+        .order_by(Interaction.position)
+    )
+    for interaction in interactions:
+        own = [a for a in answers if a.interaction_id == interaction.id]
+        detail.interactions.append(_interaction_detail(db, spec, interaction, own, data_dir))
+    return detail
+
+
+def _interaction_detail(
+    db: DbSession,
+    spec: StudySpec,
+    interaction: Interaction,
+    answers: list[QuestionnaireResponse],
+    data_dir: Path,
+) -> InteractionDetail:
+    by_questionnaire: dict[str, list[QuestionnaireResponse]] = {}
+    for answer in answers:
+        by_questionnaire.setdefault(answer.questionnaire, []).append(answer)
+    scores = {}
+    for questionnaire in spec.questionnaires_for("interaction"):
+        if questionnaire.scored:
+            values = {
+                a.item: a.value
+                for a in by_questionnaire.get(questionnaire.id, [])
+                if a.value is not None
+            }
+            scores[questionnaire.id] = questionnaire_score(questionnaire, values)
+    presented = [str(item) for item in interaction.presented_order or []]
+    try:
+        expert = spec.expert_order(interaction.task, presented)
+    except KeyError:
+        expert = presented
+    recordings = db.scalars(
+        select(Recording)
+        .where(Recording.interaction_id == interaction.id)
+        .order_by(Recording.stream)
+    )
+    return InteractionDetail(
+        interaction=interaction,
+        deviates=interaction.condition != interaction.planned_condition,
+        expert_order=_ranked(spec, interaction.task, expert),
+        initial=_ranked(spec, interaction.task, interaction.initial_ranking),
+        final=_ranked(spec, interaction.task, interaction.final_ranking),
+        initial_error=error_score(spec, interaction.task, interaction.initial_ranking),
+        final_error=error_score(spec, interaction.task, interaction.final_ranking),
+        suggestions=list(
+            db.scalars(
+                select(Suggestion)
+                .where(Suggestion.interaction_id == interaction.id)
+                .order_by(Suggestion.index)
+            )
+        ),
+        answers=by_questionnaire,
+        scores=scores,
+        recordings=[(r, recording_file(data_dir, r.path).is_file()) for r in recordings],
+    )

@@ -1,0 +1,84 @@
+"""The PI dashboard pages over HTTP: overview, session detail, recordings, access control."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi.testclient import TestClient
+from sqlalchemy import Engine
+
+from chameleons.backend.db import build_sessionmaker, session_scope
+from tests.backend.test_auth import add_user, login
+from tests.support.factories import PopulatedStudy, add_event, populate
+
+
+def _populate(engine: Engine, settings: Any, **kwargs: Any) -> PopulatedStudy:
+    for db in session_scope(build_sessionmaker(engine)):
+        data = populate(db, recordings_dir=settings.data_dir / "recordings", **kwargs)
+    return data
+
+
+def test_overview_shows_progress_sessions_and_balance(
+    client: TestClient, engine: Engine, settings: Any
+) -> None:
+    data = _populate(engine, settings, participants=3, rehearsals=1, free_rows=2)
+    for db in session_scope(build_sessionmaker(engine)):
+        add_event(db, data.session_ids[1], "worker.outage", {"reason": "crashed"}, 2)
+    add_user(engine, "pia", "correct horse", "pi")
+    login(client, "pia", "correct horse")
+    page = client.get("/pi")
+    assert page.status_code == 200
+    for code in data.codes:
+        assert f'data-participant="{code}"' in page.text
+    assert 'data-stat="free">3<' in page.text  # the rehearsal only borrowed its row
+    assert "rehearsal</span>" in page.text
+    assert 'data-constraint="condition_position"' in page.text
+    api = client.get("/api/pi/overview").json()
+    assert api["progress"]["rows"] == 6
+    assert api["balance"]["participants"] == 3
+    flagged = {s["participant"]: s["flags"] for s in api["sessions"]}
+    assert flagged["P001"] == []
+    assert [f["kind"] for f in flagged["P002"]] == ["outage"]
+    with_rehearsals = client.get("/api/pi/overview", params={"include_rehearsal": True}).json()
+    assert with_rehearsals["balance"]["participants"] == 4
+
+
+def test_session_detail_and_recording_download(
+    client: TestClient, engine: Engine, settings: Any
+) -> None:
+    data = _populate(engine, settings, participants=1)
+    add_user(engine, "pia", "correct horse", "pi")
+    login(client, "pia", "correct horse")
+    page = client.get(f"/pi/sessions/{data.session_ids[0]}")
+    assert page.status_code == 200
+    text = page.text
+    assert text.count('class="card interaction"') == 3
+    assert text.count('<tr><td class="num">1</td><td>') >= 3  # suggestions listed
+    assert "Error score" in text
+    assert "session_started" in text  # the timeline
+    assert "Answer to differences by P001" in text  # final questionnaire
+    first = text.index('href="/pi/recordings/') + len('href="/pi/recordings/')
+    recording_id = text[first : text.index('"', first)]
+    download = client.get(f"/pi/recordings/{recording_id}")
+    assert download.status_code == 200
+    assert download.content in {p.read_bytes() for p in data.recording_paths}
+    assert client.get("/pi/sessions/999").status_code == 404
+    assert client.get("/pi/recordings/999").status_code == 404
+
+
+def test_pages_need_a_pi(client: TestClient, engine: Engine, settings: Any) -> None:
+    _populate(engine, settings, participants=1)
+    assert client.get("/pi", follow_redirects=False).headers["location"] == "/login?next=/pi"
+    assert client.get("/api/pi/overview").status_code == 401
+    add_user(engine, "wiz", "right password", "wizard")
+    login(client, "wiz", "right password")
+    for url in ("/pi", "/pi/sessions/1", "/pi/recordings/1", "/pi/export", "/api/pi/overview"):
+        assert client.get(url).status_code == 403, url
+
+
+def test_without_a_study_the_overview_says_so(client: TestClient, engine: Engine) -> None:
+    add_user(engine, "pia", "correct horse", "pi")
+    login(client, "pia", "correct horse")
+    response = client.get("/pi")
+    assert response.status_code == 404
+    assert "there is no study yet" in response.text
