@@ -132,7 +132,7 @@ def test_exact_p_by_brute_force_enumeration() -> None:
 def test_monte_carlo_is_seeded_and_close_to_exact(monkeypatch: pytest.MonkeyPatch) -> None:
     data = np.random.default_rng(3).integers(0, 4, size=(12, 3)).tolist()
     exact = permutation_p(data)
-    monkeypatch.setattr(friedman_module, "MAX_EXACT_STATES", 1)
+    monkeypatch.setattr(friedman_module, "MAX_EXACT_WORK", 1)
     sampled = permutation_p(data, resamples=20_000, seed=9)
     assert sampled.method == "monte-carlo"
     assert (sampled.resamples, sampled.seed) == (20_000, 9)

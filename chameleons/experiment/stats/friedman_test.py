@@ -13,8 +13,9 @@ distinguishes the treatments and the statistic is *undefined* (``None``), never 
 
 The permutation p-value conditions on the observed within-block ranks: under the null
 hypothesis every ordering of a block's ranks is equally likely. It is computed *exactly*
-by convolving the blocks' rank vectors when the number of distinct rank-sum vectors stays
-small (always for 3 conditions), otherwise by Monte Carlo with a seeded generator
+(up to floating-point rounding) by convolving the blocks' rank vectors when that is cheap
+(3 conditions: up to about 100 participants; 4: about 12), otherwise by Monte Carlo with
+a seeded generator
 (``p = (1 + #{S* >= S}) / (1 + resamples)``).
 """
 
@@ -24,13 +25,12 @@ import itertools
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 from math import factorial
 
 import numpy as np
 from scipy.stats import chi2 as chi2_distribution
 
-MAX_EXACT_STATES = 200_000
+MAX_EXACT_WORK = 300_000_000  # grid cells x arrangements x blocks
 
 
 @dataclass(frozen=True)
@@ -105,22 +105,27 @@ def permutation_p(
 
 
 def _exact_p(doubled: list[tuple[int, ...]], observed: int) -> float | None:
-    """Convolve the distribution of rank-sum vectors block by block (integer counts)."""
-    k = len(doubled[0])
-    states: Counter[tuple[int, ...]] = Counter({(0,) * k: 1})
+    """Convolve the null distribution of the rank-sum vector block by block on a grid of
+    the first k - 1 (doubled) rank sums; the last is fixed by the total. ``None`` when the
+    grid work would be too large (then Monte Carlo is used)."""
+    n, k = len(doubled), len(doubled[0])
+    size = 2 * k * n + 1
+    if size ** (k - 1) * factorial(k) * n > MAX_EXACT_WORK:
+        return None
+    grid = np.zeros((size,) * (k - 1))
+    grid[(0,) * (k - 1)] = 1.0
     for block in doubled:
-        arrangements = Counter(itertools.permutations(block))
-        following: Counter[tuple[int, ...]] = Counter()
-        for state, count in states.items():
-            for arrangement, ways in arrangements.items():
-                key = tuple(a + b for a, b in zip(state, arrangement, strict=True))
-                following[key] += count * ways
-        if len(following) > MAX_EXACT_STATES:
-            return None
-        states = following
-    total = factorial(k) ** len(doubled)
-    extreme = sum(count for state, count in states.items() if sum(s * s for s in state) >= observed)
-    return float(Fraction(extreme, total))
+        following = np.zeros_like(grid)
+        for arrangement, ways in Counter(itertools.permutations(block)).items():
+            shift = arrangement[:-1]
+            target = tuple(slice(s, size) for s in shift)
+            source = tuple(slice(0, size - s) for s in shift)
+            following[target] += grid[source] * (ways / factorial(k))
+        grid = following
+    sums = np.indices(grid.shape)
+    last = n * k * (k + 1) - sums.sum(axis=0)  # each block's doubled ranks add to k(k+1)
+    statistic = (sums**2).sum(axis=0) + last**2
+    return float(min(1.0, grid[statistic >= observed].sum()))
 
 
 def _monte_carlo_p(
