@@ -85,13 +85,21 @@ class ClockAligner:
         self.jump_s, self.max_drift = jump_s, max_drift
         self.offset: float | None = None
         self._last_receive = 0.0
+        self._last: tuple[float, float] | None = None  # previous (sender, local) times
 
     def align(self, sender_time: float, receive_time: float) -> float:
         delay = receive_time - sender_time
         if self.offset is None or abs(delay - self.offset) > self.jump_s:
             self.offset = delay
+            self._last = None
         else:
             allowed = self.offset + self.max_drift * max(0.0, receive_time - self._last_receive)
             self.offset = min(delay, allowed)
         self._last_receive = receive_time
-        return sender_time + self.offset
+        local = sender_time + self.offset
+        if self._last is not None and sender_time > self._last[0] and local <= self._last[1]:
+            # While the offset is still learning (it drops when a faster frame arrives), keep
+            # capture times increasing: consumers interpolate between consecutive frames.
+            local = min(receive_time, self._last[1] + 1e-6)
+        self._last = (sender_time, local)
+        return local

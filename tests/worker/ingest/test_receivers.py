@@ -101,9 +101,10 @@ def test_capture_times_keep_the_sender_spacing_despite_arrival_jitter(
         frames = face_sub.receive(30, accept=not_sync)
         fps = receiver.stats.input_fps
     captures = np.array([f.capture_time for f in frames])
-    # the offset may creep by 1 ms per second of clock drift: microseconds here
-    np.testing.assert_allclose(np.diff(captures[1:]), 1 / 60, atol=2e-5)
-    assert captures[0] == pytest.approx(captures[-1] + 1 / 60, abs=2e-5)
+    # the offset may creep by 1 ms per second of clock drift over the burst's arrival span
+    creep = 1e-3 * (frames[-1].receive_time - frames[0].receive_time) + 1e-6
+    np.testing.assert_allclose(np.diff(captures[1:]), 1 / 60, atol=creep)
+    assert captures[0] == pytest.approx(captures[-1] + 1 / 60, abs=creep)
     assert all(f.capture_time <= f.receive_time for f in frames)
     assert fps > 0
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -72,6 +74,16 @@ def test_clock_aligner_removes_jitter_and_follows_jumps() -> None:
     np.testing.assert_allclose(np.diff(later), 1 / 60, atol=4e-5)  # drift allowance: 1 ms/s
     # the sender restarts its clock: capture times follow at once
     assert aligner.align(0.0, 510.0) == pytest.approx(510.0)
+
+
+def test_capture_times_keep_increasing_while_the_offset_learns() -> None:
+    aligner = ClockAligner()
+    # the first frames were held up 30 ms, then one arrives on time: the offset drops 29 ms
+    delays = [0.030, 0.030, 0.001, 0.002, 0.001]
+    local = [aligner.align(i / 60, 10 + i / 60 + d) for i, d in enumerate(delays)]
+    assert all(b > a for a, b in itertools.pairwise(local))
+    assert all(t <= 10 + i / 60 + d for i, (t, d) in enumerate(zip(local, delays, strict=True)))
+    assert local[-1] == pytest.approx(10 + 4 / 60 + 0.001)
 
 
 def test_clock_aligner_tracks_slow_drift() -> None:
