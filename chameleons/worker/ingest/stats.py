@@ -76,30 +76,24 @@ class ClockAligner:
     """Maps the sender's clock onto this host's monotonic clock: ``local = sender + offset``.
 
     The offset follows the least-delayed frame (the smallest ``receive - sender``), so network
-    jitter stays out of capture times and ``capture_time <= receive_time``. It may creep up
-    by ``max_drift`` seconds per second (clock drift) and restarts when the sender's clock
-    jumps by more than ``jump_s`` (app restart, timecode wrapping at midnight).
+    jitter stays out of capture times and ``capture_time <= receive_time``; capture times
+    increase whenever both the sender's and the receive times do (a drop of the offset lands
+    exactly on the new receive time, later than every earlier capture time). It may creep
+    up by ``max_drift`` seconds per second (clock drift) and restarts when the sender's
+    clock jumps by more than ``jump_s`` (app restart, timecode wrapping at midnight).
     """
 
     def __init__(self, jump_s: float = 1.0, max_drift: float = 1e-3) -> None:
         self.jump_s, self.max_drift = jump_s, max_drift
         self.offset: float | None = None
         self._last_receive = 0.0
-        self._last: tuple[float, float] | None = None  # previous (sender, local) times
 
     def align(self, sender_time: float, receive_time: float) -> float:
         delay = receive_time - sender_time
         if self.offset is None or abs(delay - self.offset) > self.jump_s:
             self.offset = delay
-            self._last = None
         else:
             allowed = self.offset + self.max_drift * max(0.0, receive_time - self._last_receive)
             self.offset = min(delay, allowed)
         self._last_receive = receive_time
-        local = sender_time + self.offset
-        if self._last is not None and sender_time > self._last[0] and local <= self._last[1]:
-            # While the offset is still learning (it drops when a faster frame arrives), keep
-            # capture times increasing: consumers interpolate between consecutive frames.
-            local = min(receive_time, self._last[1] + 1e-6)
-        self._last = (sender_time, local)
-        return local
+        return sender_time + self.offset
