@@ -14,6 +14,7 @@ from chameleons.backend.sessions.bot import (
     StaffApi,
     WizardBot,
     answers_for,
+    drive_session,
     new_client_id,
     run_session,
 )
@@ -26,6 +27,7 @@ __all__ = [
     "StaffApi",
     "WizardBot",
     "answers_for",
+    "drive_session",
     "new_client_id",
     "run_session",
 ]

@@ -16,7 +16,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from chameleons.backend.events.hub import Message, Subscription
 
-OnChange = Callable[[list[Message]], Awaitable[None]]
+OnChange = Callable[[list[Message]], Awaitable[bool]]  # True: stop serving
 
 
 async def send_json(websocket: WebSocket, message: Message) -> None:
@@ -45,7 +45,8 @@ async def serve(websocket: WebSocket, subscription: Subscription, on_change: OnC
             if receiver in done:
                 getter.cancel()
                 return
-            await on_change([getter.result(), *subscription.drain()])
+            if await on_change([getter.result(), *subscription.drain()]):
+                return
     except (WebSocketDisconnect, RuntimeError):
         return
     finally:

@@ -3,7 +3,7 @@ happens only after the transaction commits (see :mod:`.unit_of_work`)."""
 
 from __future__ import annotations
 
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Any
 
 from sqlalchemy import func, select
@@ -67,6 +67,13 @@ def last_id(db: Session, session_id: int) -> int:
     return int(value or 0)
 
 
+def iso(moment: datetime | None) -> str | None:
+    """ISO 8601 in UTC; SQLite hands back naive datetimes for timezone-aware columns."""
+    if moment is None:
+        return None
+    return (moment if moment.tzinfo else moment.replace(tzinfo=UTC)).isoformat()
+
+
 def to_dict(event: Event) -> dict[str, Any]:
     return {
         "id": event.id,
@@ -74,7 +81,7 @@ def to_dict(event: Event) -> dict[str, Any]:
         "source": event.source,
         "session_id": event.session_id,
         "interaction_id": event.interaction_id,
-        "server_time": event.server_time.isoformat(),
+        "server_time": iso(event.server_time),
         "worker_time": event.worker_time,
         "client_id": event.client_id,
         "payload": event.payload,

@@ -98,10 +98,14 @@ async def phone_socket(websocket: WebSocket, token: str) -> None:
             await websocket.close(code=4410)
             return
 
-        async def on_change(_messages: list[Message]) -> None:
+        async def on_change(_messages: list[Message]) -> bool:
             # Whatever was published, the phone gets only its own whitelisted view.
             _id, message = await run_in_threadpool(_read_state, factory, hub, token)
             await live.send_json(websocket, message)
+            if message["state"]["view"] == "ended":
+                await websocket.close(code=4410)  # the link has stopped working
+                return True
+            return False
 
         try:
             with hub.presence(phone_presence_key(session_id)):
@@ -111,6 +115,3 @@ async def phone_socket(websocket: WebSocket, token: str) -> None:
             # Out of the presence count first, so the wizard's snapshot says "disconnected".
             with contextlib.suppress(Exception):  # the server may be shutting down
                 await run_in_threadpool(_log_connection, factory, hub, token, "phone.disconnected")
-
-
-__all__ = ["ENDED_MESSAGE", "http_errors", "router"]

@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+from typing import Any
+
 from pydantic import BaseModel, Field
 
 ClientId = Field(
@@ -17,4 +19,5 @@ class QuestionnaireSubmission(BaseModel):
     client_id: str = ClientId
     position: int = Field(ge=0, le=100, description="0: the final questionnaire")
     questionnaire: str = Field(max_length=64)
-    answers: dict[str, int | str | None] = Field(max_length=200)
+    # Any JSON value: the flow checks each answer and says which one is wrong and why.
+    answers: dict[str, Any] = Field(max_length=200)

@@ -47,6 +47,6 @@ def _receipt(flow: Flow, event: Event, duplicate: bool) -> Receipt:
         "client_id": event.client_id,
         "kind": event.kind,
         "stored": event.payload,
-        "saved_at": event.server_time.isoformat(),
+        "saved_at": events.iso(event.server_time),
         "state": phone_state(flow),
     }

@@ -230,6 +230,7 @@ class SessionResult:
     participant_code: str
     decisions: list[list[bool]]
     snapshot: Json
+    participant: ParticipantBot
 
 
 def run_session(
@@ -241,21 +242,41 @@ def run_session(
     rehearsal: bool = False,
     booth: str = "booth-1",
 ) -> SessionResult:
-    """A whole session: every interaction in plan order, then the final questionnaire."""
+    """A whole new session: every interaction in plan order, then the final questionnaire."""
     wizard = WizardBot.create(staff, study_id, rehearsal=rehearsal, booth=booth)
     participant = ParticipantBot(phone, wizard.token)
+    return drive_session(wizard, participant, rng, accept_probability)
+
+
+def drive_session(
+    wizard: WizardBot,
+    participant: ParticipantBot,
+    rng: random.Random,
+    accept_probability: float = 0.5,
+    on_step: Callable[[str], None] | None = None,
+) -> SessionResult:
+    """Drive an existing, not yet started session to its end; ``on_step`` is called with
+    the name of each step just taken (e.g. ``"2:ranking"``)."""
+    step = on_step or (lambda _name: None)
     wizard.start()
+    step("start")
     decisions = []
     for position in range(1, wizard.snapshot["interaction_count"] + 1):
-        wizard.advance(position, "discussion")
-        wizard.advance(position, "ranking")
+        for to in ("discussion", "ranking"):
+            wizard.advance(position, to)
+            step(f"{position}:{to}")
         participant.rank(rng)
+        step(f"{position}:ranked")
         wizard.advance(position, "negotiation")
         decisions.append(wizard.negotiate(position, lambda _s: rng.random() < accept_probability))
+        step(f"{position}:negotiated")
         wizard.advance(position, "questionnaire")
+        step(f"{position}:questionnaire")
         participant.answer_questionnaires(position, rng)
+        step(f"{position}:answered")
     participant.answer_questionnaires(0, rng)
     snapshot = wizard.refresh()
     if snapshot["state"] != "complete":
         raise ApiError(0, f"the session ended in state {snapshot['state']!r}")
-    return SessionResult(wizard.session_id, snapshot["participant"]["code"], decisions, snapshot)
+    code = snapshot["participant"]["code"]
+    return SessionResult(wizard.session_id, code, decisions, snapshot, participant)

@@ -68,11 +68,12 @@ async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
     async with hub.subscribe(session_channel(session_id)) as subscription:
         await live.send_json(websocket, first)
 
-        async def on_change(messages: list[Message]) -> None:
+        async def on_change(messages: list[Message]) -> bool:
             for message in messages:
                 if message.get("type") != "resync":
                     await live.send_json(websocket, message)
             snapshot = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
             await live.send_json(websocket, snapshot)
+            return False
 
         await live.serve(websocket, subscription, on_change)

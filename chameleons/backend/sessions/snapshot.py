@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from datetime import datetime
 from typing import Any
 
 from chameleons.backend.events import repository as events
@@ -17,8 +16,7 @@ def phone_presence_key(session_id: int) -> str:
     return f"phone:{session_id}"
 
 
-def _time(moment: datetime | None) -> str | None:
-    return moment.isoformat() if moment else None
+_time = events.iso
 
 
 def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[str, Any]:

@@ -1,0 +1,449 @@
+/* The participant's phone. State comes from the server (page, WebSocket, answers to
+ * submissions); answers typed but not yet sent live in localStorage, and every submission
+ * waits in a local outbox, with its own id, until the server has stored it. */
+(function () {
+  "use strict";
+
+  var app = document.getElementById("app");
+  var token = app.dataset.token;
+  var api = "/api/phone/" + encodeURIComponent(token);
+  var connection = document.getElementById("connection");
+  var saveStatus = document.getElementById("save-status");
+  var errorBox = document.getElementById("error");
+  var announcer = document.getElementById("announce");
+  var state = JSON.parse(document.getElementById("initial-state").textContent);
+  var renderedKey = null;
+  var shownRanking = null;
+
+  /* ---------- local storage: drafts and the outbox (tolerates private mode) ---------- */
+  function key(name) { return "mc:" + token + ":" + name; }
+  function load(name, fallback) {
+    try {
+      var text = localStorage.getItem(key(name));
+      return text === null ? fallback : JSON.parse(text);
+    } catch (e) { return fallback; }
+  }
+  function store(name, value) {
+    try { localStorage.setItem(key(name), JSON.stringify(value)); } catch (e) { /* full */ }
+  }
+  function forget(name) {
+    try { localStorage.removeItem(key(name)); } catch (e) { /* unavailable */ }
+  }
+  function forgetAll() {
+    try {
+      Object.keys(localStorage).forEach(function (k) {
+        if (k.indexOf("mc:" + token + ":") === 0) { localStorage.removeItem(k); }
+      });
+    } catch (e) { /* unavailable */ }
+  }
+  function newClientId() {
+    var bytes = new Uint8Array(16);
+    crypto.getRandomValues(bytes); // works without https, unlike crypto.randomUUID
+    return Array.prototype.map.call(bytes, function (b) {
+      return ("0" + b.toString(16)).slice(-2);
+    }).join("");
+  }
+
+  /* ---------- small DOM helpers (text only: never innerHTML) ---------- */
+  function h(tag, attrs) {
+    var node = document.createElement(tag);
+    Object.keys(attrs || {}).forEach(function (name) {
+      var value = attrs[name];
+      if (value === null || value === undefined || value === false) { return; }
+      if (name === "text") { node.textContent = value; } else if (name.indexOf("on") === 0) {
+        node.addEventListener(name.slice(2), value);
+      } else { node.setAttribute(name, value === true ? "" : value); }
+    });
+    for (var i = 2; i < arguments.length; i++) {
+      if (arguments[i]) { node.appendChild(arguments[i]); }
+    }
+    return node;
+  }
+  function announce(text) { announcer.textContent = ""; announcer.textContent = text; }
+  function showError(text) { errorBox.textContent = text; errorBox.hidden = !text; }
+  function setSave(kind) {
+    var texts = {
+      saving: "Saving…",
+      saved: "Saved ✓",
+      offline: "Not sent yet – your answers are kept on this phone and sent as soon as the connection is back.",
+      "": ""
+    };
+    saveStatus.textContent = texts[kind];
+    saveStatus.dataset.state = kind;
+  }
+  function setConnection(kind) {
+    var texts = { connecting: "Connecting…", online: "Connected", offline: "Reconnecting…", ended: "" };
+    connection.textContent = texts[kind];
+    connection.dataset.state = kind;
+  }
+
+  /* ---------- views ---------- */
+  function viewKey(s) {
+    return [s.view, s.position, s.questionnaire ? s.questionnaire.id : ""].join("|");
+  }
+
+  function render(next) {
+    state = next;
+    var nextKey = viewKey(next);
+    if (nextKey === renderedKey) {
+      if (next.view === "ranked") { updateRanked(next.ranking); }
+      return;
+    }
+    renderedKey = nextKey;
+    showError("");
+    var builders = {
+      welcome: welcomeView, waiting: waitingView, listen: listenView, ranking: rankingView,
+      ranked: rankedView, questionnaire: questionnaireView, ended: endedView
+    };
+    app.replaceChildren((builders[next.view] || waitingView)(next));
+    app.dataset.view = next.view;
+    var heading = app.querySelector("h1");
+    if (heading) { heading.setAttribute("tabindex", "-1"); heading.focus({ preventScroll: true }); }
+    window.scrollTo(0, 0);
+    if (next.view === "ended") { forgetAll(); setConnection("ended"); setSave(""); }
+  }
+
+  function panel() {
+    var section = h("section", { class: "panel" });
+    for (var i = 0; i < arguments.length; i++) { if (arguments[i]) { section.appendChild(arguments[i]); } }
+    return section;
+  }
+
+  function welcomeView() {
+    return panel(h("h1", { text: "Welcome!" }),
+      h("p", { class: "lead", text: "Thank you for taking part. The session begins shortly." }),
+      h("p", { text: "Please keep this page open; it shows you what to do next." }));
+  }
+
+  function waitingView(s) {
+    return panel(h("h1", { text: s.after ? "Thank you!" : "Please wait" }),
+      h("p", { class: "lead", text: "The next conversation begins shortly." }),
+      h("p", { text: "Please keep this page open." }));
+  }
+
+  function listenView(s) {
+    return panel(h("div", { class: "listen-icon", "aria-hidden": "true" }),
+      h("h1", { text: "Listen to " + s.robot_name }),
+      h("p", { class: "lead", text: "When it is time to rank the items, they will appear here." }));
+  }
+
+  function nameOf(s, id) {
+    var found = s.items.filter(function (item) { return item.id === id; })[0];
+    return found ? found.name : id;
+  }
+
+  function rankingView(s) {
+    var draftName = "draft:rank:" + s.position;
+    var presented = s.items.map(function (item) { return item.id; });
+    var draft = load(draftName, null);
+    var order = isPermutation(draft, presented) ? draft : presented;
+    var list = h("ol", { class: "rank-list", id: "ranking-list", "aria-label": "Your ranking" });
+    order.forEach(function (id) { list.appendChild(rankItem(s, id, list, draftName)); });
+    renumber(list);
+    if (window.Sortable) {
+      window.Sortable.create(list, {
+        animation: 150, handle: ".handle", ghostClass: "dragging",
+        onEnd: function () { renumber(list); store(draftName, currentOrder(list)); }
+      });
+    }
+    var button = h("button", {
+      type: "button", class: "big primary", id: "submit-ranking", text: "Submit my ranking",
+      onclick: function () {
+        submit("ranking", { position: s.position, ranking: currentOrder(list) }, draftName);
+      }
+    });
+    return panel(h("h1", { text: "Rank the items" }),
+      h("p", { class: "muted", text: s.task_name + ": " + s.introduction }),
+      h("p", { text: "Number 1 is the most important. Drag an item by its handle, or use the arrow buttons." }),
+      list, button);
+  }
+
+  function isPermutation(candidate, items) {
+    return Array.isArray(candidate) && candidate.length === items.length &&
+      candidate.slice().sort().join("\u0000") === items.slice().sort().join("\u0000");
+  }
+
+  function rankItem(s, id, list, draftName) {
+    var name = nameOf(s, id);
+    function moveBy(step) {
+      return function () {
+        var item = list.querySelector('[data-id="' + CSS.escape(id) + '"]');
+        var target = step < 0 ? item.previousElementSibling : item.nextElementSibling;
+        if (!target) { return; }
+        list.insertBefore(item, step < 0 ? target : target.nextElementSibling);
+        renumber(list);
+        store(draftName, currentOrder(list));
+        var rank = currentOrder(list).indexOf(id) + 1;
+        announce(name + " is now number " + rank + ".");
+        item.querySelector(step < 0 ? ".up" : ".down").focus();
+      };
+    }
+    return h("li", { class: "rank-item", "data-id": id },
+      h("span", { class: "handle", "aria-hidden": "true", text: "⠿" }),
+      h("span", { class: "rank" }),
+      h("span", { class: "name", text: name }),
+      h("button", { type: "button", class: "move up", "aria-label": "Move " + name + " up", text: "▲", onclick: moveBy(-1) }),
+      h("button", { type: "button", class: "move down", "aria-label": "Move " + name + " down", text: "▼", onclick: moveBy(1) }));
+  }
+
+  function renumber(list) {
+    Array.prototype.forEach.call(list.children, function (item, index) {
+      item.querySelector(".rank").textContent = String(index + 1);
+      var up = item.querySelector(".up");
+      var down = item.querySelector(".down");
+      if (up) { up.disabled = index === 0; }
+      if (down) { down.disabled = index === list.children.length - 1; }
+    });
+  }
+
+  function currentOrder(list) {
+    return Array.prototype.map.call(list.children, function (item) { return item.dataset.id; });
+  }
+
+  function rankedView(s) {
+    shownRanking = null;
+    var list = h("ol", { class: "rank-list readonly", id: "current-ranking", "aria-label": "Your current ranking" });
+    var section = panel(h("h1", { text: "Your ranking" }),
+      h("p", { class: "lead", text: "Listen to " + s.robot_name + "." }),
+      h("p", { class: "muted", text: "If you change your ranking together, this list changes too." }),
+      list);
+    fillRanked(list, s.ranking, []);
+    shownRanking = s.ranking.slice();
+    return section;
+  }
+
+  function fillRanked(list, ranking, moved) {
+    list.replaceChildren.apply(list, ranking.map(function (id, index) {
+      return h("li", { class: "rank-item" + (moved.indexOf(id) >= 0 ? " moved" : ""), "data-id": id },
+        h("span", { class: "rank", text: String(index + 1) }),
+        h("span", { class: "name", text: nameOf(state, id) }));
+    }));
+  }
+
+  function updateRanked(ranking) {
+    var list = document.getElementById("current-ranking");
+    if (!list || !shownRanking || shownRanking.join("|") === ranking.join("|")) { return; }
+    var before = shownRanking;
+    var moved = ranking.filter(function (id, index) { return before[index] !== id; });
+    fillRanked(list, ranking, moved);
+    shownRanking = ranking.slice();
+    var leader = moved.filter(function (id) { return ranking.indexOf(id) < before.indexOf(id); })[0];
+    if (leader) { announce("Updated: " + nameOf(state, leader) + " is now number " + (ranking.indexOf(leader) + 1) + "."); }
+  }
+
+  function questionnaireView(s) {
+    var q = s.questionnaire;
+    var draftName = "draft:q:" + s.position + ":" + q.id;
+    var draft = load(draftName, {});
+    var form = h("form", { class: "questionnaire", novalidate: true, id: "questionnaire" });
+    var counter = h("p", { class: "answered", "aria-live": "polite" });
+    q.items.forEach(function (item, index) {
+      form.appendChild(questionField(q, item, index + 1, draft[item.id], function (value) {
+        var current = load(draftName, {});
+        current[item.id] = value;
+        store(draftName, current);
+        countAnswered(form, q, counter);
+      }));
+    });
+    form.appendChild(h("button", { type: "submit", class: "big primary", text: s.page < s.pages ? "Save and continue" : "Save" }));
+    form.addEventListener("submit", function (event) {
+      event.preventDefault();
+      var answers = collect(form, q);
+      var missing = q.items.map(function (item, i) { return answers[item.id] === undefined ? i + 1 : 0; })
+        .filter(Boolean);
+      if (missing.length) {
+        showError("Please answer question " + missing[0] + ".");
+        var field = form.querySelector('[data-number="' + missing[0] + '"]');
+        field.classList.add("invalid");
+        field.scrollIntoView({ block: "center" });
+        return;
+      }
+      submit("questionnaire", { position: s.position, questionnaire: q.id, answers: answers }, draftName);
+    });
+    countAnswered(form, q, counter);
+    var title = s.final ? "Final questions" : "Questions about " + s.robot_name;
+    return panel(
+      h("p", { class: "progress-label", text: "Part " + s.page + " of " + s.pages }),
+      h("progress", { value: s.page - 1, max: s.pages, "aria-label": "Progress" }),
+      h("h1", { text: title }), counter, form);
+  }
+
+  function questionField(q, item, number, saved, onChange) {
+    var field = h("fieldset", { class: "question " + item.type, "data-number": number, "data-item": item.id });
+    if (item.type === "text") {
+      var area = h("textarea", { name: item.id, rows: "4", id: "answer-" + item.id });
+      area.value = typeof saved === "string" ? saved : "";
+      area.addEventListener("input", function () { onChange(area.value); field.classList.remove("invalid"); });
+      field.appendChild(h("legend", { text: number + ". " + item.text }));
+      field.appendChild(area);
+      return field;
+    }
+    var legend = item.type === "differential"
+      ? number + ". " + item.left + " – " + item.right
+      : number + ". " + item.text;
+    field.appendChild(h("legend", { text: legend }));
+    var scale = h("div", { class: "scale" });
+    for (var value = 1; value <= q.points; value++) {
+      var input = h("input", { type: "radio", name: item.id, value: String(value), checked: saved === value });
+      input.addEventListener("change", function (event) {
+        onChange(Number(event.target.value));
+        field.classList.remove("invalid");
+      });
+      scale.appendChild(h("label", { class: "point" }, input, h("span", { text: String(value) })));
+    }
+    field.appendChild(scale);
+    var low = item.type === "differential" ? item.left : q.low;
+    var high = item.type === "differential" ? item.right : q.high;
+    if (low || high) {
+      field.appendChild(h("div", { class: "anchors", "aria-hidden": "true" },
+        h("span", { text: low }), h("span", { text: high })));
+    }
+    return field;
+  }
+
+  function collect(form, q) {
+    var answers = {};
+    q.items.forEach(function (item) {
+      if (item.type === "text") {
+        var text = form.querySelector('textarea[name="' + CSS.escape(item.id) + '"]').value.trim();
+        if (text) { answers[item.id] = text; }
+      } else {
+        var checked = form.querySelector('input[name="' + CSS.escape(item.id) + '"]:checked');
+        if (checked) { answers[item.id] = Number(checked.value); }
+      }
+    });
+    return answers;
+  }
+
+  function countAnswered(form, q, counter) {
+    var done = Object.keys(collect(form, q)).length;
+    counter.textContent = done + " of " + q.items.length + " answered";
+  }
+
+  function endedView() {
+    return panel(h("h1", { text: "Thank you!" }),
+      h("p", { class: "lead", text: "This session has ended. Thank you for taking part!" }),
+      h("p", { text: "You can give the phone back now." }));
+  }
+
+  /* ---------- submissions: outbox first, then the server; shown as saved only once stored ---------- */
+  var flushing = false;
+  var retryTimer = null;
+  var retryDelay = 1000;
+
+  function submit(kind, body, draftName) {
+    var box = load("outbox", []);
+    var target = kind + ":" + body.position + ":" + (body.questionnaire || "");
+    var entry = box.filter(function (e) { return e.target === target; })[0];
+    if (entry) {
+      entry.body = Object.assign({}, body, { client_id: entry.body.client_id });
+    } else {
+      entry = { target: target, kind: kind, draft: draftName, body: Object.assign({ client_id: newClientId() }, body) };
+      box.push(entry);
+    }
+    store("outbox", box);
+    showError("");
+    setSave("saving");
+    flush();
+  }
+
+  function dropFromOutbox(clientId) {
+    store("outbox", load("outbox", []).filter(function (e) { return e.body.client_id !== clientId; }));
+  }
+
+  function scheduleRetry() {
+    setSave("offline");
+    if (retryTimer) { return; }
+    retryTimer = setTimeout(function () { retryTimer = null; flush(); }, retryDelay);
+    retryDelay = Math.min(retryDelay * 2, 8000);
+  }
+
+  function messageOf(data) {
+    return typeof data.detail === "string" ? data.detail : "Your answer could not be read. Please check it and try again.";
+  }
+
+  function flush() {
+    if (flushing) { return; }
+    var box = load("outbox", []);
+    if (!box.length) { return; }
+    flushing = true;
+    var entry = box[0];
+    fetch(api + "/" + entry.kind, {
+      method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(entry.body)
+    }).then(function (response) {
+      if (response.status >= 500) { throw new Error("server " + response.status); }
+      return response.json().catch(function () { return {}; }).then(function (data) {
+        dropFromOutbox(entry.body.client_id);
+        if (response.ok) {
+          if (entry.draft) { forget(entry.draft); }
+          retryDelay = 1000;
+          setSave("saved");
+          render(data.state);
+        } else if (response.status === 410) {
+          render({ view: "ended" });
+        } else {
+          setSave("");
+          showError(messageOf(data));
+          if (response.status === 409) { refresh(); }
+        }
+      });
+    }).then(function () {
+      flushing = false;
+      flush();
+    }, function () {
+      flushing = false;
+      scheduleRetry();
+    });
+  }
+
+  function refresh() {
+    fetch(api + "/state").then(function (response) {
+      if (response.status === 410) { render({ view: "ended" }); return null; }
+      return response.ok ? response.json() : null;
+    }).then(function (fresh) { if (fresh) { render(fresh); } }, function () { /* the socket retries */ });
+  }
+
+  /* ---------- the live connection: reconnects by itself with backoff ---------- */
+  var socket = null;
+  var attempts = 0;
+  var lastHeard = Date.now();
+
+  function connect() {
+    if (state.view === "ended") { return; }
+    setConnection(attempts ? "offline" : "connecting");
+    var scheme = location.protocol === "https:" ? "wss://" : "ws://";
+    var ws = new WebSocket(scheme + location.host + "/ws/p/" + encodeURIComponent(token));
+    socket = ws;
+    ws.onopen = function () { attempts = 0; lastHeard = Date.now(); setConnection("online"); flush(); };
+    ws.onmessage = function (event) {
+      lastHeard = Date.now();
+      var message = JSON.parse(event.data);
+      if (message.type === "state") { render(message.state); }
+    };
+    ws.onclose = function (event) {
+      if (socket !== ws) { return; }
+      socket = null;
+      if (event.code === 4410) { render({ view: "ended" }); return; }
+      setConnection("offline");
+      var delay = Math.min(8000, 400 * Math.pow(2, attempts)) * (0.75 + Math.random() / 2);
+      attempts += 1;
+      setTimeout(connect, delay);
+    };
+  }
+
+  setInterval(function () {
+    if (socket && socket.readyState === WebSocket.OPEN) {
+      if (Date.now() - lastHeard > 45000) { socket.close(); return; } // silently dead
+      socket.send('{"type":"ping"}');
+    }
+  }, 15000);
+  window.addEventListener("online", function () {
+    flush();
+    if (socket) { socket.close(); } else { connect(); }
+  });
+  window.addEventListener("offline", function () { setConnection("offline"); });
+
+  render(state);
+  connect();
+  flush();
+}());
