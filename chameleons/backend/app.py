@@ -14,6 +14,7 @@ from fastapi.templating import Jinja2Templates
 from starlette.middleware.sessions import SessionMiddleware
 
 from chameleons import __version__
+from chameleons.backend.analysis import pages as analysis_pages
 from chameleons.backend.auth import endpoints as auth_endpoints
 from chameleons.backend.auth import pages as auth_pages
 from chameleons.backend.auth.csrf import csrf_token
@@ -91,6 +92,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         phone_endpoints.router,
         phone_pages.router,
         export_endpoints.router,
+        analysis_pages.router,
         dashboard_pages.router,
         withdrawal_endpoints.router,
         wizard_pages.router,

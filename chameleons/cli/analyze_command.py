@@ -59,9 +59,12 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     "--scores",
     "scores_path",
     type=click.Path(dir_okay=False, path_type=Path),
-    required=True,
-    help="scores.csv: participant, condition, accepted, credibility, likeability, trust.",
+    default=None,
+    help="scores.csv: participant, condition, accepted, credibility, likeability, trust. "
+    "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
 )
+@click.option("--study", "study_id", type=int, help="Database mode: study id (default: newest).")
+@click.option("--include-rehearsal", is_flag=True, help="Database mode: count rehearsals too.")
 @click.option(
     "--format",
     "output_format",
@@ -90,7 +93,9 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     help="paper: Table I's layout; wide: a column per condition.",
 )
 def analyze_command(
-    scores_path: Path,
+    scores_path: Path | None,
+    study_id: int | None,
+    include_rehearsal: bool,
     output_format: str,
     permutations: int | None,
     seed: int,
@@ -98,7 +103,10 @@ def analyze_command(
     latex_layout: Literal["paper", "wide"],
 ) -> None:
     """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests."""
-    rows = read_scores_csv(scores_path)
+    if scores_path is not None:
+        rows = read_scores_csv(scores_path)
+    else:
+        rows = database_score_rows(study_id, include_rehearsal)
     click.echo(
         analysis_output(
             rows,
@@ -109,3 +117,20 @@ def analyze_command(
             latex_layout=latex_layout,
         )
     )
+
+
+def database_score_rows(study_id: int | None, include_rehearsal: bool) -> list[dict[str, Any]]:
+    """The export's scores rows read from the configured database."""
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from chameleons.backend.analysis.service import score_rows_from_database
+    from chameleons.backend.export.selection import StudyNotFoundError
+    from chameleons.cli.common import load_settings
+
+    url = load_settings().effective_database_url
+    try:
+        return score_rows_from_database(url, study_id, include_rehearsal)
+    except StudyNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    except SQLAlchemyError as exc:
+        raise click.ClickException(f"could not read the database: {exc}") from exc

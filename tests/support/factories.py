@@ -114,6 +114,7 @@ def populate(
     free_rows: int = 0,
     recordings_dir: Path | None = None,
     spec: StudySpec | None = None,
+    effects: dict[str, float] | None = None,
 ) -> PopulatedStudy:
     """A study with ``participants`` completed sessions (codes P001...), then ``rehearsals``
     rehearsal ones (R001..., on the next rows without holding them), and ``free_rows``
@@ -135,6 +136,7 @@ def populate(
             rehearsal=rehearsal,
             recordings_dir=recordings_dir,
             result=result,
+            effects=effects,
         )
         result.participant_ids.append(participant.id)
         result.codes.append(participant.code)
@@ -153,6 +155,7 @@ def add_completed_participant(
     rehearsal: bool = False,
     recordings_dir: Path | None = None,
     result: PopulatedStudy | None = None,
+    effects: dict[str, float] | None = None,
 ) -> Participant:
     start = START + timedelta(hours=row.row_number)
     participant = Participant(  # a rehearsal borrows its row without holding it
@@ -186,7 +189,7 @@ def add_completed_participant(
     level = rng.gauss(0.0, 0.8)
     for planned in row.interactions:
         _add_interaction(
-            db, study, spec, session, planned, start, level, rng, recordings_dir, result
+            db, study, spec, session, planned, start, level, rng, recordings_dir, result, effects
         )
     final_time = start + timedelta(minutes=42)
     for questionnaire in spec.questionnaires_for("final"):
@@ -208,7 +211,8 @@ def add_completed_participant(
     return participant
 
 
-CONDITION_EFFECT = {"still": 0.0, "natural": -0.2, "copy": 0.3}
+# Small, like the paper found (nothing significant); tests wanting an effect pass their own.
+CONDITION_EFFECT = {"still": 0.0, "natural": -0.1, "copy": 0.1}
 
 
 def _add_interaction(
@@ -222,6 +226,7 @@ def _add_interaction(
     rng: random.Random,
     recordings_dir: Path | None,
     result: PopulatedStudy | None,
+    effects: dict[str, float] | None = None,
 ) -> None:
     position = int(planned["position"])
     began = start + timedelta(minutes=2 + 13 * (position - 1))
@@ -259,7 +264,7 @@ def _add_interaction(
             {"prompt": f"p{prompt:03d}", "ack_latency_ms": round(latency, 1)},
             worker_time=1000.0 + prompt,
         )
-    effect = CONDITION_EFFECT.get(interaction.condition, 0.0)
+    effect = (effects or CONDITION_EFFECT).get(interaction.condition, 0.0)
     final = _add_suggestions(db, spec, interaction, initial, began, effect, rng)
     interaction.final_ranking = final
     interaction.current_ranking = final

@@ -16,31 +16,33 @@ from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.export.queries import accepted_counts, counted_interactions
 from chameleons.backend.models import QuestionnaireResponse, Study
+from chameleons.experiment import suggestions
 from chameleons.experiment.model import Questionnaire
 from chameleons.experiment.model import Study as StudySpec
+from chameleons.experiment.questionnaires import score_questionnaire
 
 
 def error_score(spec: StudySpec, task: str, ranking: Sequence[str] | None) -> int | None:
-    """Sum of |rank - expert rank| over a ranking's items, expert ranks taken within the
-    ranked items (so a 5-item scenario scores 0..12, like the 15-item score scores 0..112)."""
+    """The experiment core's survival-task error score, expert ranks taken among the ranked
+    items (0 = expert order); None for a missing or unusable ranking."""
     if not ranking:
         return None
     try:
-        expert = spec.expert_order(task, list(ranking))
-    except KeyError:
+        expert_ranks = {item.id: item.expert_rank for item in spec.task(task).items}
+        return suggestions.error_score(list(ranking), expert_ranks)
+    except (KeyError, ValueError):
         return None
-    return sum(abs(rank - expert.index(item)) for rank, item in enumerate(ranking))
 
 
 def questionnaire_score(questionnaire: Questionnaire, values: dict[str, int]) -> float | None:
-    """Mean of the numeric items, reverse-keyed ones reversed; None unless all are answered."""
-    scored = []
-    for item in questionnaire.numeric_items:
-        value = values.get(item.id)
-        if value is None:
-            return None
-        scored.append(questionnaire.points + 1 - value if item.reverse else value)
-    return sum(scored) / len(scored) if scored else None
+    """The experiment core's score (mean of the numeric items, reverse-keyed ones reversed);
+    None unless every numeric item has a valid answer."""
+    numeric = {item.id for item in questionnaire.numeric_items}
+    try:
+        answers = {item: value for item, value in values.items() if item in numeric}
+        return score_questionnaire(questionnaire, answers)
+    except ValueError:
+        return None
 
 
 def _answers_by_interaction(

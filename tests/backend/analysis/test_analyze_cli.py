@@ -1,0 +1,39 @@
+"""`chameleons analyze` from the database equals `chameleons analyze --scores` on the export."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
+from chameleons.cli.analyze_command import analyze_command
+from chameleons.cli.export_command import export
+from tests.support.factories import populate
+
+
+def test_database_mode_matches_the_exported_scores(sqlite_template: Path, tmp_path: Path) -> None:
+    database = tmp_path / "study.sqlite3"
+    shutil.copyfile(sqlite_template, database)
+    engine = build_engine(f"sqlite:///{database}")
+    for db in session_scope(build_sessionmaker(engine)):
+        populate(db, 12, rehearsals=1, seed=3)
+    engine.dispose()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CHAMELEONS_")}
+    env["CHAMELEONS_DATABASE_URL"] = f"sqlite:///{database}"
+    runner = CliRunner(env=env)
+    assert runner.invoke(export, ["--out", str(tmp_path / "out")]).exit_code == 0
+    for output in ("json", "latex", "text"):
+        from_db = runner.invoke(analyze_command, ["--format", output])
+        from_file = runner.invoke(
+            analyze_command, ["--scores", str(tmp_path / "out" / "scores.csv"), "--format", output]
+        )
+        assert from_db.exit_code == 0, from_db.output
+        assert from_db.output == from_file.output
+    with_rehearsal = runner.invoke(analyze_command, ["--format", "json", "--include-rehearsal"])
+    assert '"n": 13' in with_rehearsal.output
+    missing = runner.invoke(analyze_command, ["--study", "42"])
+    assert missing.exit_code == 1
+    assert "there is no study with id 42" in missing.output
