@@ -96,4 +96,4 @@ class ClockAligner:
             allowed = self.offset + self.max_drift * max(0.0, receive_time - self._last_receive)
             self.offset = min(delay, allowed)
         self._last_receive = receive_time
-        return sender_time + self.offset
+        return min(sender_time + self.offset, receive_time)  # exact even after rounding
