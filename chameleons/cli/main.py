@@ -14,6 +14,7 @@ from chameleons.cli import (
     serve_command,
     simulate_face_command,
     user_commands,
+    worker_command,
 )
 
 
@@ -30,6 +31,7 @@ cli.add_command(simulate_face_command.simulate_face)
 cli.add_command(user_commands.user)
 cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
+cli.add_command(worker_command.worker)
 cli.add_command(analyze_command.analyze_command)
 
 

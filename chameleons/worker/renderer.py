@@ -111,13 +111,14 @@ class LipsyncTrack:
         return self.start + (self.curve.duration if self.curve is not None else 0.0)
 
     def apply(self, t: float, agent: F32Array) -> None:
-        curve = self.curve
-        if curve is None or not self.active or t < self.start:
+        if not self.active or t < self.start:
             return
+        if t >= self.end + self.fade:
+            self.start = math.nan  # faded out: the behaviour owns the mouth again
+            return
+        curve = self.curve
         weight = min(1.0, (t - self.start) / self.fade, 1.0 - (t - self.end) / self.fade)
-        if weight <= 0.0:
-            if t > self.end:
-                self.start = math.nan  # faded out: the behaviour owns the mouth again
+        if curve is None or weight <= 0.0:
             return
         u, times = t - self.start, curve.times
         last = len(times) - 1

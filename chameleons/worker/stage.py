@@ -8,7 +8,9 @@ that stages connect a DEALER to (identity = stage name) for commands and acks.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Mapping
@@ -40,8 +42,10 @@ POLL_MS = 100  # how often a blocked stage looks at its stop flag
 
 @dataclass(frozen=True, slots=True)
 class Endpoints:
-    """Where each stage's sockets live. ``participant`` is the ingest PUB."""
+    """Where each stage's sockets live. Capture receivers connect their PUBs to ``capture``;
+    the participant bus re-publishes those frames on ``participant`` for every consumer."""
 
+    capture: str
     participant: str
     agent: str
     playback: str
@@ -63,7 +67,7 @@ class Endpoints:
         return cls(**ports)
 
 
-_NAMES = ("participant", "agent", "playback", "render", "recorder", "stage_control")
+_NAMES = ("capture", "participant", "agent", "playback", "render", "recorder", "stage_control")
 
 CommandHandler = Callable[[Mapping[str, Any]], Mapping[str, Any]]
 
@@ -124,7 +128,53 @@ def send_message(socket: zmq.Socket[bytes], message: Message) -> bool:
         socket.send_multipart(serialize(message), zmq.NOBLOCK)
     except zmq.Again:
         return False
+    except ValueError:  # e.g. a NaN slipped into a header: a bug to log, not a crash
+        log.exception("could not serialise a %s message", message.type)
+        return False
     return True
+
+
+class ParticipantBus:
+    """XSUB/XPUB forwarder: any number of capture receivers in, any number of consumers out
+    (behaviour stage, recorder, benchmarks), subscriptions forwarded upstream."""
+
+    name = "bus"
+
+    def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints) -> None:
+        self.context, self.endpoints = context, endpoints
+        self.forwarded = 0
+
+    def run(self, stop: threading.Event) -> None:
+        inbound = self.context.socket(zmq.XSUB)
+        outbound = self.context.socket(zmq.XPUB)
+        for socket in (inbound, outbound):
+            socket.setsockopt(zmq.LINGER, 0)
+        inbound.bind(self.endpoints.capture)
+        outbound.bind(self.endpoints.participant)
+        poller = zmq.Poller()
+        poller.register(inbound, zmq.POLLIN)
+        poller.register(outbound, zmq.POLLIN)
+        try:
+            while not stop.is_set():
+                events = dict(poller.poll(POLL_MS))
+                if inbound in events:
+                    self.forwarded += _forward(inbound, outbound)
+                if outbound in events:
+                    _forward(outbound, inbound)  # (un)subscriptions travel upstream
+        finally:
+            inbound.close(linger=0)
+            outbound.close(linger=0)
+
+
+def _forward(source: zmq.Socket[bytes], target: zmq.Socket[bytes], limit: int = 1000) -> int:
+    for count in range(limit):
+        try:
+            frames = source.recv_multipart(zmq.NOBLOCK, copy=False)
+        except zmq.Again:
+            return count
+        with contextlib.suppress(zmq.Again):  # a slow consumer: PUB semantics, drop
+            target.send_multipart(frames, zmq.NOBLOCK, copy=False)
+    return limit
 
 
 def receive_messages(

@@ -192,6 +192,7 @@ def test_switching_behaviour_never_jumps(crossfade: float) -> None:
             if abs(t - when) < tick / 2:
                 router.set_behaviour(name, params, t)
         router.sample(t, out)
+        router.advance(t)
         if previous is not None:
             max_step = np.maximum(max_step, np.abs(out - previous))
         previous = out.copy()

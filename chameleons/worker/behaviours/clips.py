@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -88,12 +87,20 @@ def load_clip(path: str | Path) -> MotionClip:
 
 
 def _load_take(path: Path) -> MotionClip:
-    takes = importlib.import_module("chameleons.worker.takes")  # the capture side's reader
-    take = takes.read_take(path)
+    from chameleons.worker.takes import TakeError, read_take
+
+    try:
+        take = read_take(path)
+    except TakeError as exc:
+        raise BehaviourError(str(exc)) from exc
     return MotionClip.from_arrays(take.times, take.blendshapes, take.head, take.eyes)
 
 
 def _load_recording(path: Path) -> MotionClip:
-    recording = importlib.import_module("chameleons.worker.recording")  # capture side
-    stream = recording.read_face_stream(path)
-    return MotionClip.from_arrays(stream.times, stream.blendshapes, stream.head, stream.eyes)
+    from chameleons.worker.recording import RecordingError, read_recording
+
+    try:
+        take = read_recording(path)
+    except RecordingError as exc:
+        raise BehaviourError(str(exc)) from exc
+    return MotionClip.from_arrays(take.times, take.blendshapes, take.head, take.eyes)

@@ -101,8 +101,11 @@ class BehaviourRouter:
         return new
 
     def sample(self, t: float, out: F32Array) -> float:
+        return self.current.sample(t, out)
+
+    def advance(self, t: float) -> None:
+        """No sample before ``t`` will be asked for again: drop finished crossfades."""
         current = self.current
         while isinstance(current, Crossfade) and t >= current.end_time:
-            current = current.new  # the fade is over: drop the old behaviour
+            current = current.new
         self.current = current
-        return current.sample(t, out)

@@ -42,6 +42,7 @@ def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver
 
 
 __all__ = [
+    "DEFAULT_URL",
     "DRIVER_NAMES",
     "ROBOT_STATE",
     "SPEECH_END",
@@ -51,6 +52,7 @@ __all__ = [
     "DriverOptions",
     "FurhatDriver",
     "NullDriver",
+    "Publish",
     "RecordDriver",
     "VirtualDriver",
     "create_driver",

@@ -1,0 +1,123 @@
+"""``chameleons worker``: the realtime pipeline of one booth."""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+import click
+
+from chameleons.cli.common import load_settings
+from chameleons.settings import Settings
+from chameleons.worker.behaviours.copy import DEFAULT_DELAY
+from chameleons.worker.drivers import DRIVER_NAMES
+from chameleons.worker.renderer import RenderConfig
+from chameleons.worker.runtime import WorkerConfig, run_worker
+
+
+def _setting(settings: Settings, name: str, default: Any) -> Any:
+    """A worker setting, or its default when this build's Settings does not have it."""
+    return getattr(settings, name, default)
+
+
+@click.command()
+@click.option("--booth", default=None, help="Booth id (the control identity). [booth-1]")
+@click.option("--driver", type=click.Choice(DRIVER_NAMES), default=None,
+              help="Robot driver. [virtual]")  # fmt: skip
+@click.option("--robot-url", default=None,
+              help="Furhat Realtime API URL. [ws://127.0.0.1:9000/v1/events]")  # fmt: skip
+@click.option("--livelink-port", type=int, default=None, help="Live Link Face UDP port (0: any).")
+@click.option("--facecapturex-port", type=int, default=None, help="FaceCaptureX TCP port (0: any).")
+@click.option("--behaviour", default="still", show_default=True,
+              help="Behaviour to start in: still, natural, copy or a registered one.")  # fmt: skip
+@click.option(
+    "--copy-delay", type=float, default=None, help=f"Copy delay in seconds. [{DEFAULT_DELAY}]"
+)
+@click.option("--natural", "natural_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None,
+              help="Recording `natural` replays (take CSV, Parquet, .npz).")  # fmt: skip
+@click.option("--control", default=None, help="Server command endpoint (ROUTER) to connect to.")
+@click.option("--telemetry", default=None, help="Server telemetry endpoint (SUB) to connect to.")
+@click.option("--tick-rate", type=float, default=None, help="Renderer rate in Hz. [125]")
+@click.option("--face-rate", type=float, default=None, help="Face parameter rate in Hz. [25]")
+@click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
+def worker(
+    booth: str | None, driver: str | None, robot_url: str | None, livelink_port: int | None,
+    facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
+    natural_path: Path | None, control: str | None, telemetry: str | None,
+    tick_rate: float | None, face_rate: float | None, verbose: bool,
+) -> None:  # fmt: skip
+    """Run the realtime worker of one booth (capture -> behaviour -> renderer -> robot).
+
+    Runs standalone too: without a server it starts in the given behaviour and drives the
+    robot, so a lab can test the robot chain on its own. Ctrl-C stops it cleanly.
+    """
+    settings = load_settings()
+    logging.basicConfig(level=logging.DEBUG if verbose else settings.log_level.upper(),
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
+    config = build_config(
+        settings, booth=booth, driver=driver, robot_url=robot_url, livelink_port=livelink_port,
+        facecapturex_port=facecapturex_port, behaviour=behaviour, copy_delay=copy_delay,
+        natural_path=natural_path, control=control, telemetry=telemetry, tick_rate=tick_rate,
+        face_rate=face_rate,
+    )  # fmt: skip
+    try:
+        code = run_worker(config, echo=click.echo)
+    except (OSError, RuntimeError, ValueError) as exc:
+        raise click.ClickException(str(exc)) from exc
+    if code:
+        raise SystemExit(code)
+
+
+def build_config(settings: Settings, **options: Any) -> WorkerConfig:
+    """Command-line options over settings over defaults."""
+
+    def pick(option: str, setting: str, default: Any) -> Any:
+        value = options.get(option)
+        return value if value is not None else _setting(settings, setting, default)
+
+    delay = float(pick("copy_delay", "worker_copy_delay", DEFAULT_DELAY))
+    if not math.isfinite(delay) or delay < 0:
+        raise click.BadParameter(
+            "must be a non-negative number of seconds", param_hint="--copy-delay"
+        )
+    params: dict[str, Any] = {}
+    if options.get("natural_path") is not None:
+        params["path"] = str(options["natural_path"])
+    render = RenderConfig(
+        tick_rate=float(pick("tick_rate", "worker_tick_rate", 125.0)),
+        face_rate=float(pick("face_rate", "worker_face_rate", 25.0)),
+        fir_taps=int(_setting(settings, "worker_fir_taps", 15)),
+        fir_cutoff_hz=float(_setting(settings, "worker_fir_cutoff_hz", 6.0)),
+    )
+    return WorkerConfig(
+        booth=pick("booth", "worker_booth", "booth-1"),
+        driver=pick("driver", "worker_driver", "virtual"),
+        robot_url=pick("robot_url", "worker_robot_url", "ws://127.0.0.1:9000/v1/events"),
+        robot_key=_secret(_setting(settings, "worker_robot_key", None)),
+        data_dir=settings.data_dir,
+        command_endpoint=pick("control", "worker_command_endpoint", "tcp://127.0.0.1:5555"),
+        telemetry_endpoint=pick("telemetry", "worker_telemetry_endpoint", "tcp://127.0.0.1:5556"),
+        capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),
+        livelink_port=pick("livelink_port", "livelink_port", 11111),
+        facecapturex_port=pick("facecapturex_port", "facecapturex_port", 19977),
+        livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "degrees/180"),
+        mounting_rotation_deg=_setting(settings, "mounting_rotation_deg", 0.0),
+        mirror=_setting(settings, "mirror", True),
+        behaviour=options["behaviour"], behaviour_params=params, copy_delay=delay,
+        render=render,
+        crossfade_seconds=float(_setting(settings, "worker_crossfade_seconds", 0.3)),
+    )  # fmt: skip
+
+
+def _secret(value: Any) -> str | None:
+    if value is None:
+        return None
+    secret = value.get_secret_value() if hasattr(value, "get_secret_value") else str(value)
+    return secret or None
+
+
+if __name__ == "__main__":  # `python -m chameleons.cli.worker_command`: no server imports
+    worker()

@@ -1,0 +1,168 @@
+"""The behaviour stage: participant frames in, agent keyframes out.
+
+It samples the current behaviour on the renderer's tick grid (times ``k / tick_rate`` on the
+monotonic clock) a few ticks ahead (``lookahead``) and publishes each sample as a keyframe
+(topic ``face.agent``, body ``{"t", "input_time"}``, payload 61 float32). Publishing ahead
+makes the renderer's output independent of this stage's scheduling and of the socket hop:
+at tick ``k`` the keyframe for exactly that time is already there. The head channels are
+sampled ``head_lead`` seconds later than the face (the renderer's FIR group delay), so after
+the filter the head is exactly as late as the face.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import zmq
+
+from chameleons.worker.behaviours.base import HEAD_SLICE, VECTOR_SIZE, BehaviourError
+from chameleons.worker.behaviours.router import BehaviourRouter, build_context
+from chameleons.worker.control import SET_BEHAVIOUR, STATUS, CommandError
+from chameleons.worker.envelope import EnvelopeError, Message, message_frame
+from chameleons.worker.stage import (
+    AGENT_TOPIC,
+    PARTICIPANT_TOPIC,
+    POLL_MS,
+    CommandPort,
+    Endpoints,
+    RateMeter,
+    receive_messages,
+    send_message,
+)
+
+STATS_INTERVAL = 1.0
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviourStageConfig:
+    tick_rate: float = 125.0
+    lookahead_ticks: int = 3
+    crossfade_seconds: float = 0.3
+    history_seconds: float = 12.0
+    head_lead: float = 0.0  # the renderer's FIR group delay, compensated here
+    initial: str = "still"
+    initial_params: Mapping[str, Any] = field(default_factory=dict)
+
+
+class BehaviourStage:
+    name = "behaviour"
+
+    def __init__(
+        self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints,
+        config: BehaviourStageConfig | None = None, *, clock: Callable[[], float] = time.monotonic,
+    ) -> None:  # fmt: skip
+        self.context, self.endpoints = context, endpoints
+        self.config = config or BehaviourStageConfig()
+        self.clock = clock
+        self.period = 1.0 / self.config.tick_rate
+        self.router = BehaviourRouter(
+            build_context(self.config.history_seconds), self.config.crossfade_seconds,
+            initial=self.config.initial, params=self.config.initial_params, start=clock(),
+        )  # fmt: skip
+        self.errors: Counter[str] = Counter()
+        self.frames = RateMeter()
+        self.keyframes_out = 0
+        self._next = math.ceil(clock() / self.period)  # tick index of the next keyframe
+        self._vector = np.zeros(VECTOR_SIZE, dtype=np.float32)
+        self._lead = np.zeros(VECTOR_SIZE, dtype=np.float32)
+        self._seq = 0
+        self._input_fps = 0.0
+
+    def run(self, stop: threading.Event) -> None:
+        sub = self.context.socket(zmq.SUB)
+        sub.setsockopt(zmq.LINGER, 0)
+        sub.setsockopt(zmq.SUBSCRIBE, PARTICIPANT_TOPIC.encode())
+        sub.connect(self.endpoints.participant)
+        pub = self.context.socket(zmq.PUB)
+        pub.setsockopt(zmq.LINGER, 0)
+        pub.bind(self.endpoints.agent)
+        port = CommandPort(self.context, self.endpoints.stage_control, self.name,
+                           {SET_BEHAVIOUR: self._set_behaviour, STATUS: self._status})  # fmt: skip
+        poller = zmq.Poller()
+        poller.register(sub, zmq.POLLIN)
+        poller.register(port.socket, zmq.POLLIN)
+        next_stats = self.clock() + STATS_INTERVAL
+        try:
+            while not stop.is_set():
+                wait = (self._next * self.period - self.config.lookahead_ticks * self.period
+                        - self.clock())  # fmt: skip
+                events = dict(poller.poll(min(POLL_MS, max(0, math.ceil(wait * 1000)))))
+                if sub in events:
+                    self._take_frames(receive_messages(sub, self.errors))
+                if port.socket in events:
+                    port.handle_pending()
+                self._publish_due(pub)
+                if self.clock() >= next_stats:
+                    next_stats += STATS_INTERVAL
+                    send_message(pub, self._stats_message())
+        finally:
+            for socket in (sub, pub):
+                socket.close(linger=0)
+            port.close()
+
+    def _take_frames(self, messages: list[Message]) -> None:
+        for message in messages:
+            try:
+                frame = message_frame(message)
+            except EnvelopeError as exc:
+                self.errors[exc.reason] += 1
+                continue
+            self.router.on_participant(frame)
+            self.frames.count += 1
+
+    def _publish_due(self, pub: zmq.Socket[bytes]) -> None:
+        horizon = self.clock() + self.config.lookahead_ticks * self.period
+        if self._next * self.period < horizon - 1.0:  # stalled for a second: skip ahead
+            self.errors["stalled"] += 1
+            self._next = math.ceil((horizon - self.config.lookahead_ticks * self.period)
+                                   / self.period)  # fmt: skip
+        while self._next * self.period <= horizon:
+            t = self._next * self.period
+            send_message(pub, self.keyframe(t))
+            self._next += 1
+
+    def keyframe(self, t: float) -> Message:
+        """Sample the router for local time ``t`` (head ``head_lead`` later) as a message."""
+        input_time = self.router.sample(t, self._vector)
+        lead = self.config.head_lead
+        if lead > 0:
+            self.router.sample(t + lead, self._lead)
+            self._vector[HEAD_SLICE] = self._lead[HEAD_SLICE]
+        self.router.advance(t)
+        self._seq += 1
+        self.keyframes_out += 1
+        body = {"t": t, "input_time": input_time if math.isfinite(input_time) else None}
+        return Message(AGENT_TOPIC, "keyframe", self._seq, self.name, self.clock(), body,
+                       self._vector.astype("<f4").tobytes())  # fmt: skip
+
+    def _set_behaviour(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        params = body.get("params") or {}
+        switch_at = self._next * self.period  # the first keyframe not yet published
+        try:
+            self.router.set_behaviour(str(body["name"]), params, switch_at)
+        except BehaviourError as exc:
+            raise CommandError("bad_behaviour", str(exc)) from exc
+        return {"behaviour": self.router.current_name, "params": params, "switch_at": switch_at,
+                "crossfade": self.router.crossfade_seconds}  # fmt: skip
+
+    def _status(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
+        return self._stats_body()
+
+    def _stats_body(self) -> dict[str, Any]:
+        history = self.router.context.history
+        return {"behaviour": self.router.current_name, "params": self.router.current_params,
+                "input_fps": self._input_fps, "frames_in": self.frames.count,
+                "keyframes_out": self.keyframes_out, "errors": dict(self.errors),
+                "history_frames": len(history), "out_of_order": history.out_of_order,
+                "history_underruns": history.underruns}  # fmt: skip
+
+    def _stats_message(self) -> Message:
+        self._input_fps = self.frames.rate(self.clock())
+        return Message("stats.behaviour", "stats", 0, self.name, self.clock(), self._stats_body())

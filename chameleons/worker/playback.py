@@ -1,0 +1,114 @@
+"""Playback: plays a prompt, stops it, and relays the robot display's speech events.
+
+``play_prompt`` loads the prompt's lip-sync curves (:func:`load_lipsync`) and publishes
+``playback.prompt`` (body ``{"prompt_id", "audio_url", "channels", "rows"}``, payload the
+curve times then the ``rows x len(LIPSYNC_NAMES)`` values, float32). The renderer, which owns
+the driver, tells the robot to play the audio and runs the curves on the audio's clock:
+from the moment the driver reports that the audio started (``speech_start``, with the
+worker's timestamp) to when it ended (``speech_end``). ``stop_prompt`` publishes
+``playback.stop``; ``set_face`` ``playback.face``; ``speech_event`` (sent by the server for
+the virtual robot, whose page plays the audio) ``playback.speech``.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import Counter
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import zmq
+
+from chameleons.worker.control import (
+    PLAY_PROMPT,
+    SET_FACE,
+    SPEECH_EVENT,
+    STOP_PROMPT,
+    CommandError,
+)
+from chameleons.worker.envelope import Message
+from chameleons.worker.lipsync import LIPSYNC_NAMES, LipSync, LipSyncError, load_lipsync
+from chameleons.worker.stage import POLL_MS, CommandPort, Endpoints, send_message
+
+__all__ = ["LipSync", "LipSyncError", "PlaybackStage", "lipsync_from_message", "load_lipsync"]
+
+
+def lipsync_message(prompt_id: str, audio_url: str, lipsync: LipSync | None) -> Message:
+    body: dict[str, Any] = {"prompt_id": prompt_id, "audio_url": audio_url, "rows": 0,
+                            "channels": []}  # fmt: skip
+    payload = b""
+    if lipsync is not None:
+        body["rows"], body["channels"] = len(lipsync.times), list(lipsync.channels)
+        payload = np.concatenate([lipsync.times, lipsync.values.ravel()]).astype("<f4").tobytes()
+    return Message("playback.prompt", "prompt", 0, "playback", 0.0, body, payload)
+
+
+def lipsync_from_message(message: Message) -> LipSync | None:
+    """Inverse of :func:`lipsync_message`'s curves (None for a prompt without lip-sync)."""
+    rows = int(message.body.get("rows", 0))
+    if rows == 0:
+        return None
+    data = message.array()
+    width = len(LIPSYNC_NAMES)
+    if data.size != rows * (1 + width):
+        raise ValueError(f"lip-sync payload has {data.size} values for {rows} rows")
+    times = data[:rows].astype(np.float64)
+    values = data[rows:].reshape(rows, width)
+    return LipSync(times, values, tuple(message.body.get("channels", ())))
+
+
+class PlaybackStage:
+    name = "playback"
+
+    def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints) -> None:
+        self.context, self.endpoints = context, endpoints
+        self.errors: Counter[str] = Counter()
+        self.prompts = 0
+        self._pub: zmq.Socket[bytes] | None = None
+
+    def run(self, stop: threading.Event) -> None:
+        self._pub = self.context.socket(zmq.PUB)
+        self._pub.setsockopt(zmq.LINGER, 0)
+        self._pub.bind(self.endpoints.playback)
+        handlers = {PLAY_PROMPT: self._play, STOP_PROMPT: self._stop, SET_FACE: self._face,
+                    SPEECH_EVENT: self._speech}  # fmt: skip
+        port = CommandPort(self.context, self.endpoints.stage_control, self.name, handlers)
+        try:
+            while not stop.is_set():
+                if port.socket.poll(POLL_MS):
+                    port.handle_pending()
+        finally:
+            self._pub.close(linger=0)
+            port.close()
+
+    def _publish(self, message: Message) -> None:
+        assert self._pub is not None
+        if not send_message(self._pub, message):
+            self.errors["publish_dropped"] += 1
+
+    def _play(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        path = body.get("lipsync_path")
+        try:
+            lipsync = load_lipsync(path) if path else None
+        except LipSyncError as exc:
+            raise CommandError("bad_lipsync", str(exc)) from exc
+        prompt_id, url = str(body["prompt_id"]), str(body["audio_url"])
+        self._publish(lipsync_message(prompt_id, url, lipsync))
+        self.prompts += 1
+        if lipsync is None:
+            return {"prompt_id": prompt_id, "lipsync_seconds": None, "lipsync_channels": []}
+        return {"prompt_id": prompt_id, "lipsync_seconds": lipsync.duration,
+                "lipsync_channels": list(lipsync.channels)}  # fmt: skip
+
+    def _stop(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
+        self._publish(Message("playback.stop", "stop", 0, self.name))
+        return {}
+
+    def _face(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        self._publish(Message("playback.face", "face", 0, self.name, body=dict(body)))
+        return {"face_id": body["face_id"]}
+
+    def _speech(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        self._publish(Message("playback.speech", "speech", 0, self.name, body=dict(body)))
+        return {}

@@ -1,0 +1,172 @@
+"""The recorder stage: per interaction, the participant's incoming frames and the agent's
+outgoing frames (what the renderer sent) to two Parquet files.
+
+``start_recording`` ``{"interaction_id", "directory"}`` opens
+``<directory>/interaction-<id>-participant.parquet`` and ``...-agent.parquet`` (crash-safe
+journals while recording, see :mod:`chameleons.worker.recording`). If those exist already —
+a worker restarted mid-interaction and the server re-sent the command — the recording goes
+on in ``...-part2`` (``-part3``...) and a journal the crash left behind is recovered first.
+``stop_recording`` closes both and answers with their paths and frame counts; an
+``event.recording`` event carries the same for the server to index.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import Counter
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import zmq
+
+from chameleons.worker.control import START_RECORDING, STOP_RECORDING, CommandError
+from chameleons.worker.envelope import EnvelopeError, Message, message_frame
+from chameleons.worker.frames import FaceFrame
+from chameleons.worker.recording import FrameRecorder, journal_path, recover_recording
+from chameleons.worker.stage import (
+    PARTICIPANT_TOPIC,
+    POLL_MS,
+    SENT_TOPIC,
+    CommandPort,
+    Endpoints,
+    receive_messages,
+    send_message,
+)
+
+STREAMS = ("participant", "agent")
+STATS_INTERVAL = 1.0
+
+
+def recording_paths(directory: Path, interaction_id: str) -> dict[str, Path]:
+    """The first free ``interaction-<id>[-partN]-<stream>.parquet`` pair in ``directory``."""
+    for part in range(1, 1000):
+        suffix = "" if part == 1 else f"-part{part}"
+        paths = {s: directory / f"interaction-{interaction_id}{suffix}-{s}.parquet"
+                 for s in STREAMS}  # fmt: skip
+        taken = False
+        for path in paths.values():
+            if journal_path(path).exists() and not path.exists():
+                recover_recording(path)  # left behind by a crash: keep what it saved
+            taken = taken or path.exists()
+        if not taken:
+            return paths
+    raise CommandError("recording_exists", f"too many parts for interaction {interaction_id}")
+
+
+class RecorderStage:
+    name = "recorder"
+
+    def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints,
+                 *, booth: str = "") -> None:  # fmt: skip
+        self.context, self.endpoints, self.booth = context, endpoints, booth
+        self.errors: Counter[str] = Counter()
+        self.interaction: str | None = None
+        self.recorders: dict[str, FrameRecorder] = {}
+        self._pub: zmq.Socket[bytes] | None = None
+
+    def run(self, stop: threading.Event) -> None:
+        sub = self.context.socket(zmq.SUB)
+        sub.setsockopt(zmq.LINGER, 0)
+        for topic in (PARTICIPANT_TOPIC, SENT_TOPIC):
+            sub.setsockopt(zmq.SUBSCRIBE, topic.encode())
+        sub.connect(self.endpoints.participant)
+        sub.connect(self.endpoints.render)
+        self._pub = self.context.socket(zmq.PUB)
+        self._pub.setsockopt(zmq.LINGER, 0)
+        self._pub.bind(self.endpoints.recorder)
+        port = CommandPort(self.context, self.endpoints.stage_control, self.name,
+                           {START_RECORDING: self._start, STOP_RECORDING: self._stop})  # fmt: skip
+        poller = zmq.Poller()
+        poller.register(sub, zmq.POLLIN)
+        poller.register(port.socket, zmq.POLLIN)
+        next_stats = time.monotonic() + STATS_INTERVAL
+        try:
+            while not stop.is_set():
+                events = dict(poller.poll(POLL_MS))
+                if sub in events:
+                    for message in receive_messages(sub, self.errors):
+                        self._record(message)
+                if port.socket in events:
+                    port.handle_pending()
+                if time.monotonic() >= next_stats:
+                    next_stats += STATS_INTERVAL
+                    self._send(Message("stats.recorder", "stats", 0, self.name,
+                                       time.monotonic(), self.status()))  # fmt: skip
+        finally:
+            self._close_all()  # a clean stop keeps the files readable
+            sub.close(linger=0)
+            self._pub.close(linger=0)
+            port.close()
+
+    def _send(self, message: Message) -> None:
+        assert self._pub is not None
+        send_message(self._pub, message)
+
+    def _record(self, message: Message) -> None:
+        if not self.recorders:
+            return
+        try:
+            if message.topic == PARTICIPANT_TOPIC:
+                self.recorders["participant"].write(message_frame(message))
+            else:
+                vector = message.array()
+                due = float(message.body["t"])
+                self.recorders["agent"].write(FaceFrame.from_vector(
+                    vector, due, message.time, "agent"))  # fmt: skip
+        except (EnvelopeError, KeyError, TypeError, ValueError) as exc:
+            self.errors[getattr(exc, "reason", "bad_frame")] += 1
+        except OSError:
+            self.errors["write_failed"] += 1
+
+    def _start(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        interaction = str(body["interaction_id"])
+        if self.interaction == interaction:
+            return self._files()  # already recording it: idempotent
+        self._close_all()
+        directory = Path(str(body["directory"]))
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            paths = recording_paths(directory, interaction)
+            for stream, path in paths.items():
+                metadata = {"interaction_id": interaction, "stream": stream, "booth": self.booth}
+                self.recorders[stream] = FrameRecorder(path, metadata=metadata)
+        except (OSError, ValueError) as exc:
+            self._close_all()
+            raise CommandError("recording_failed", str(exc)) from exc
+        self.interaction = interaction
+        return self._files()
+
+    def _stop(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        wanted = body.get("interaction_id")
+        if wanted is not None and self.interaction is not None and str(wanted) != self.interaction:
+            raise CommandError("not_recording", f"recording {self.interaction}, not {wanted}")
+        return self._close_all()
+
+    def _close_all(self) -> dict[str, Any]:
+        if not self.recorders:
+            return {"interaction_id": None, "files": {}}
+        files, frames = {}, {}
+        for stream, recorder in self.recorders.items():
+            try:
+                files[stream] = str(recorder.close())
+            except OSError:
+                self.errors["close_failed"] += 1
+                files[stream] = str(recorder.journal)
+            frames[stream] = recorder.frames_written
+        result = {"interaction_id": self.interaction, "files": files, "frames": frames}
+        now = time.monotonic()
+        self._send(Message("event.recording", "recording_stopped", 0, self.name, now,
+                           {"worker_time": now, "wall_time": time.time(), **result}))  # fmt: skip
+        self.recorders, self.interaction = {}, None
+        return result
+
+    def _files(self) -> dict[str, Any]:
+        return {"interaction_id": self.interaction,
+                "files": {s: str(r.path) for s, r in self.recorders.items()}}  # fmt: skip
+
+    def status(self) -> dict[str, Any]:
+        frames = {s: r.frames_written for s, r in self.recorders.items()}
+        return {**self._files(), "frames": frames, "active": bool(self.recorders),
+                "errors": dict(self.errors)}  # fmt: skip

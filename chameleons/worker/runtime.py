@@ -1,0 +1,230 @@
+"""The worker process of one booth: capture -> behaviour -> renderer -> driver, plus playback,
+recording and the control hub, each stage a thread talking over ZeroMQ.
+
+With the default :class:`Endpoints` (``inproc://``) everything runs as threads of this
+process; give ``ipc://``/``tcp://`` endpoints and the same stage classes run in separate
+processes (each calls ``Stage(context, endpoints, ...).run(stop)``). A stage that crashes
+stops the whole worker with a non-zero exit, so a supervisor restarts it cleanly.
+"""
+
+from __future__ import annotations
+
+import logging
+import signal
+import sys
+import threading
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any, Protocol
+
+import zmq
+
+from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
+from chameleons.worker.drivers import DEFAULT_URL, DriverOptions, Publish, create_driver
+from chameleons.worker.hub import ControlHub, HubConfig
+from chameleons.worker.playback import PlaybackStage
+from chameleons.worker.recorder_stage import RecorderStage
+from chameleons.worker.render_stage import RendererStage
+from chameleons.worker.renderer import HeadFilter, RenderConfig
+from chameleons.worker.stage import Endpoints, ParticipantBus
+
+log = logging.getLogger(__name__)
+START_TIMEOUT = 10.0
+
+
+class Stage(Protocol):
+    name: str
+
+    def run(self, stop: threading.Event) -> None: ...
+
+
+class Receiver(Protocol):
+    port: int
+    stats: Any
+
+    def start(self) -> Any: ...
+
+    def stop(self, timeout: float = 5.0) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class WorkerConfig:
+    booth: str = "booth-1"
+    driver: str = "virtual"
+    robot_url: str = DEFAULT_URL
+    robot_key: str | None = None
+    data_dir: Path = Path("data")
+    command_endpoint: str = "tcp://127.0.0.1:5555"
+    telemetry_endpoint: str = "tcp://127.0.0.1:5556"
+    capture_host: str = "0.0.0.0"
+    livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
+    facecapturex_port: int | None = 19977
+    livelink_rotation_scale: str = "degrees/180"
+    mounting_rotation_deg: float = 0.0
+    mirror: bool = True
+    behaviour: str = "still"
+    behaviour_params: Mapping[str, Any] = field(default_factory=dict)
+    copy_delay: float = 4.0
+    render: RenderConfig = field(default_factory=RenderConfig)
+    crossfade_seconds: float = 0.3
+    history_seconds: float = 12.0
+    lookahead_ticks: int = 3
+    endpoints: Endpoints | None = None  # None: inproc, unique to this worker
+
+    def initial_params(self) -> dict[str, Any]:
+        if self.behaviour == "copy":
+            return {"delay": self.copy_delay, **self.behaviour_params}
+        return dict(self.behaviour_params)
+
+    @property
+    def head_lead(self) -> float:
+        render = self.render
+        return HeadFilter(render.fir_taps, render.fir_cutoff_hz, render.tick_rate).group_delay
+
+
+class Worker:
+    """Builds the sockets and threads of one booth's pipeline; ``start``/``stop``."""
+
+    def __init__(
+        self, config: WorkerConfig, *, context: zmq.Context[zmq.Socket[bytes]] | None = None
+    ) -> None:
+        self.config = config
+        self._own_context = context is None
+        self.context: zmq.Context[zmq.Socket[bytes]] = context or zmq.Context()
+        self.endpoints = config.endpoints or Endpoints.inproc(
+            f"{config.booth}-{uuid.uuid4().hex[:8]}"
+        )
+        self.stop_event = threading.Event()
+        self.failed = threading.Event()
+        self.receivers: dict[str, Receiver] = {}
+        self._threads: list[threading.Thread] = []
+        self.bus = ParticipantBus(self.context, self.endpoints)
+        self.behaviour = BehaviourStage(self.context, self.endpoints, BehaviourStageConfig(
+            tick_rate=config.render.tick_rate, lookahead_ticks=config.lookahead_ticks,
+            crossfade_seconds=config.crossfade_seconds, history_seconds=config.history_seconds,
+            head_lead=config.head_lead, initial=config.behaviour,
+            initial_params=config.initial_params(),
+        ))  # fmt: skip
+        self.playback = PlaybackStage(self.context, self.endpoints)
+        self.renderer = RendererStage(self.context, self.endpoints, self._make_driver,
+                                      config.render)  # fmt: skip
+        self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth)
+        self.hub = ControlHub(self.context, self.endpoints, HubConfig(
+            config.booth, config.command_endpoint, config.telemetry_endpoint,
+            info={"driver": config.driver, "behaviour": config.behaviour},
+        ), ingest_stats=self.ingest_stats)  # fmt: skip
+        self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, self.renderer,
+                                    self.recorder, self.hub]  # fmt: skip
+
+    def _make_driver(self, publish: Publish) -> Any:
+        cfg = self.config
+        options = DriverOptions(booth=cfg.booth, robot_url=cfg.robot_url, robot_key=cfg.robot_key,
+                                record_path=cfg.data_dir / f"driver-{cfg.booth}.jsonl")  # fmt: skip
+        return create_driver(cfg.driver, options, publish)
+
+    # --- lifecycle -------------------------------------------------------------------------
+    def start(self) -> Worker:
+        for stage in self.stages:
+            thread = threading.Thread(target=self._guard, args=(stage,),
+                                      name=f"worker-{stage.name}", daemon=True)  # fmt: skip
+            thread.start()
+            self._threads.append(thread)
+        try:
+            self._start_capture()
+        except OSError:
+            self.stop()
+            raise
+        if not self.renderer.ready.wait(START_TIMEOUT) and not self.failed.is_set():
+            self.stop()
+            raise RuntimeError("the renderer did not start ticking")
+        return self
+
+    def _guard(self, stage: Stage) -> None:
+        try:
+            stage.run(self.stop_event)
+        except Exception:
+            log.exception("worker stage %s crashed: stopping the worker", stage.name)
+            self.failed.set()
+            self.stop_event.set()
+
+    def _start_capture(self) -> None:
+        from chameleons.worker.ingest.livelink import rotation_factor
+        from chameleons.worker.ingest.receivers import FaceCaptureXReceiver, LiveLinkReceiver
+        from chameleons.worker.ingest.transform import FrameTransform
+
+        cfg = self.config
+        common: dict[str, Any] = {
+            "host": cfg.capture_host, "publish_endpoint": self.endpoints.capture,
+            "context": self.context,
+            "transform": FrameTransform(cfg.mounting_rotation_deg, cfg.mirror),
+        }  # fmt: skip
+        if cfg.livelink_port is not None:
+            self.receivers["livelink"] = LiveLinkReceiver(
+                port=cfg.livelink_port,
+                rotation_factor=rotation_factor(cfg.livelink_rotation_scale), **common,
+            ).start()  # fmt: skip
+        if cfg.facecapturex_port is not None:
+            receiver = FaceCaptureXReceiver(port=cfg.facecapturex_port, **common)
+            self.receivers["facecapturex"] = receiver.start()
+
+    def ingest_stats(self) -> dict[str, Any]:
+        snapshots = {name: r.stats.snapshot() for name, r in self.receivers.items()}
+        drops: dict[str, int] = {}
+        for name, snap in snapshots.items():
+            for reason, count in snap.get("drops", {}).items():
+                drops[f"{name}.{reason}"] = count
+        fps = max((s.get("input_fps", 0.0) for s in snapshots.values()), default=0.0)
+        return {"input_fps": fps, "drops": drops, "receivers": snapshots}
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self.stop_event.set()
+        for receiver in self.receivers.values():
+            try:
+                receiver.stop(timeout)
+            except RuntimeError:
+                log.exception("capture receiver did not stop")
+        for thread in self._threads:
+            thread.join(timeout)
+        if self._own_context:
+            self.context.term()
+
+    def __enter__(self) -> Worker:
+        return self.start()
+
+    def __exit__(self, *_exc: object) -> None:
+        self.stop()
+
+
+def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> int:
+    """Run until SIGINT/SIGTERM (or a stage crash); returns the process exit code."""
+    worker = Worker(config)
+    previous: dict[int, Any] = {}
+
+    def request_stop(signum: int, _frame: FrameType | None) -> None:
+        worker.stop_event.set()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        previous[int(signum)] = signal.signal(signum, request_stop)
+    try:
+        worker.start()
+        ports = ", ".join(f"{n} port {r.port}" for n, r in worker.receivers.items())
+        echo(f"worker {config.booth}: driver {config.driver}, behaviour {config.behaviour}, "
+             f"{ports or 'no capture'}; control {config.command_endpoint}; "
+             "Ctrl-C stops")  # fmt: skip
+        while not worker.stop_event.wait(0.5):
+            pass
+    finally:
+        worker.stop()
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+    if worker.failed.is_set():
+        echo("worker stopped after a stage failure (see the log)")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - `python -m chameleons.worker.runtime`
+    sys.exit(run_worker(WorkerConfig()))
