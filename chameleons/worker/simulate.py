@@ -197,10 +197,17 @@ class FaceCaptureXSender:
         self._sock.sendall(frame)
 
     def close(self) -> None:
+        """Send ``z`` and close gracefully. The server's unread ``s`` greeting would turn a
+        plain close into a reset, and a reset can discard the last frames still unread on
+        the server: so half-close, read until the server closes too, then close."""
         try:
             self._sock.sendall(FACECAPTUREX_END)
+            self._sock.shutdown(socket.SHUT_WR)
+            self._sock.settimeout(2.0)
+            while self._sock.recv(4096):
+                pass
         except OSError:
-            pass  # the server went away first: nothing to end
+            pass  # the server went away first, or is slow to close: nothing more to do
         finally:
             self._sock.close()
 

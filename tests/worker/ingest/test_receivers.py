@@ -38,7 +38,8 @@ def smile(value: float = 0.5) -> np.ndarray:
 
 
 def not_sync(frame: FaceFrame) -> bool:
-    return float(frame.blendshapes[SMILE]) != SYNC
+    sides = frame.blendshapes[[SMILE, BLENDSHAPE_INDEX["mouthSmileRight"]]]  # either, if mirrored
+    return SYNC not in sides.tolist()
 
 
 @contextlib.contextmanager
