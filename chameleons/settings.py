@@ -64,6 +64,10 @@ class Settings(BaseSettings):
     # Mirror the participant (swap left/right, negate yaw and roll) rather than same side.
     mirror: bool = True
 
+    # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
+    # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
+    prompts_dir: Path | None = None
+
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
     @model_validator(mode="after")

@@ -22,6 +22,9 @@ from chameleons.backend.auth.dependencies import LoginRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.dashboard import pages as dashboard_pages
 from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.display import endpoints as display_endpoints
+from chameleons.backend.display import media as display_media
+from chameleons.backend.display import pages as display_pages
 from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
@@ -95,6 +98,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         analysis_pages.router,
         dashboard_pages.router,
         withdrawal_endpoints.router,
+        display_pages.router,
+        display_endpoints.router,
+        display_media.router,
         wizard_pages.router,
         wizard_endpoints.router,
         wizard_live.router,

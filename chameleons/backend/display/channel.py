@@ -1,0 +1,174 @@
+"""``DisplayChannel``: the in-process hub between the worker bridge and robot display pages.
+
+Downstream, ``publish(booth, message)`` fans a protocol message (see
+:mod:`chameleons.backend.display.protocol`) out to every page showing that booth; it may be
+called from any thread (it hops onto the server's event loop). Upstream, pages'
+speech events and telemetry arrive through ``report`` and go to the listeners (the bridge
+forwards speech events to the worker).
+
+The current face and the last face frame of each booth are kept, so a page that
+(re)connects shows the right character at once. A slow page loses old face/head frames,
+never control messages.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+import logging
+import threading
+from collections import Counter, deque
+from collections.abc import Awaitable, Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from fastapi import FastAPI
+
+from chameleons.backend.display.protocol import DROPPABLE_TYPES, Message, set_face_message
+
+log = logging.getLogger(__name__)
+
+Listener = Callable[[str, Message], Awaitable[None] | None]
+DEFAULT_QUEUE_LIMIT = 256
+
+
+class Subscription:
+    """One connected page's outgoing queue. Only touched on the event loop's thread."""
+
+    def __init__(self, booth: str, limit: int) -> None:
+        self.booth = booth
+        self.limit = limit
+        self.dropped = 0
+        self._items: deque[Message] = deque()
+        self._ready = asyncio.Event()
+
+    def put(self, message: Message) -> None:
+        full = len(self._items) >= self.limit and not self._drop_oldest_frame()
+        if full and message.get("type") in DROPPABLE_TYPES:  # control messages always go
+            self.dropped += 1
+            return
+        self._items.append(message)
+        self._ready.set()
+
+    def _drop_oldest_frame(self) -> bool:
+        for i, queued in enumerate(self._items):
+            if queued.get("type") in DROPPABLE_TYPES:
+                del self._items[i]
+                self.dropped += 1
+                return True
+        return False
+
+    async def get(self) -> Message:
+        while not self._items:
+            self._ready.clear()
+            await self._ready.wait()
+        return self._items.popleft()
+
+
+class DisplayChannel:
+    def __init__(self, queue_limit: int = DEFAULT_QUEUE_LIMIT) -> None:
+        self.queue_limit = queue_limit
+        self.counters: Counter[str] = Counter()
+        self._lock = threading.Lock()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._subscriptions: dict[str, set[Subscription]] = {}
+        self._faces: dict[str, str] = {}
+        self._last_frames: dict[str, Message] = {}
+        self._telemetry: dict[str, Message] = {}
+        self._listeners: list[Listener] = []
+
+    # -- downstream ---------------------------------------------------------------------
+    def publish(self, booth: str, message: Message) -> None:
+        """Send ``message`` to every page of ``booth`` (from any thread)."""
+        loop = self._loop
+        if loop is None or _running_in(loop):
+            self._deliver(booth, message)
+            return
+        try:
+            loop.call_soon_threadsafe(self._deliver, booth, message)
+        except RuntimeError:  # the server's loop has stopped: nobody is listening
+            self.counters["published_after_stop"] += 1
+
+    def _deliver(self, booth: str, message: Message) -> None:
+        kind = message.get("type")
+        with self._lock:
+            if kind == "set_face":
+                self._faces[booth] = str(message["face"])
+            elif kind == "face":
+                self._last_frames[booth] = message
+            subscriptions = list(self._subscriptions.get(booth, ()))
+        self.counters[f"published.{kind}"] += 1
+        for subscription in subscriptions:
+            subscription.put(message)
+
+    @contextmanager
+    def subscribe(self, booth: str) -> Iterator[Subscription]:
+        """Register a page (call on the event loop); it first gets the booth's state."""
+        self._loop = asyncio.get_running_loop()
+        subscription = Subscription(booth, self.queue_limit)
+        with self._lock:
+            if booth in self._faces:
+                subscription.put(set_face_message(self._faces[booth]))
+            if booth in self._last_frames:
+                subscription.put(self._last_frames[booth])
+            self._subscriptions.setdefault(booth, set()).add(subscription)
+        try:
+            yield subscription
+        finally:
+            with self._lock:
+                self._subscriptions.get(booth, set()).discard(subscription)
+
+    def connected(self, booth: str) -> int:
+        with self._lock:
+            return len(self._subscriptions.get(booth, ()))
+
+    def current_face(self, booth: str) -> str | None:
+        with self._lock:
+            return self._faces.get(booth)
+
+    # -- upstream -----------------------------------------------------------------------
+    def add_listener(self, listener: Listener) -> None:
+        """``listener(booth, message)`` gets every speech event and telemetry report."""
+        self._listeners.append(listener)
+
+    def remove_listener(self, listener: Listener) -> None:
+        self._listeners.remove(listener)
+
+    async def report(self, booth: str, message: Message) -> None:
+        if message.get("type") == "telemetry":
+            with self._lock:
+                self._telemetry[booth] = message
+        self.counters[f"reported.{message.get('type')}"] += 1
+        for listener in list(self._listeners):
+            try:
+                result: Any = listener(booth, message)
+                if inspect.isawaitable(result):
+                    await result
+            except Exception:  # a listener's bug must not cut the display off
+                log.exception("display listener failed for booth %s", booth)
+
+    def telemetry(self, booth: str) -> Message | None:
+        """The latest telemetry report of the booth's display page, if any."""
+        with self._lock:
+            return self._telemetry.get(booth)
+
+
+def _running_in(loop: asyncio.AbstractEventLoop) -> bool:
+    try:
+        return asyncio.get_running_loop() is loop
+    except RuntimeError:
+        return False
+
+
+_CREATE_LOCK = threading.Lock()
+
+
+def get_display_channel(app: FastAPI) -> DisplayChannel:
+    """The app's channel, created on first use (``app.state.display_channel``)."""
+    with _CREATE_LOCK:
+        channel = getattr(app.state, "display_channel", None)
+        if channel is None:
+            channel = DisplayChannel()
+            app.state.display_channel = channel
+    assert isinstance(channel, DisplayChannel)
+    return channel

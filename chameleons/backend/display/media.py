@@ -1,0 +1,132 @@
+"""Prompt audio and lip-sync files by URL, for display pages and for a Furhat.
+
+``GET /media/prompts/<actor>/<path>?key=<media token>`` serves a file of the actor's
+prompt folder (``Settings.prompts_dir``, resolved like the wizard console does): the
+committed MP3s (Chromium, Firefox and Safari all play MP3; Ogg/Opus files are served too,
+but Safari before 17 cannot play them) and the lip-sync CSVs. Asking for ``<name>.wav``
+where only ``<name>.mp3``/``.ogg``/``.opus``/``.flac`` exists returns a 16-bit PCM mono
+WAV decoded on first request and cached under ``<data_dir>/media-cache``. The play
+command's URL (:func:`prompt_audio_url_builder`) is that WAV: a Furhat needs WAV
+(``request.speak.audio``) and every browser plays PCM WAV too, so one URL serves both
+robots. Staff may fetch without the key.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Callable
+from pathlib import Path, PurePosixPath
+from typing import Annotated, Final
+from urllib.parse import quote, unquote, urlsplit, urlunsplit
+
+from fastapi import APIRouter, FastAPI, HTTPException, Query, Request, status
+from fastapi.responses import FileResponse
+
+from chameleons.backend.display.tokens import check_token, media_token, signing_key
+from chameleons.backend.wizard.catalogues import prompts_root
+from chameleons.settings import Settings
+
+router = APIRouter(tags=["display"])
+
+MEDIA_TYPES: Final = {
+    ".mp3": "audio/mpeg", ".ogg": "audio/ogg", ".opus": "audio/ogg", ".wav": "audio/wav",
+    ".flac": "audio/flac", ".csv": "text/csv; charset=utf-8",
+}  # fmt: skip
+TRANSCODE_SOURCES: Final = (".mp3", ".ogg", ".opus", ".flac")
+_AUDIO_URL = re.compile(r"^/media/prompts/(?P<actor>[^/]+)/audio/(?P<stem>[^/]+)\.\w+$")
+
+
+def media_path(key: bytes, actor: str, relative: str | PurePosixPath, *, wav: bool = False) -> str:
+    """The URL path (with key) of a prompt file; ``wav=True`` asks for the WAV version."""
+    rel = PurePosixPath(str(relative))
+    if wav:
+        rel = rel.with_suffix(".wav")
+    return f"/media/prompts/{quote(actor)}/{quote(str(rel))}?key={media_token(key, actor)}"
+
+
+def prompt_audio_url_builder(app: FastAPI) -> Callable[[str, str], str]:
+    """``(actor, audio path from the manifest) -> absolute WAV URL with key``; the lead sets
+    it as ``app.state.prompt_audio_url``, which the wizard console uses for play commands."""
+    settings: Settings = app.state.settings
+
+    def build(actor: str, audio: str) -> str:
+        path = media_path(signing_key(app), actor, audio, wav=True)
+        return settings.effective_public_url + path
+
+    return build
+
+
+def lipsync_url_for(settings: Settings, audio_url: str) -> str | None:
+    """The lip-sync CSV URL of a prompt audio URL built here, by the assets' convention
+    (``audio/<id>.<ext>`` beside ``lipsync/<id>.csv``), when that file exists."""
+    parts = urlsplit(audio_url)
+    match = _AUDIO_URL.match(unquote(parts.path))
+    if match is None:
+        return None
+    actor, stem = match.group("actor"), match.group("stem")
+    if not (prompts_root(settings) / actor / "lipsync" / f"{stem}.csv").is_file():
+        return None
+    path = f"/media/prompts/{quote(actor)}/lipsync/{quote(stem)}.csv?{parts.query}"
+    return urlunsplit((parts.scheme, parts.netloc, "", "", "")) + path
+
+
+def _actor_file(settings: Settings, actor: str, relative: str) -> Path:
+    root = prompts_root(settings).resolve()
+    actor_dir = (root / actor).resolve()
+    path = (actor_dir / relative).resolve()
+    inside = actor_dir.parent == root and path.is_relative_to(actor_dir)
+    if not inside or path.suffix.lower() not in MEDIA_TYPES:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
+    return path
+
+
+def _staff_session(request: Request) -> bool:
+    return isinstance(request.session.get("staff_id"), int)
+
+
+@router.get("/media/prompts/{actor}/{relative:path}", name="prompt_media")
+def prompt_media(
+    request: Request, actor: str, relative: str, key: Annotated[str | None, Query()] = None
+) -> FileResponse:
+    if not check_token(media_token(signing_key(request.app), actor), key) and not (
+        _staff_session(request)
+    ):
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
+    settings: Settings = request.app.state.settings
+    path = _actor_file(settings, actor, relative)
+    if not path.is_file() and path.suffix.lower() == ".wav":
+        path = _cached_wav(settings, actor, path)
+    if not path.is_file():
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
+    return FileResponse(path, media_type=MEDIA_TYPES[path.suffix.lower()])
+
+
+def _cached_wav(settings: Settings, actor: str, wav_path: Path) -> Path:
+    source = next(
+        (s for s in (wav_path.with_suffix(x) for x in TRANSCODE_SOURCES) if s.is_file()), None
+    )
+    if source is None:
+        return wav_path
+    actor_dir = (prompts_root(settings).resolve() / actor).resolve()
+    cached = settings.data_dir / "media-cache" / actor / wav_path.relative_to(actor_dir)
+    if not cached.is_file() or cached.stat().st_mtime < source.stat().st_mtime:
+        transcode_to_wav(source, cached)
+    return cached
+
+
+def transcode_to_wav(source: Path, target: Path) -> None:
+    """Decode ``source`` to 16-bit PCM mono WAV, written atomically (concurrent requests)."""
+    import soundfile  # libsndfile decodes MP3, Ogg Vorbis/Opus and FLAC
+
+    data, rate = soundfile.read(source, dtype="int16", always_2d=True)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(suffix=".wav", dir=target.parent)
+    os.close(handle)
+    try:
+        soundfile.write(temporary, data.mean(axis=1).astype("int16"), rate, subtype="PCM_16")
+        os.replace(temporary, target)
+    finally:
+        if os.path.exists(temporary):
+            os.unlink(temporary)

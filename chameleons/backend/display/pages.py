@@ -1,0 +1,87 @@
+"""The robot display page (booth screen) and the staff page that lists its links."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, HTTPException, Query, Request, status
+from fastapi.responses import HTMLResponse, Response
+from sqlalchemy import select
+
+from chameleons.backend.auth.dependencies import CurrentStaff
+from chameleons.backend.dependencies import AppSettings, DbSession, Templates
+from chameleons.backend.display.protocol import FACE_IDS
+from chameleons.backend.display.tokens import (
+    BOOTH_PATTERN,
+    check_token,
+    display_path,
+    display_token,
+    is_valid_booth,
+    signing_key,
+)
+from chameleons.backend.models import Session
+
+router = APIRouter(tags=["display"])
+
+DEFAULT_BOOTH = "booth-1"
+
+
+def _render(request: Request, templates: Templates, booth: str, token: str | None) -> Response:
+    query = f"?token={token}" if token else ""
+    context = {
+        "booth": booth,
+        "ws_path": f"/ws/display/{booth}{query}",
+        "faces": FACE_IDS,
+        "initial_face": FACE_IDS[0],
+    }
+    response = templates.TemplateResponse(request, "display/robot.html", context)
+    # The link is the credential: keep it out of other sites' logs and out of caches.
+    response.headers["Referrer-Policy"] = "no-referrer"
+    response.headers["Cache-Control"] = "no-store"
+    return response
+
+
+@router.get("/display", response_class=HTMLResponse)
+def display_links(
+    request: Request,
+    user: CurrentStaff,
+    db: DbSession,
+    settings: AppSettings,
+    templates: Templates,
+    booth: Annotated[str | None, Query(max_length=64)] = None,
+) -> Response:
+    """Staff: the unguessable display link of every known booth (and of one typed in)."""
+    booths = {DEFAULT_BOOTH, *db.scalars(select(Session.booth).distinct())}
+    error = None
+    if booth:
+        if is_valid_booth(booth):
+            booths.add(booth)
+        else:
+            error = "A booth id uses letters, digits, '-', '_' and '.' (at most 64)."
+    key = signing_key(request.app)
+    base = settings.effective_public_url
+    links = [(b, base + display_path(key, b)) for b in sorted(booths)]
+    return templates.TemplateResponse(
+        request,
+        "display/links.html",
+        {"user": user, "links": links, "error": error, "booth_pattern": BOOTH_PATTERN[1:-1]},
+    )
+
+
+@router.get("/display/{booth}", response_class=HTMLResponse)
+def staff_display(
+    request: Request, booth: str, _user: CurrentStaff, templates: Templates
+) -> Response:
+    """The display for a logged-in staff member (no token in the link)."""
+    if not is_valid_booth(booth):
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No such booth.")
+    return _render(request, templates, booth, None)
+
+
+@router.get("/display/{booth}/{token}", response_class=HTMLResponse)
+def booth_display(request: Request, booth: str, token: str, templates: Templates) -> Response:
+    """The booth screen's own link: works without a login, 404 for a wrong token."""
+    expected = display_token(signing_key(request.app), booth)
+    if not is_valid_booth(booth) or not check_token(expected, token):
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No such display.")
+    return _render(request, templates, booth, token)

@@ -1,0 +1,277 @@
+/* The robot display: WebSocket client, frame interpolation, audio with lip-sync, telemetry.
+   Protocol: chameleons/backend/display/protocol.py. Shows nothing but the face; add
+   ?debug=1 to the URL for an overlay with connection and timing figures. */
+"use strict";
+
+(function () {
+  const canvas = document.getElementById("face");
+  const ctx = canvas.getContext("2d", { alpha: false });
+  const debugBox = document.getElementById("debug");
+  const debug = new URLSearchParams(location.search).get("debug") === "1";
+  const N = FaceRenderer.NAMES.length;
+  const MOUTH_JAW = FaceRenderer.NAMES.map((n, i) => (/^(mouth|jaw)/.test(n) ? i : -1)).filter((i) => i >= 0);
+
+  /** A jitter buffer: samples keep their sender's time ("t", ms), mapped onto this page's
+      clock by the smallest transit seen, and are painted a little late (the delay covers
+      the frame interval and the network's jitter) so motion is interpolated, never stepped,
+      even when frames arrive in bunches. */
+  class Track {
+    constructor(size) {
+      this.size = size;
+      this.samples = [];
+      this.offset = null;  // page time - sender time, for the quickest frame
+      this.interval = 40;  // EWMA of sender intervals, ms
+      this.jitter = 2;  // EWMA of lateness beyond the quickest frame, ms
+    }
+    push(arrival, sent, values) {
+      const last = this.samples[this.samples.length - 1];
+      const transit = arrival - sent;
+      if (last && sent === last.sent) {  // e.g. a face frame carrying the tick's head pose
+        last.v = Float32Array.from(values);
+        return;
+      }
+      if (!last || sent < last.sent || Math.abs(transit - this.offset) > 1000) {
+        this.samples = [];  // first frame, or the sender restarted: start over
+        this.offset = transit;
+      } else {
+        const dt = sent - last.sent;
+        this.interval += 0.1 * (Math.min(dt, 500) - this.interval);
+        this.offset = Math.min(this.offset + 0.001 * dt, transit);  // follows clock drift
+        this.jitter += 0.05 * (transit - this.offset - this.jitter);
+      }
+      this.samples.push({ t: arrival, sent, v: Float32Array.from(values), painted: false });
+      if (this.samples.length > 64) this.samples.shift();
+    }
+    get delay() {
+      return Math.min(200, Math.max(8, this.interval + 2 * this.jitter + 2));
+    }
+    /** Interpolate into out at page time now; returns the samples newly shown in full. */
+    sample(now, out) {
+      const s = this.samples;
+      if (!s.length) return [];
+      const t = now - this.delay - this.offset;  // in the sender's time
+      let k = s.length - 1;
+      while (k > 0 && s[k].sent > t) k--;
+      const a = s[k], b = s[Math.min(k + 1, s.length - 1)];
+      const w = b.sent > a.sent ? Math.min(1, Math.max(0, (t - a.sent) / (b.sent - a.sent))) : 1;
+      for (let i = 0; i < this.size; i++) out[i] = a.v[i] + (b.v[i] - a.v[i]) * w;
+      const shown = [];
+      for (let j = 0; j <= k; j++) {
+        if (!s[j].painted && s[j].sent <= t) { s[j].painted = true; shown.push(s[j]); }
+      }
+      return shown;
+    }
+    get lastArrival() {
+      return this.samples.length ? this.samples[this.samples.length - 1].t : -Infinity;
+    }
+  }
+
+  const state = { bs: new Float32Array(N), head: new Float32Array(3), eyes: new Float32Array(6) };
+  const faceTrack = new Track(N), headTrack = new Track(3), eyeTrack = new Track(6);
+  let face = canvas.dataset.initialFace;
+  let geometry = null;
+  let socket = null, connected = false, backoff = 500;
+  const outbox = [];  // speech events wait here while disconnected
+  const stats = { painted: 0, framesIn: 0, latencies: [], relay: [], fps: 0, inRate: 0 };
+  let clockOffset = null, bestRtt = Infinity, pingId = 0;
+  let playback = null;
+
+  function resize() {
+    const dpr = window.devicePixelRatio || 1;
+    canvas.width = Math.round(window.innerWidth * dpr);
+    canvas.height = Math.round(window.innerHeight * dpr);
+  }
+
+  // ---- connection -------------------------------------------------------------------
+  function connect() {
+    const scheme = location.protocol === "https:" ? "wss:" : "ws:";
+    socket = new WebSocket(scheme + "//" + location.host + canvas.dataset.wsPath);
+    socket.onopen = () => {
+      connected = true;
+      backoff = 500;
+      while (outbox.length) socket.send(outbox.shift());
+      ping();
+    };
+    socket.onmessage = (event) => {
+      try { handle(JSON.parse(event.data), performance.now()); } catch (err) { note("bad message: " + err); }
+    };
+    socket.onclose = () => {
+      connected = false;
+      const wait = backoff * (0.8 + 0.4 * Math.random());
+      backoff = Math.min(backoff * 2, 5000);
+      setTimeout(connect, wait);
+    };
+  }
+
+  function send(message, important) {
+    const text = JSON.stringify(message);
+    if (connected && socket.readyState === WebSocket.OPEN) socket.send(text);
+    else if (important && outbox.length < 50) outbox.push(text);
+  }
+
+  function ping() {
+    if (connected) send({ type: "ping", id: ++pingId, t: performance.now() });
+  }
+
+  const handlers = {
+    hello() {},
+    face(m, now) {
+      faceTrack.push(now, m.t, m.bs);
+      faceTrack.samples[faceTrack.samples.length - 1].ts = m.ts;
+      if (m.head) headTrack.push(now, m.t, m.head);
+      if (m.eyes) eyeTrack.push(now, m.t, m.eyes);
+      stats.framesIn++;
+    },
+    head(m, now) {
+      headTrack.push(now, m.t, m.head);
+      headTrack.samples[headTrack.samples.length - 1].ts = m.ts;
+      stats.framesIn++;
+    },
+    set_face(m) {
+      if (RobotFaces[m.face]) face = m.face;
+    },
+    play_audio(m, now) { play(m, now); },
+    stop_audio() { if (playback) finish(playback, "stopped"); },
+    pong(m, now) {
+      const rtt = now - m.t;
+      if (rtt <= bestRtt * 1.5) {  // keep the offsets measured over the quickest round trips
+        bestRtt = Math.min(bestRtt, rtt);
+        clockOffset = m.server_ts - (m.t + now) / 2;
+      }
+    },
+  };
+
+  function handle(message, now) {
+    const handler = handlers[message.type];
+    if (handler) handler(message, now); else note("unknown message " + message.type);
+  }
+
+  // ---- audio and lip-sync -----------------------------------------------------------
+  function play(m, now) {
+    if (playback) finish(playback, "interrupted");
+    const audio = new Audio();
+    audio.preload = "auto";
+    const p = { id: m.play_id, prompt: m.prompt_id, audio, curves: null, received: now,
+                started: false, done: false, clock: null };
+    playback = p;
+    audio.addEventListener("playing", () => {
+      if (p.started || p.done) return;
+      p.started = true;
+      send({ type: "speech", event: "start", play_id: p.id, prompt_id: p.prompt,
+             audio_delay_ms: performance.now() - p.received }, true);
+    });
+    audio.addEventListener("ended", () => finish(p, "ended"));
+    audio.addEventListener("error", () => finish(p, "error"));
+    audio.src = m.url;
+    const curves = m.lipsync_url
+      ? fetch(m.lipsync_url).then((r) => (r.ok ? r.text() : Promise.reject(new Error(r.status))))
+          .then((text) => LipSync.parse(text, FaceRenderer.INDEX))
+          .catch((err) => { note("lip-sync unavailable: " + err); return null; })
+      : Promise.resolve(null);
+    curves.then((c) => {
+      if (p.done) return;
+      p.curves = c;
+      return audio.play();
+    }).catch((err) => finish(p, err && err.name === "NotAllowedError" ? "autoplay_blocked" : "error"));
+  }
+
+  function finish(p, reason) {
+    if (p.done) return;
+    p.done = true;
+    p.audio.pause();
+    if (playback === p) playback = null;
+    send({ type: "speech", event: "end", play_id: p.id, prompt_id: p.prompt, reason }, true);
+  }
+
+  /** The audio clock, extrapolated between the element's coarse currentTime updates. */
+  function audioTime(p, now) {
+    const t = p.audio.currentTime;
+    if (!p.clock || p.clock.t !== t) p.clock = { t, at: now };
+    return p.audio.paused ? t : p.clock.t + (now - p.clock.at) / 1000;
+  }
+
+  // ---- painting ---------------------------------------------------------------------
+  function frame(now) {
+    let shown = [];
+    if (now - Math.max(faceTrack.lastArrival, headTrack.lastArrival) > 3000) {
+      relax();
+    } else {
+      shown = faceTrack.sample(now, state.bs).concat(headTrack.sample(now, state.head));
+      eyeTrack.sample(now, state.eyes);
+    }
+    if (playback && playback.started && playback.curves) {
+      for (const i of MOUTH_JAW) state.bs[i] = 0;  // the curves own the mouth while speaking
+      LipSync.apply(playback.curves, audioTime(playback, now), state.bs);
+    }
+    geometry = FaceRenderer.draw(ctx, canvas.width, canvas.height, state, RobotFaces[face]);
+    const painted = performance.now();
+    stats.painted++;
+    for (const s of shown) {
+      stats.latencies.push(painted - s.t);
+      if (clockOffset !== null && s.ts) stats.relay.push(painted + clockOffset - s.ts);
+    }
+    requestAnimationFrame(frame);
+  }
+
+  /** Without frames for a while (worker or network gone), ease back to a neutral face. */
+  function relax() {
+    for (const v of [state.bs, state.head, state.eyes]) for (let i = 0; i < v.length; i++) v[i] *= 0.97;
+  }
+
+  // ---- telemetry --------------------------------------------------------------------
+  function percentile(sorted, q) {
+    return sorted.length ? sorted[Math.min(sorted.length - 1, Math.floor(q * sorted.length))] : null;
+  }
+
+  function report() {
+    const lat = stats.latencies.sort((a, b) => a - b), relay = stats.relay.sort((a, b) => a - b);
+    const round = (v) => (v === null ? null : Math.round(v * 10) / 10);
+    stats.fps = stats.painted;
+    stats.inRate = stats.framesIn;
+    const message = {
+      type: "telemetry", fps: stats.painted, frames_in: stats.framesIn,
+      paint_latency_ms: { p50: round(percentile(lat, 0.5)), p95: round(percentile(lat, 0.95)),
+                          max: round(lat.length ? lat[lat.length - 1] : null) },
+      interp_delay_ms: round(faceTrack.delay), relay_to_paint_ms: round(percentile(relay, 0.5)),
+      speaking: Boolean(playback && playback.started), face,
+    };
+    stats.painted = 0; stats.framesIn = 0; stats.latencies = []; stats.relay = [];
+    stats.last = message;
+    send(message, false);
+    if (debug) {
+      debugBox.hidden = false;
+      debugBox.textContent = `booth ${canvas.dataset.booth} · ${connected ? "connected" : "reconnecting"}\n`
+        + `face ${face} · ${message.fps} fps · in ${message.frames_in}/s\n`
+        + `paint latency p50 ${message.paint_latency_ms.p50} p95 ${message.paint_latency_ms.p95} ms\n`
+        + `relay->paint ${message.relay_to_paint_ms} ms · rtt ${round(bestRtt)} ms\n`
+        + (stats.note ? "note: " + stats.note : "");
+    }
+  }
+
+  function note(text) {
+    stats.note = text;
+    if (debug) console.warn("[display]", text);
+  }
+
+  // Any click or key unlocks sound in browsers without the autoplay flag; double-click
+  // toggles full screen; the wake lock keeps the booth screen on.
+  document.addEventListener("dblclick", () => {
+    if (document.fullscreenElement) document.exitFullscreen(); else document.documentElement.requestFullscreen().catch(() => {});
+  });
+  if (navigator.wakeLock) navigator.wakeLock.request("screen").catch(() => {});
+
+  window.robotDisplay = Object.freeze({
+    state: () => ({ bs: Array.from(state.bs), head: Array.from(state.head), face }),
+    geometry: () => geometry,
+    connected: () => connected,
+    telemetry: () => stats.last || null,
+    speaking: () => Boolean(playback && playback.started && !playback.done),
+  });
+
+  window.addEventListener("resize", resize);
+  resize();
+  connect();
+  setInterval(report, 1000);
+  setInterval(ping, 5000);
+  requestAnimationFrame(frame);
+})();

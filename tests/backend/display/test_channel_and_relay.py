@@ -1,0 +1,166 @@
+"""The display channel (fan-out, state for late joiners, back-pressure) and the relay from
+the worker's real ``virtual`` driver."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from typing import Any
+
+import numpy as np
+import pytest
+
+from chameleons.backend.display.channel import DisplayChannel
+from chameleons.backend.display.protocol import (
+    Message,
+    face_message,
+    play_audio_message,
+    set_face_message,
+)
+from chameleons.backend.display.relay import (
+    RelayError,
+    display_message,
+    forward_speech_events,
+    relay_envelope,
+)
+from chameleons.worker.drivers.virtual import VirtualDriver
+from chameleons.worker.envelope import Message as Envelope
+from chameleons.worker.envelope import deserialize, serialize
+from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES
+
+BOOTH = "booth-1"
+
+
+def run(coroutine: Any) -> Any:
+    return asyncio.run(coroutine)
+
+
+def test_late_joiners_get_the_face_and_last_frame_first() -> None:
+    async def scenario() -> list[Message]:
+        channel = DisplayChannel()
+        channel.publish(BOOTH, set_face_message("face-2"))
+        channel.publish(BOOTH, face_message([0.5] * N_BLENDSHAPES))
+        with channel.subscribe(BOOTH) as subscription:
+            return [await asyncio.wait_for(subscription.get(), 5) for _ in range(2)]
+
+    first, second = run(scenario())
+    assert first == set_face_message("face-2")
+    assert second["type"] == "face"
+    assert second["bs"] == [0.5] * N_BLENDSHAPES
+
+
+def test_a_slow_page_loses_old_frames_never_commands() -> None:
+    async def scenario() -> tuple[list[Message], int]:
+        channel = DisplayChannel(queue_limit=4)
+        with channel.subscribe(BOOTH) as subscription:
+            for k in range(10):
+                channel.publish(BOOTH, face_message([k / 10] * N_BLENDSHAPES))
+                if k == 3:
+                    channel.publish(BOOTH, play_audio_message("p#1", "/a.mp3"))
+            channel.publish(BOOTH, set_face_message("face-3"))  # queue full of frames
+            got = [await asyncio.wait_for(subscription.get(), 5) for _ in range(4)]
+            return got, subscription.dropped
+
+    got, dropped = run(scenario())
+    assert [m["type"] for m in got] == ["play_audio", "face", "face", "set_face"]
+    assert [m["bs"][0] for m in got[1:3]] == [0.8, 0.9]  # the newest frames survive
+    assert dropped == 8
+
+
+def test_publish_from_another_thread_reaches_the_page() -> None:
+    async def scenario() -> Message:
+        channel = DisplayChannel()
+        with channel.subscribe(BOOTH) as subscription:
+            thread = threading.Thread(
+                target=channel.publish, args=(BOOTH, set_face_message("face-4"))
+            )
+            thread.start()
+            message = await asyncio.wait_for(subscription.get(), timeout=5)
+            thread.join()
+            return message
+
+    assert run(scenario()) == set_face_message("face-4")
+
+
+def virtual_driver_envelopes() -> list[Envelope]:
+    sent: list[Envelope] = []
+    driver = VirtualDriver(BOOTH, sent.append, head_rate=1e6)
+    shapes = np.zeros(N_BLENDSHAPES, dtype=np.float32)
+    shapes[BLENDSHAPE_INDEX["jawOpen"]] = 0.75
+    driver.send_face(shapes)
+    driver.send_head(12.5, -3.0, 1.0)
+    driver.set_face("face-2")
+    driver.play_audio("hello", "/media/prompts/m1/audio/hello.mp3?key=k")
+    driver.stop_audio()
+    # Through the real wire format, as the bridge receives them.
+    return [deserialize(serialize(envelope)) for envelope in sent]
+
+
+def test_virtual_driver_envelopes_become_page_messages() -> None:
+    face, head, set_face, play, stop = (display_message(e) for e in virtual_driver_envelopes())
+    assert face["type"] == "face"
+    assert face["bs"][BLENDSHAPE_INDEX["jawOpen"]] == 0.75
+    assert "head" not in face
+    assert face["t"] > 0
+    assert (head["type"], head["head"]) == ("head", [12.5, -3.0, 1.0])
+    assert set_face == set_face_message("face-2")
+    assert (play["type"], play["prompt_id"], play["url"]) == (
+        "play_audio", "hello", "/media/prompts/m1/audio/hello.mp3?key=k",
+    )  # fmt: skip
+    assert play["play_id"].startswith("hello#")
+    assert stop["type"] == "stop_audio"
+
+
+@pytest.mark.parametrize(
+    ("envelope", "reason"),
+    [
+        (Envelope("display.b", "face", payload=b"\x00" * 8), "short_face"),
+        (Envelope("display.b", "head", body={"yaw": 1}), "bad_head"),
+        (Envelope("display.b", "set_face", body={"face_id": "face-9"}), "unknown_face"),
+        (Envelope("display.b", "play_audio", body={}), "bad_play_audio"),
+        (Envelope("display.b", "dance"), "unknown_type"),
+    ],
+)
+def test_unusable_envelopes_are_refused_with_a_reason(envelope: Envelope, reason: str) -> None:
+    with pytest.raises(RelayError) as caught:
+        display_message(envelope)
+    assert caught.value.reason == reason
+    channel = DisplayChannel()
+    assert not relay_envelope(channel, envelope)
+    assert channel.counters[f"relay.{reason}"] == 1
+
+
+def test_relay_names_the_curves_for_the_audio() -> None:
+    envelope = Envelope("display.b", "play_audio", body={"prompt_id": "hi", "url": "/a/hi.wav"})
+    message = display_message(envelope, lambda url: url.replace(".wav", ".csv"))
+    assert message["lipsync_url"] == "/a/hi.csv"
+    assert display_message(envelope)["lipsync_url"] is None
+
+
+def test_relay_publishes_to_the_envelopes_booth() -> None:
+    async def scenario() -> Message:
+        channel = DisplayChannel()
+        with channel.subscribe("booth-9") as subscription:
+            envelope = Envelope("display.booth-9", "set_face", body={"face_id": "face-3"})
+            assert relay_envelope(channel, envelope)
+            return await asyncio.wait_for(subscription.get(), 5)
+
+    assert run(scenario()) == set_face_message("face-3")
+
+
+def test_speech_events_are_forwarded_as_worker_commands() -> None:
+    sent: list[tuple[str, str, dict[str, Any]]] = []
+
+    async def send(booth: str, command: str, body: dict[str, Any]) -> None:
+        sent.append((booth, command, body))
+
+    async def scenario() -> None:
+        channel = DisplayChannel()
+        forward_speech_events(channel, send)
+        await channel.report(BOOTH, {"type": "telemetry", "fps": 60})
+        speech = {"type": "speech", "event": "end", "play_id": "x#1", "prompt_id": "x"}
+        await channel.report(BOOTH, speech)
+        assert channel.telemetry(BOOTH) == {"type": "telemetry", "fps": 60}
+
+    run(scenario())
+    assert sent == [(BOOTH, "speech_event", {"event": "end", "prompt_id": "x"})]

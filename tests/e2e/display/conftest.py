@@ -1,0 +1,128 @@
+"""Fixtures for the robot display in a real Chromium: a prompts folder with a short tone,
+the booth's display link, and a recorder of what pages report back."""
+
+from __future__ import annotations
+
+import queue
+import shutil
+import socket
+import threading
+import wave
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+import uvicorn
+from fastapi import FastAPI
+from playwright.sync_api import Page
+
+from chameleons.backend.display.channel import DisplayChannel, get_display_channel
+from chameleons.backend.display.protocol import Message
+from chameleons.backend.display.tokens import display_path, signing_key
+from chameleons.settings import Settings
+from tests.support.live_server import LiveServer
+
+BOOTH = "booth-1"
+ACTOR = "t1"
+
+
+def write_tone(path: Path, seconds: float, rate: int = 16000) -> None:
+    """A 440 Hz tone as 16-bit mono WAV."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    t = np.arange(int(seconds * rate)) / rate
+    samples = (8000 * np.sin(2 * np.pi * 440 * t)).astype("<i2")
+    with wave.open(str(path), "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes(samples.tobytes())
+
+
+@pytest.fixture
+def database_url(sqlite_template: Path, tmp_path: Path) -> str:
+    """Browser tests exercise the page; one backend (SQLite) is enough here."""
+    path = tmp_path / "browser.sqlite3"
+    shutil.copyfile(sqlite_template, path)
+    return f"sqlite:///{path}"
+
+
+@pytest.fixture
+def settings(settings: Settings, tmp_path: Path) -> Settings:
+    prompts = tmp_path / "prompts"
+    write_tone(prompts / ACTOR / "audio" / "short.wav", 0.6)
+    write_tone(prompts / ACTOR / "audio" / "long.wav", 20.0)
+    lipsync = prompts / ACTOR / "lipsync" / "short.csv"
+    lipsync.parent.mkdir(parents=True)
+    # The mouth is wide open from 0.1 s to 0.5 s.
+    rows = [f"{t / 30:.3f},{1.0 if 3 <= t <= 15 else 0.0}" for t in range(19)]
+    lipsync.write_text("time,jawOpen\n" + "\n".join(rows) + "\n")
+    return settings.model_copy(update={"prompts_dir": prompts})
+
+
+@pytest.fixture
+def channel(app: FastAPI) -> DisplayChannel:
+    return get_display_channel(app)
+
+
+@pytest.fixture
+def reports(channel: DisplayChannel) -> Iterator[queue.Queue[tuple[str, Message]]]:
+    """Everything the pages report (speech events, telemetry), in arrival order."""
+    received: queue.Queue[tuple[str, Message]] = queue.Queue()
+
+    def listener(booth: str, message: Message) -> None:
+        received.put((booth, message))
+
+    channel.add_listener(listener)
+    yield received
+    channel.remove_listener(listener)
+
+
+@pytest.fixture
+def display_url(live_server: LiveServer, app: FastAPI) -> str:
+    return live_server.url + display_path(signing_key(app), BOOTH)
+
+
+@pytest.fixture
+def display_page(page: Page, display_url: str) -> Page:
+    page.set_viewport_size({"width": 640, "height": 480})
+    page.goto(display_url)
+    page.wait_for_function("window.robotDisplay && window.robotDisplay.connected()")
+    return page
+
+
+def next_report(
+    received: queue.Queue[tuple[str, Message]], kind: str, timeout: float = 10.0
+) -> Message:
+    """The next report of type ``kind`` (others are skipped)."""
+    while True:
+        _booth, message = received.get(timeout=timeout)
+        if message.get("type") == kind:
+            return message
+
+
+class PortServer:
+    """uvicorn serving ``app`` on a given loopback port (to restart a server in place)."""
+
+    def __init__(self, app: FastAPI, port: int) -> None:
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self._sock.bind(("127.0.0.1", port))
+        config = uvicorn.Config(app, log_level="warning", lifespan="off", ws="websockets-sansio")
+        self._server = uvicorn.Server(config)
+        self._thread = threading.Thread(
+            target=self._server.run, kwargs={"sockets": [self._sock]}, daemon=True
+        )
+
+    def __enter__(self) -> PortServer:
+        self._thread.start()
+        started = threading.Event()
+        while not self._server.started:  # polls readiness; not a fixed wait
+            if not self._thread.is_alive() or started.wait(0.005):
+                raise RuntimeError("server did not start")
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self._server.should_exit = True
+        self._thread.join(timeout=10)
+        self._sock.close()
