@@ -1,8 +1,8 @@
 """Realistic study data inserted as model rows (for tests that need sessions already run).
 
-``populate`` builds a study from the default study config, a plan for N participants and,
-per participant, a completed session: three interactions (one per condition, Williams
-orders), three decided suggestions each, every questionnaire item answered on its scale
+``populate`` builds a study from the default study config, a plan for N participants (the
+experiment core's planner) and, per participant, a completed session: three interactions
+as planned, three decided suggestions each, every questionnaire item answered on its scale
 (reverse-keyed items stored raw), the final questionnaire, a timeline of events and,
 when ``recordings_dir`` is given, real Parquet recordings. Values come from a seeded RNG
 with a per-participant level and a small per-condition effect, so statistics are not
@@ -33,17 +33,10 @@ from chameleons.backend.models import (
     Study,
     Suggestion,
 )
+from chameleons.experiment.design import plan
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.study import load_default_study
 
-WILLIAMS_3 = (
-    ("still", "natural", "copy"),
-    ("natural", "copy", "still"),
-    ("copy", "still", "natural"),
-    ("copy", "natural", "still"),
-    ("still", "copy", "natural"),
-    ("natural", "still", "copy"),
-)
 START = datetime(2026, 3, 2, 9, 0, tzinfo=UTC)
 
 
@@ -65,40 +58,18 @@ def create_study(db: DbSession, spec: StudySpec | None = None, name: str | None 
     return study
 
 
-def plan_interactions(spec: StudySpec, row_number: int) -> list[dict[str, Any]]:
-    """A simple balanced plan row (not the planner's): Williams orders, rotated resources,
-    tasks alternating, both item sets per task type over consecutive rows."""
-    order = WILLIAMS_3[(row_number - 1) % len(WILLIAMS_3)]
-    actors = [a.id for a in spec.actors]
-    faces = [f.id for f in spec.faces]
-    tasks = [t.id for t in spec.tasks]
-    sets = list(spec.item_sets.sets)
-    rng = random.Random(row_number)
-    rows = []
-    for index, condition in enumerate(order):
-        task = tasks[(row_number + index) % len(tasks)]
-        item_set = sets[(row_number // 2 + index) % len(sets)]
-        items = list(spec.scenario(task, item_set).items)
-        rng.shuffle(items)
-        rows.append(
-            {
-                "position": index + 1,
-                "condition": condition,
-                "actor": actors[(row_number + index) % len(actors)],
-                "face": faces[(row_number + 2 * index) % len(faces)],
-                "robot_name": spec.robot_names[(row_number + index) % len(spec.robot_names)],
-                "task": task,
-                "item_set": item_set,
-                "item_order": items,
-            }
-        )
-    return rows
-
-
-def create_plan(db: DbSession, study: Study, spec: StudySpec, count: int) -> list[PlanRow]:
+def create_plan(
+    db: DbSession, study: Study, spec: StudySpec, count: int, seed: int = 0
+) -> list[PlanRow]:
+    """Plan rows from the experiment core's planner, as the session flow stores them."""
+    planned = plan(spec, count, seed)
     rows = [
-        PlanRow(study_id=study.id, row_number=n, interactions=plan_interactions(spec, n))
-        for n in range(1, count + 1)
+        PlanRow(
+            study_id=study.id,
+            row_number=row.participant,
+            interactions=row.to_dict()["interactions"],
+        )
+        for row in planned.rows
     ]
     db.add_all(rows)
     db.flush()

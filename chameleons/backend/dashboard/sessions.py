@@ -101,6 +101,7 @@ class InteractionDetail:
     interaction: Interaction
     deviates: bool
     expert_order: list[RankedItem]
+    presented: list[RankedItem]
     initial: list[RankedItem]
     final: list[RankedItem]
     initial_error: int | None
@@ -207,6 +208,7 @@ def _interaction_detail(
         interaction=interaction,
         deviates=interaction.condition != interaction.planned_condition,
         expert_order=_ranked(spec, interaction.task, expert),
+        presented=_ranked(spec, interaction.task, presented),
         initial=_ranked(spec, interaction.task, interaction.initial_ranking),
         final=_ranked(spec, interaction.task, interaction.final_ranking),
         initial_error=error_score(spec, interaction.task, interaction.initial_ranking),

@@ -47,9 +47,10 @@ def test_export_command_writes_the_bundle(sqlite_template: Path, tmp_path: Path)
 def test_export_command_reports_a_missing_study(sqlite_template: Path, tmp_path: Path) -> None:
     database = tmp_path / "empty.sqlite3"
     shutil.copyfile(sqlite_template, database)
-    result = run_cli("export", "--out", str(tmp_path / "o"), "--study", "7", env=_env(database))
-    assert result.returncode != 0
-    assert "there is no study with id 7" in result.stderr
-    bad = run_cli("export", "--out", str(tmp_path / "o"), "--format", "docx", env=_env(database))
-    assert bad.returncode == 2
-    assert "docx" in bad.stderr
+    runner = CliRunner(env=_env(database))
+    result = runner.invoke(export, ["--out", str(tmp_path / "o"), "--study", "7"])
+    assert result.exit_code == 1
+    assert "there is no study with id 7" in result.output
+    bad = runner.invoke(export, ["--out", str(tmp_path / "o"), "--format", "docx"])
+    assert bad.exit_code == 2
+    assert "docx" in bad.output

@@ -1,0 +1,96 @@
+"""A PI walks the dashboard in Chromium: overview, a session, an export, the analysis, and
+withdraws a participant by typing the code."""
+
+from __future__ import annotations
+
+import io
+import shutil
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import pytest
+from playwright.sync_api import Page, expect
+from sqlalchemy import Engine
+
+from chameleons.backend.db import build_sessionmaker, session_scope
+from tests.backend.test_auth import add_user
+from tests.support.factories import PopulatedStudy, populate
+from tests.support.live_server import LiveServer
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.fixture
+def database_url(sqlite_template: Path, tmp_path: Path) -> str:
+    """The browser exercises the UI; one backend (SQLite) is enough here."""
+    path = tmp_path / "browser.sqlite3"
+    shutil.copyfile(sqlite_template, path)
+    return f"sqlite:///{path}"
+
+
+@pytest.fixture
+def study(engine: Engine, settings: Any) -> PopulatedStudy:
+    for db in session_scope(build_sessionmaker(engine)):
+        data = populate(db, 6, rehearsals=1, recordings_dir=settings.data_dir / "recordings")
+    add_user(engine, "pia", "correct horse", "pi")
+    return data
+
+
+def log_in(page: Page, server: LiveServer, path: str) -> None:
+    page.goto(server.url + path)
+    page.get_by_label("Username").fill("pia")
+    page.get_by_label("Password").fill("correct horse")
+    page.get_by_role("button", name="Log in").click()
+
+
+def test_pi_walks_the_dashboard(live_server: LiveServer, page: Page, study: PopulatedStudy) -> None:
+    log_in(page, live_server, "/pi")
+    expect(page.get_by_role("heading", name="Study progress")).to_be_visible()
+    expect(page.locator('[data-stat="used"]')).to_have_text("6")
+    rows = page.locator("#sessions tbody tr")
+    expect(rows).to_have_count(7)
+    expect(page.locator('tr[data-participant="R001"] .badge')).to_have_text("rehearsal")
+
+    page.get_by_role("link", name="P003", exact=True).click()
+    expect(page.get_by_role("heading", name="Session of P003")).to_be_visible()
+    expect(page.locator("section.interaction")).to_have_count(3)
+    expect(page.locator("#timeline li").first).to_contain_text("session_started")
+    expect(page.locator(".recordings a")).to_have_count(6)
+
+    page.get_by_role("link", name="Export").click()
+    page.get_by_label("Parquet").check()
+    with page.expect_download() as download_info:
+        page.get_by_role("button", name="Download zip").click()
+    bundle = zipfile.ZipFile(io.BytesIO(Path(download_info.value.path()).read_bytes()))
+    names = set(bundle.namelist())
+    for table in ("participants", "interactions", "suggestions", "questionnaire", "scores"):
+        assert {f"{table}.csv", f"{table}.parquet"} <= names
+    assert {"events.csv", "codebook.csv", "study_config.json", "metadata.json"} <= names
+    assert bundle.read("scores.csv").decode().count("\n") == 1 + 6 * 3  # no rehearsal
+
+    page.get_by_role("link", name="Analysis").click()
+    expect(page.locator("#table1 tbody tr")).to_have_count(4)
+    expect(page.locator("#friedman tbody tr")).to_have_count(4)
+    expect(page.locator("#latex")).to_contain_text("\\begin{tabular}")
+    images = page.locator("#plots img")
+    expect(images).to_have_count(4)
+    for index in range(4):
+        image = images.nth(index)
+        image.scroll_into_view_if_needed()
+        expect(image).to_have_js_property("complete", True)
+        assert image.evaluate("img => img.naturalWidth") > 100, "a plot did not load"
+
+
+def test_pi_withdraws_a_participant_by_typing_the_code(
+    live_server: LiveServer, page: Page, study: PopulatedStudy
+) -> None:
+    log_in(page, live_server, "/pi")
+    page.locator('tr[data-participant="P002"]').get_by_role("link", name="Withdraw…").click()
+    expect(page.get_by_role("heading", name="Withdraw participant P002")).to_be_visible()
+    page.get_by_label("Type the participant code").fill("P002")
+    page.get_by_role("button", name="Delete all data of P002").click()
+    expect(page.get_by_role("status")).to_contain_text("P002 was withdrawn")
+    expect(page.locator('tr[data-participant="P002"]')).to_have_count(0)
+    expect(page.locator('[data-stat="withdrawn"]')).to_have_text("1")
+    assert not any(p.exists() for p in study.recording_paths[6:12])
