@@ -11,6 +11,7 @@ from chameleons.cli import (
     demo_command,
     export_command,
     plan_command,
+    prompts_command,
     serve_command,
     simulate_face_command,
     user_commands,
@@ -33,6 +34,7 @@ cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
 cli.add_command(worker_command.worker)
 cli.add_command(analyze_command.analyze_command)
+cli.add_command(prompts_command.prompts)
 
 
 def main() -> None:
