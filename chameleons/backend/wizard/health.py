@@ -31,8 +31,10 @@ LABELS = {
 
 @dataclass
 class Check:
+    """``ok`` None means unknown (the worker is silent, so its parts cannot be judged)."""
+
     id: str
-    ok: bool
+    ok: bool | None
     value: str
     failing_for: float | None = None
 
@@ -71,9 +73,8 @@ def evaluate(telemetry: Mapping[str, Any] | None, age: float | None) -> dict[str
     """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds."""
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
         why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
-        checks = {name: Check(name, False, "unknown") for name in CHECKS}
+        checks = {name: Check(name, None, "unknown") for name in (*CHECKS, "speaking")}
         checks["worker"] = Check("worker", False, why)
-        checks["speaking"] = Check("speaking", True, "unknown")
         return checks
     fps = _number(telemetry, "input_fps", "input_frame_rate", "ingest.fps")
     tick = _number(telemetry, "tick_rate", "tick_hz", "renderer.tick_rate")
@@ -114,14 +115,14 @@ class HealthTracker:
         checks = evaluate(telemetry, age)
         for check in checks.values():
             key = (booth, check.id)
-            if check.ok:
-                self.since.pop(key, None)
-            else:
+            if check.ok is False:
                 check.failing_for = moment - self.since.setdefault(key, moment)
+            else:
+                self.since.pop(key, None)
         return {
             "type": "health",
             "booth": booth,
-            "ok": all(check.ok for check in checks.values()),
+            "ok": all(check.ok is not False for check in checks.values()),
             "checks": [checks[name].as_dict() for name in (*CHECKS, "speaking")],
             "telemetry": dict(telemetry) if telemetry is not None else None,
         }

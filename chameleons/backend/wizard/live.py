@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 from typing import Any
 
+import anyio
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
@@ -80,22 +82,50 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
     async with hub.subscribe(session_channel(session_id)) as subscription:
         await sender.send(first)
 
-        async def on_change(messages: list[Message]) -> None:
-            for message in messages:
-                if message.get("type") != "resync":
-                    await sender.send(message)
-            fresh = await run_in_threadpool(
-                read, state, _state_message, state, session_id, base_url
-            )
-            await sender.send(fresh)
+        reads: set[asyncio.Future[Message]] = set()
 
-        beat = asyncio.create_task(_forward_health(sender, state, booth))
+        async def forward_changes() -> None:
+            while True:
+                messages = [await subscription.get(), *subscription.drain()]
+                for message in messages:
+                    if message.get("type") != "resync":
+                        await sender.send(message)
+                # Shielded: a read cut off by a disconnect still finishes (and gives its
+                # database connection back) before the handler returns.
+                reading = asyncio.ensure_future(
+                    run_in_threadpool(read, state, _state_message, state, session_id, base_url)
+                )
+                reads.add(reading)
+                reading.add_done_callback(reads.discard)
+                await sender.send(await asyncio.shield(reading))
+
+        tasks = [
+            asyncio.create_task(forward_changes()),
+            asyncio.create_task(_forward_health(sender, state, booth)),
+            asyncio.create_task(_answer_pings(websocket, sender)),
+        ]
         try:
-            await live.serve(websocket, subscription, on_change)
+            await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         finally:
-            beat.cancel()
-            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
-                await beat
+            for task in tasks:
+                task.cancel()
+            for task in tasks:
+                with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                    await task
+            with anyio.CancelScope(shield=True):  # even when the server cancels the handler
+                await asyncio.gather(*reads, return_exceptions=True)
+
+
+async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:
+    """Reply to the console's pings (it measures the link); return when it disconnects."""
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            try:
+                message = json.loads(await websocket.receive_text())
+            except ValueError:
+                continue
+            if isinstance(message, dict) and message.get("type") == "ping":
+                await sender.send({"type": "pong"})
 
 
 async def _forward_health(sender: Sender, state: Any, booth: str) -> None:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import gc
+from collections.abc import Iterator
+
 import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import Engine
@@ -37,3 +40,11 @@ def to_negotiation(wizard: WizardBot, phone: ParticipantBot) -> list[str]:
     phone.submit_ranking(1, ranking)
     wizard.advance(1, "negotiation")
     return ranking
+
+
+@pytest.fixture(autouse=True)
+def _collect_after() -> Iterator[None]:
+    """Collect garbage after each test, so a leaked database connection is reported against
+    the test that leaked it rather than a later one."""
+    yield
+    gc.collect()

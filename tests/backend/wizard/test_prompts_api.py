@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import pytest
@@ -44,9 +45,12 @@ def test_script_fits_the_robot_and_task_and_every_shortcut_is_unique(wizard: Wiz
     intro = [b for b in sections["script"] if b["stage"] == "intro"]
     assert [b["label"] for b in intro] == [f"Introduce ({interaction['robot_name']})"]
     scenario = [b for b in sections["script"] if b["stage"] == "scenario"]
-    assert scenario and all(interaction["task"] in str(b["group"]) for b in scenario)
+    assert scenario
+    assert all(interaction["task"] in str(b["group"]) for b in scenario)
     replies = {b["group"]: b["shortcut"]["label"] for b in sections["replies"]}  # type: ignore[index]
-    assert replies["ack_yes"] == "Y" and replies["ack_no"] == "N" and replies["repeat"] == "R"
+    assert replies["ack_yes"] == "Y"
+    assert replies["ack_no"] == "N"
+    assert replies["repeat"] == "R"
     keys = [
         (b["shortcut"]["code"], b["shortcut"]["shift"])  # type: ignore[index]
         for buttons in sections.values()
@@ -71,9 +75,11 @@ def test_a_play_without_a_worker_is_logged_as_not_sent(wizard: WizardBot) -> Non
     assert result["sent"] is False
     assert result["reason"] == "no_worker"
     assert "worker unreachable" in result["detail"]
-    assert result["group"] == "ack_yes" and result["text"]
+    assert result["group"] == "ack_yes"
+    assert result["text"]
     played, not_sent = events_of(wizard)
-    assert played["kind"] == "prompt.played" and played["source"] == "wizard"
+    assert played["kind"] == "prompt.played"
+    assert played["source"] == "wizard"
     assert played["payload"]["prompt_id"] == result["prompt_id"]  # type: ignore[index]
     assert played["payload"]["position"] == 1  # type: ignore[index]
     assert not_sent["kind"] == "prompt.not_sent"
@@ -88,7 +94,7 @@ def test_variants_are_random_but_never_the_same_twice_in_a_row(wizard: WizardBot
         wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "ack_okay"})["prompt_id"]
         for _ in range(12)
     ]
-    assert all(a != b for a, b in zip(played, played[1:], strict=False))
+    assert all(a != b for a, b in itertools.pairwise(played))
     assert set(played) <= variants
     assert len(set(played)) >= 2
 
@@ -96,7 +102,8 @@ def test_variants_are_random_but_never_the_same_twice_in_a_row(wizard: WizardBot
 def test_stop_is_logged_with_the_prompt_it_stopped(wizard: WizardBot) -> None:
     played = wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "ack_hmm"})
     result = wizard.staff.post(f"{api(wizard)}/prompts/stop")
-    assert result["sent"] is False and result["reason"] == "no_worker"
+    assert result["sent"] is False
+    assert result["reason"] == "no_worker"
     stopped = events_of(wizard)[-1]
     assert stopped["kind"] == "prompt.stopped"
     assert stopped["payload"]["play_event_id"] == played["event_id"]  # type: ignore[index]
@@ -105,7 +112,8 @@ def test_stop_is_logged_with_the_prompt_it_stopped(wizard: WizardBot) -> None:
 def test_unknown_group_and_unknown_session_are_404(wizard: WizardBot) -> None:
     with pytest.raises(ApiError) as caught:
         wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "no_such_group"})
-    assert caught.value.status == 404 and "no prompt group" in str(caught.value.detail)
+    assert caught.value.status == 404
+    assert "no prompt group" in str(caught.value.detail)
     with pytest.raises(ApiError) as caught:
         wizard.staff.post("/api/wizard/sessions/999999/prompts/play", {"group": "ack_yes"})
     assert caught.value.status == 404
@@ -129,7 +137,8 @@ def test_console_state_carries_the_snapshot_timeline_and_suggestion_prompts(
     assert state["prompt_position"] == 1
     assert state["worker"] == {"bridge": False}
     kinds = [e["kind"] for e in state["events"]]
-    assert kinds[-1] == "suggestion.proposed" and "ranking.submitted" in kinds
+    assert kinds[-1] == "suggestion.proposed"
+    assert "ranking.submitted" in kinds
     assert state["last_event_id"] == state["events"][-1]["id"]
     pending = state["session"]["interactions"][0]["suggestions"][0]
     interaction = wizard.interaction(1)
@@ -141,7 +150,8 @@ def test_console_state_carries_the_snapshot_timeline_and_suggestion_prompts(
     assert state["suggestion_prompts"] == [g.name for g in expected]
     assert state["suggestion_prompts"], "the demo catalogue phrases every move"
     first = catalogue.group(state["suggestion_prompts"][0]).prompts[0]
-    assert first.item == pending["item"] and first.other_item == target
+    assert first.item == pending["item"]
+    assert first.other_item == target
 
 
 def test_prompts_follow_the_next_interaction_once_one_is_done(
@@ -157,7 +167,8 @@ def test_prompts_follow_the_next_interaction_once_one_is_done(
     state = wizard.staff.get(f"{api(wizard)}/console")
     assert state["prompt_position"] == 2
     data = wizard.staff.get(f"{api(wizard)}/prompts")
-    assert data["position"] == 2 and data["actor"] == wizard.interaction(2)["actor"]
+    assert data["position"] == 2
+    assert data["actor"] == wizard.interaction(2)["actor"]
     played = wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "ack_yes"})
     assert played["prompt_id"]
     assert events_of(wizard)[-2]["payload"]["position"] == 2  # type: ignore[index]

@@ -13,28 +13,29 @@ export class HealthStrip {
 
   update(message) {
     this.lastAt = Date.now();
-    const failing = message.checks.filter((check) => !check.ok);
-    const chips = message.checks.map((check) =>
-      el(
+    const failing = message.checks.filter((check) => check.ok === false);
+    const chips = message.checks.map((check) => {
+      const state = check.ok === null ? "unknown" : check.ok ? "ok" : "bad";
+      return el(
         "span",
         {
-          class: `chip ${check.ok ? "ok" : "bad"}`,
-          dataset: { check: check.id },
-          title: check.ok ? "ok" : `failing for ${seconds(check.failing_for || 0)}`,
+          class: `chip ${state}`,
+          dataset: { check: check.id, state },
+          title: state === "bad" ? `failing for ${seconds(check.failing_for || 0)}` : state,
         },
         el("strong", { text: check.label }),
         " ",
         check.value,
-        check.ok ? null : el("span", { class: "since", text: ` · ${seconds(check.failing_for || 0)}` }),
-      ),
-    );
+        state === "bad" ? el("span", { class: "since", text: ` · ${seconds(check.failing_for || 0)}` }) : null,
+      );
+    });
     const alarm = failing.length
       ? el(
           "div",
           { class: "alarm", role: "alert" },
-          message.bridge ? "Robot problem: " : "Worker unreachable (no bridge on this server). ",
+          message.bridge ? "Robot problem: " : "Worker unreachable (no bridge on this server): ",
           failing.map((c) => `${c.label} ${c.value} for ${seconds(c.failing_for || 0)}`).join("; "),
-          message.bridge ? "" : " Prompts are logged but not sent.",
+          failing.some((c) => c.id === "worker") ? ". Prompts are logged but not sent." : ".",
         )
       : null;
     this.container.classList.toggle("failing", failing.length > 0);

@@ -1,0 +1,72 @@
+"""The console's WebSocket: the state on connect, events and fresh state on every change,
+the robot's health once a second; staff only."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from tests.backend.wizard.conftest import api
+from tests.support.bots import WizardBot
+
+
+def next_of(socket: Any, kind: str, limit: int = 20) -> dict[str, Any]:
+    """The next message of type ``kind`` (health beats may come in between)."""
+    for _ in range(limit):
+        message: dict[str, Any] = socket.receive_json()
+        if message["type"] == kind:
+            return message
+    raise AssertionError(f"no {kind!r} message among {limit}")
+
+
+def test_the_feed_sends_state_then_events_and_fresh_state(
+    client: TestClient, wizard: WizardBot
+) -> None:
+    with client.websocket_connect(f"/ws/wizard/sessions/{wizard.session_id}") as socket:
+        first = socket.receive_json()
+        assert first["type"] == "console"
+        assert first["session"]["id"] == wizard.session_id
+        assert first["prompt_position"] == 1
+        played = wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "ack_no"})
+        event = next_of(socket, "event")["event"]
+        assert event["kind"] == "prompt.played"
+        assert event["id"] == played["event_id"]
+        fresh = next_of(socket, "console")
+        assert fresh["last_event_id"] >= played["event_id"]
+
+
+def test_health_says_the_worker_is_unreachable_and_for_how_long(
+    client: TestClient, wizard: WizardBot
+) -> None:
+    with client.websocket_connect(f"/ws/wizard/sessions/{wizard.session_id}") as socket:
+        beat = next_of(socket, "health")
+        assert beat["booth"] == "booth-1"
+        assert beat["bridge"] is False
+        assert beat["ok"] is False
+        checks = {check["id"]: check for check in beat["checks"]}
+        assert checks["worker"]["ok"] is False
+        assert checks["worker"]["value"] == "no telemetry"
+        assert checks["worker"]["failing_for"] >= 0
+        assert checks["robot"]["ok"] is None  # unknown while the worker is silent
+
+
+def test_the_feed_is_for_staff_only(client: TestClient, wizard: WizardBot) -> None:
+    client.cookies.clear()
+    with (
+        pytest.raises(WebSocketDisconnect) as closed,
+        client.websocket_connect(f"/ws/wizard/sessions/{wizard.session_id}") as socket,
+    ):
+        socket.receive_json()
+    assert closed.value.code == 4401
+
+
+def test_an_unknown_session_closes_the_feed(client: TestClient, wizard: WizardBot) -> None:
+    with (
+        pytest.raises(WebSocketDisconnect) as closed,
+        client.websocket_connect("/ws/wizard/sessions/987654") as socket,
+    ):
+        socket.receive_json()
+    assert closed.value.code == 4404

@@ -1,0 +1,188 @@
+"""The wizard console in a real Chromium against a real server: a whole interaction driven
+from the keyboard and the mouse, with the participant's answers arriving live.
+
+No worker runs in these tests, so every prompt is logged as "not sent: worker unreachable";
+the worker path (ack and speech latencies) needs the lead's bridge wiring.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+
+import pytest
+from playwright.sync_api import Page, expect
+
+from tests.e2e.wizard.conftest import Console
+from tests.support.bots import answers_for
+
+pytestmark = pytest.mark.browser
+
+
+def played(console: Console) -> list[dict[str, object]]:
+    return [e for e in console.events() if e["kind"] == "prompt.played"]
+
+
+def expect_played(console: Console, count: int) -> dict[str, object]:
+    """Wait until the timeline shows ``count`` plays; return the last one."""
+    expect(console.page.locator("#timeline li[data-kind='prompt.played']")).to_have_count(count)
+    plays = played(console)
+    assert len(plays) == count
+    return plays[-1]
+
+
+def start_discussion(page: Page) -> None:
+    primary = page.locator("#primary-action")
+    expect(primary).to_contain_text("Start the session")
+    primary.click()
+    expect(primary).to_contain_text("Start interaction 1")
+    page.keyboard.press("Control+Enter")
+    expect(page.locator("#bar-step")).to_have_text("discussion")
+
+
+def test_prompts_play_by_click_shortcut_and_search(console: Console) -> None:
+    page = console.page
+    interaction = console.wizard.interaction(1)
+    start_discussion(page)
+    page.get_by_role("button", name=re.compile(r"Introduce")).click()
+    first = expect_played(console, 1)
+    assert first["payload"]["group"].startswith("intro_")  # type: ignore[index]
+    expect(page.locator("#now-playing")).to_have_attribute("data-phase", "not-sent")
+    expect(page.locator("#now-label")).to_contain_text("worker unreachable")
+    expect(page.locator("#timeline")).to_contain_text("Not sent")
+
+    page.keyboard.press("1")
+    describe = expect_played(console, 2)
+    assert describe["payload"]["item"] == interaction["presented_order"][0]  # type: ignore[index]
+    page.keyboard.press("Shift+2")
+    ask = expect_played(console, 3)
+    assert ask["payload"]["stage"] == "item_question"  # type: ignore[index]
+    assert ask["payload"]["item"] == interaction["presented_order"][1]  # type: ignore[index]
+    page.keyboard.press("y")
+    assert expect_played(console, 4)["payload"]["group"] == "ack_yes"  # type: ignore[index]
+    expect(page.locator("button.pb[data-group='ack_yes']")).to_have_class(re.compile("played"))
+
+    page.keyboard.press("/")
+    expect(page.locator("#prompt-search")).to_be_focused()
+    page.keyboard.type("good point")
+    expect(page.locator("#search-count")).to_have_text("1 match")
+    page.keyboard.press("Enter")
+    assert expect_played(console, 5)["payload"]["group"] == "ack_good_point"  # type: ignore[index]
+    page.keyboard.press("Escape")
+    expect(page.locator("#prompt-search")).to_have_value("")
+
+    page.keyboard.press("Space")
+    expect(page.locator("#timeline li[data-kind='prompt.stopped']")).to_have_count(1)
+    assert len(played(console)) == 5, "Space stops; it must not also press a focused button"
+
+
+def test_a_full_interaction_with_the_participant(console: Console) -> None:
+    page = console.page
+    start_discussion(page)
+    page.keyboard.press("Control+Enter")
+    expect(page.locator("#bar-step")).to_have_text("ranking")
+    expect(page.locator("#primary-action")).to_contain_text("Waiting for the participant's ranking")
+
+    presented = list(console.wizard.interaction(1)["presented_order"])
+    ranking = list(reversed(presented))
+    console.phone.submit_ranking(1, ranking)
+    names = {item["id"]: item["name"] for item in console.wizard.interaction(1)["items"]}
+    expect(page.locator("#live-ranking li")).to_have_count(5)
+    expect(page.locator("#live-ranking li").first).to_have_text(names[ranking[0]])
+
+    page.keyboard.press("Control+Enter")
+    panel = page.locator("#negotiation-body")
+    expect(panel).to_contain_text("Suggestion 1 of 3")
+    suggested = page.locator("#suggestion-prompts button.pb")
+    expect(suggested.first).to_be_visible()
+    page.keyboard.press("m")
+    phrasing = expect_played(console, 1)
+    assert phrasing["payload"]["stage"] == "suggestion"  # type: ignore[index]
+
+    page.keyboard.press("a")
+    expect(panel).to_contain_text("Suggestion 2 of 3")
+    after_accept = console.wizard.refresh()["interactions"][0]["current_ranking"]
+    assert console.phone.state()["ranking"] == after_accept
+    expect(page.locator("#live-ranking li.moved").first).to_be_visible()
+
+    page.keyboard.press("d")
+    expect(panel).to_contain_text("Suggestion 3 of 3")
+    expect(page.locator("#undo-button")).to_be_visible()
+    page.keyboard.press("u")
+    expect(panel).to_contain_text("Suggestion 2 of 3")
+    expect(page.locator("#timeline")).to_contain_text("decision undone")
+    page.keyboard.press("d")
+    expect(panel).to_contain_text("Suggestion 3 of 3")
+    page.keyboard.press("a")
+    expect(page.locator("#negotiation-body li.yes")).to_have_count(2)
+    expect(page.locator("#negotiation-body li.no")).to_have_count(1)
+    decisions = [s["accepted"] for s in console.wizard.refresh()["interactions"][0]["suggestions"]]
+    assert decisions == [True, False, True]
+    assert console.phone.state()["ranking"] == console.wizard.interaction(1)["current_ranking"]
+
+    switch_to_an_unplanned_condition(console)
+
+    page.keyboard.press("Control+Enter")
+    expect(page.locator("#bar-step")).to_have_text("questionnaire")
+    rng = random.Random(5)
+    page_one = console.phone.state()["questionnaire"]
+    console.phone.submit_questionnaire(1, page_one["id"], answers_for(page_one, rng))
+    expect(page.locator("#participant-view")).to_contain_text("1 of 4 done")
+    console.phone.answer_questionnaires(1, rng)
+    expect(page.locator("#primary-action")).to_contain_text("Start interaction 2")
+    expect(page.locator("#timeline li[data-kind='questionnaire.submitted']")).to_have_count(4)
+
+    timeline_holds_every_event(console)
+    page.reload()
+    timeline_holds_every_event(console)
+    expect(page.locator("#bar-position")).to_have_text("2 of 3")
+
+
+def switch_to_an_unplanned_condition(console: Console) -> None:
+    page = console.page
+    planned = console.wizard.interaction(1)["planned_condition"]
+    other = next(c for c in console.wizard.snapshot["conditions"] if c != planned)
+    page.locator(f"#condition-switch button[data-condition='{other}']").click()
+    dialog = page.locator("#confirm-dialog")
+    expect(dialog).to_be_visible()
+    expect(dialog).to_contain_text(f'planned as "{planned}"')
+    page.get_by_role("button", name="Switch and log deviation").click()
+    expect(page.locator("#condition-note")).to_contain_text(f"Deviation: running {other}")
+    expect(page.locator("#timeline li[data-kind='plan.deviation']")).to_have_count(1)
+    assert console.wizard.refresh()["interactions"][0]["condition"] == other
+
+
+def timeline_holds_every_event(console: Console) -> None:
+    events = console.events()
+    rows = console.page.locator("#timeline li")
+    expect(rows).to_have_count(len(events))
+    shown = {int(i) for i in rows.evaluate_all("rows => rows.map(r => r.dataset.id)")}
+    assert shown == {int(e["id"]) for e in events}  # type: ignore[call-overload]
+
+
+def test_cancelling_a_condition_switch_changes_nothing(console: Console) -> None:
+    page = console.page
+    expect(page.locator("#condition-switch button")).to_have_count(3)
+    planned = console.wizard.interaction(1)["planned_condition"]
+    other = next(c for c in console.wizard.snapshot["conditions"] if c != planned)
+    page.locator(f"#condition-switch button[data-condition='{other}']").click()
+    page.get_by_role("button", name="Cancel").click()
+    expect(page.locator("#confirm-dialog")).to_be_hidden()
+    assert console.wizard.refresh()["interactions"][0]["condition"] == planned
+    assert not [e for e in console.events() if e["kind"] == "condition.switched"]
+
+
+def test_the_console_says_when_the_worker_and_the_server_are_unreachable(
+    console: Console,
+) -> None:
+    page = console.page
+    alarm = page.locator("#health .alarm")
+    expect(alarm).to_contain_text("Worker unreachable")
+    expect(alarm).to_contain_text("Prompts are logged but not sent")
+    expect(page.locator("#health .chip[data-check='worker']")).to_have_attribute(
+        "data-state", "bad"
+    )
+    console.server.stop()
+    expect(page.locator("#conn-banner")).to_be_visible(timeout=15_000)
+    page.keyboard.press("y")
+    expect(page.locator("#conn-banner")).to_contain_text("server is unreachable")
