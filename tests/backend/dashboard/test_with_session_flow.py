@@ -7,14 +7,26 @@ import csv
 import io
 import json
 import random
+import shutil
 import zipfile
+from pathlib import Path
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import Engine, select
 
 from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.models import Base
 from tests.support.bots import run_session, staff_api, study_with_plan
+
+
+@pytest.fixture
+def database_url(sqlite_template: Path, tmp_path: Path) -> str:
+    """An integration walk over the whole flow; the per-database behaviour (withdrawal,
+    export queries) is covered on both backends by the other tests, so SQLite is enough."""
+    path = tmp_path / "flow.sqlite3"
+    shutil.copyfile(sqlite_template, path)
+    return f"sqlite:///{path}"
 
 
 def test_sessions_run_by_the_flow_export_analyse_and_withdraw(

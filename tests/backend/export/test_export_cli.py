@@ -1,4 +1,5 @@
-"""`chameleons export` as a user runs it: a subprocess against a real database file."""
+"""`chameleons export` against a real database file (in process: the subprocess start-up
+of the CLI itself is covered by tests/backend/test_cli.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from click.testing import CliRunner
 
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
 from chameleons.cli.export_command import export
-from tests.backend.test_cli import run_cli
+from chameleons.cli.main import cli
 from tests.support.factories import populate
 
 
@@ -30,9 +31,11 @@ def test_export_command_writes_the_bundle(sqlite_template: Path, tmp_path: Path)
         populate(db, 4, rehearsals=1)
     engine.dispose()
     out = tmp_path / "out"
-    result = run_cli("export", "--out", str(out), "--format", "json", env=_env(database))
-    assert result.returncode == 0, result.stderr
-    assert "participants 4" in result.stdout
+    result = CliRunner(env=_env(database)).invoke(
+        cli, ["export", "--out", str(out), "--format", "json"]
+    )
+    assert result.exit_code == 0, result.output
+    assert "participants 4" in result.output
     assert (out / "scores.csv").exists()
     assert (out / "scores.json").exists()
     assert not (out / "scores.parquet").exists()
