@@ -4,10 +4,11 @@
   without an answer to every item of its questionnaires;
 - plan deviations: an interaction run in another condition than planned, or a deviation
   event the session flow logged;
-- outages: worker or robot outage / disconnection events during an interaction;
-- wizard-latency outliers: any ``*latency_ms`` number in an event payload (e.g. click to
-  worker acknowledgement, click to speech start) above ``LATENCY_LIMIT_MS``, or above the
-  study's own upper fence (third quartile + 3 x IQR, once there are enough values).
+- outages: worker or robot outage / disconnection events, and prompts the worker never
+  got (``prompt.not_sent``), during an interaction (by interaction id, or by time);
+- wizard-latency outliers: a latency in an event payload (``click_to_ack_ms``,
+  ``click_to_speech_ms``, any ``*latency_ms``) above ``LATENCY_LIMIT_MS``, or above the
+  study's own upper fence for that latency (third quartile + 3 x IQR, with enough values).
 """
 
 from __future__ import annotations
@@ -28,8 +29,11 @@ from chameleons.experiment.model import Study as StudySpec
 
 LATENCY_LIMIT_MS = 1500.0
 MIN_VALUES_FOR_FENCE = 20
+# Worker/robot trouble: outage-like events of the worker, robot, bridge or display, and a
+# prompt the worker never received (``prompt.not_sent``). A phone reconnecting is not one.
 OUTAGE_KIND = re.compile(
-    r"(outage|disconnect|connection[._]lost|worker[._](down|died|restart)|robot[._](down|lost))"
+    r"^(worker|robot|bridge|display)\.\w*(down|lost|disconnect|outage|restart|died|unreachable"
+    r"|timeout)|outage|^prompt\.not_sent$"
 )
 DEVIATION_KIND = re.compile(r"deviation")
 FINISHED_STEPS = frozenset({"done"})
@@ -60,16 +64,20 @@ class SessionFlags:
 
 
 def latencies(payload: Any) -> list[tuple[str, float]]:
-    """Every ``*latency_ms`` number in a payload (nested objects included)."""
+    """Every latency (ms) in a payload, nested objects included."""
     found: list[tuple[str, float]] = []
     if isinstance(payload, dict):
         for key, value in payload.items():
             numeric = isinstance(value, int | float) and not isinstance(value, bool)
-            if key.endswith("latency_ms") and numeric:
+            if numeric and _is_latency(key):
                 found.append((key, float(value)))
             else:
                 found.extend(latencies(value))
     return found
+
+
+def _is_latency(key: str) -> bool:
+    return key.endswith("latency_ms") or (key.startswith("click_to_") and key.endswith("_ms"))
 
 
 def latency_limits(events: Iterable[Event]) -> dict[str, float]:

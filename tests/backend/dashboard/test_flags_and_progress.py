@@ -37,8 +37,8 @@ def test_clean_sessions_have_no_flags(db_session: DbSession) -> None:
 
 
 def test_each_kind_of_problem_is_flagged(db_session: DbSession) -> None:
-    data = populate(db_session, 5)
-    first, second, third, fourth, fifth = data.session_ids
+    data = populate(db_session, 7)
+    first, second, third, fourth, fifth, sixth, seventh = data.session_ids
     db_session.execute(
         delete(QuestionnaireResponse).where(
             QuestionnaireResponse.session_id == first,
@@ -53,6 +53,10 @@ def test_each_kind_of_problem_is_flagged(db_session: DbSession) -> None:
     add_event(db_session, third, "worker.outage", {"reason": "process died"}, position=1)
     add_event(db_session, fourth, "prompt.played", {"ack_latency_ms": LATENCY_LIMIT_MS + 900}, 2)
     add_event(db_session, fifth, "plan.deviation", {"field": "condition"}, position=1)
+    add_event(db_session, sixth, "prompt.not_sent", {"reason": "worker unreachable"}, 3)
+    add_event(db_session, sixth, "prompt.acked", {"click_to_ack_ms": 5200.0}, 3)
+    add_event(db_session, seventh, "phone.disconnected", {}, 1)
+    add_event(db_session, seventh, "prompt.acked", {"click_to_ack_ms": 120.0}, 1)
     db_session.flush()
     assert _flags(db_session) == {
         "P001": ["missing_answers"],
@@ -60,6 +64,8 @@ def test_each_kind_of_problem_is_flagged(db_session: DbSession) -> None:
         "P003": ["outage"],
         "P004": ["latency"],
         "P005": ["deviation"],
+        "P006": ["outage", "latency"],
+        "P007": [],
     }
 
 
