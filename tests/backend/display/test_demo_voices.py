@@ -23,8 +23,8 @@ MAX_DEMO_AUDIO_BYTES = 20 * 1024 * 1024
 
 @pytest.fixture(scope="module")
 def synth() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("synthesize_voices",
-                                                  ROOT / "scripts" / "synthesize_voices.py")  # fmt: skip
+    path = ROOT / "scripts" / "synthesize_voices.py"
+    spec = importlib.util.spec_from_file_location("synthesize_voices", path)
     assert spec is not None
     assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
@@ -47,14 +47,15 @@ def channel(curves: dict[str, np.ndarray], times: np.ndarray, name: str, t: floa
 
 def test_phonemes_shape_the_mouth(synth: ModuleType, espeak: object) -> None:
     speech = espeak.speak("Bob saw you.", {"espeak_voice": "en-us"})  # type: ignore[attr-defined]
-    spans = [(name, start / speech.rate, end / speech.rate) for (start, name), (end, _) in
-             zip(speech.phonemes, [*speech.phonemes[1:], (len(speech.samples), "")], strict=True)]  # fmt: skip
+    ends = [*speech.phonemes[1:], (len(speech.samples), "")]
+    spans = [(name, start / speech.rate, end / speech.rate)
+             for (start, name), (end, _) in zip(speech.phonemes, ends, strict=True)]  # fmt: skip
     middles = {name: (a + b) / 2 for name, a, b in reversed(spans)}  # first occurrence wins
     assert {"b", "O:", "u:"} <= set(middles)
     times, curves = synth.lipsync_curves(speech)
     assert times[1] - times[0] == pytest.approx(1 / 30)
     assert len(times) / 30 == pytest.approx(len(speech.samples) / speech.rate, abs=0.1)
-    assert all(0 <= v.min() and v.max() <= 1 for v in curves.values())
+    assert all(v.min() >= 0 and v.max() <= 1 for v in curves.values())
     vowel = middles["O:"]
     assert channel(curves, times, "jawOpen", vowel) > 0.15
     assert channel(curves, times, "mouthFunnel", vowel) > 0.15  # "saw": rounded and open
