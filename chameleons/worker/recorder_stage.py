@@ -12,6 +12,7 @@ on in ``...-part2`` (``-part3``...) and a journal the crash left behind is recov
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections import Counter
@@ -24,7 +25,12 @@ import zmq
 from chameleons.worker.control import START_RECORDING, STOP_RECORDING, CommandError
 from chameleons.worker.envelope import EnvelopeError, Message, message_frame
 from chameleons.worker.frames import FaceFrame
-from chameleons.worker.recording import FrameRecorder, journal_path, recover_recording
+from chameleons.worker.recording import (
+    FrameRecorder,
+    RecordingError,
+    journal_path,
+    recover_recording,
+)
 from chameleons.worker.stage import (
     PARTICIPANT_TOPIC,
     POLL_MS,
@@ -35,6 +41,7 @@ from chameleons.worker.stage import (
     send_message,
 )
 
+log = logging.getLogger(__name__)
 STREAMS = ("participant", "agent")
 STATS_INTERVAL = 1.0
 
@@ -45,14 +52,21 @@ def recording_paths(directory: Path, interaction_id: str) -> dict[str, Path]:
         suffix = "" if part == 1 else f"-part{part}"
         paths = {s: directory / f"interaction-{interaction_id}{suffix}-{s}.parquet"
                  for s in STREAMS}  # fmt: skip
-        taken = False
-        for path in paths.values():
-            if journal_path(path).exists() and not path.exists():
-                recover_recording(path)  # left behind by a crash: keep what it saved
-            taken = taken or path.exists()
-        if not taken:
+        if not any(_taken(path) for path in paths.values()):
             return paths
     raise CommandError("recording_exists", f"too many parts for interaction {interaction_id}")
+
+
+def _taken(path: Path) -> bool:
+    """Whether ``path`` holds a recording; a journal a crash left behind is recovered into
+    it first (one the crash cut before its first chunk stays, unreadable, and is skipped)."""
+    journal = journal_path(path)
+    if journal.exists() and not path.exists():
+        try:
+            recover_recording(path)
+        except RecordingError:
+            log.warning("unrecoverable recording journal %s left in place", journal)
+    return path.exists() or journal.exists()
 
 
 class RecorderStage:

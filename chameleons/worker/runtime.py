@@ -127,6 +127,8 @@ class Worker:
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self) -> Worker:
+        if self._threads:
+            raise RuntimeError("this worker has been started already")
         for stage in self.stages:
             thread = threading.Thread(target=self._guard, args=(stage,),
                                       name=f"worker-{stage.name}", daemon=True)  # fmt: skip

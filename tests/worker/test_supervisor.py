@@ -1,0 +1,98 @@
+"""The embedded setup: the server's bridge supervises a real ``chameleons worker`` process.
+Killing the worker mid-stream: it is restarted, gets its behaviour, face and recording
+back, and the robot (the Furhat peer) copies the participant again."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import socket
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from chameleons.backend.bridge import Bridge, WorkerSupervisor
+from chameleons.worker.recording import read_recording
+from tests.worker.furhat_peer import FurhatPeer
+from tests.worker.phone import Pose, SteppingPhone
+
+BOOTH = "sup"
+START_TIMEOUT = 40.0  # a fresh Python process importing numpy/scipy on a busy machine
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+async def _until(condition: Callable[[], object], timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        await asyncio.sleep(0.05)
+
+
+def _copying_since(robot: FurhatPeer, since: float) -> Callable[[], bool]:
+    """The robot turned towards the participant's alternating yaw after ``since``."""
+    return lambda: any(r.time > since and r.message["yaw"] > 10
+                       for r in robot.of_type("request.face.headpose"))  # fmt: skip
+
+
+@pytest.mark.slow
+def test_a_killed_worker_is_restarted_with_its_state(tmp_path: Path) -> None:
+    port = _free_udp_port()
+    poses = [Pose(20.0, 0.0, 0.5), Pose(-20.0, 0.0, 0.0)] * 60
+    times = [0.5 * i for i in range(len(poses))]
+    env = {**os.environ, "CHAMELEONS_DATA_DIR": str(tmp_path), "CHAMELEONS_MIRROR": "false"}
+    recordings = tmp_path / "rec"
+
+    async def scenario(robot: FurhatPeer) -> None:
+        async with Bridge("tcp://127.0.0.1:*", "tcp://127.0.0.1:*") as bridge:
+            args = ["--driver", "furhat", "--robot-url", robot.url, "--livelink-port", str(port),
+                    "--facecapturex-port", "0", "--behaviour", "still"]  # fmt: skip
+            supervisor = WorkerSupervisor(bridge, BOOTH, args, env=env, backoff=0.1)
+            await supervisor.start()
+            try:
+                with bridge.subscribe(BOOTH, ("worker",)) as connection, \
+                        SteppingPhone(port, poses, times):  # fmt: skip
+                    await _until(lambda: BOOTH in bridge.workers(), START_TIMEOUT)
+                    for kind, body in (
+                        ("set_face", {"face_id": "adult-02"}),
+                        ("set_behaviour", {"name": "copy", "params": {"delay": 0.3}}),
+                        ("start_recording", {"interaction_id": 5, "directory": str(recordings)}),
+                    ):
+                        assert (await bridge.send_command(BOOTH, kind, body, timeout=5)).ok
+                    # Copying, with the recording past its first chunk (0.5 s) on disk.
+                    await _until(_copying_since(robot, time.monotonic() + 0.6), 10)
+
+                    assert supervisor.process is not None
+                    os.kill(supervisor.process.pid, signal.SIGKILL)
+                    killed = time.monotonic()
+                    async for message in connection:
+                        if message.type == "worker_restarted":
+                            break
+                    await _until(lambda: robot.connections == 2, START_TIMEOUT)
+                    await _until(_copying_since(robot, killed), 15)  # copy was re-sent
+                    await _until(lambda: bridge.state(BOOTH).recording is not None, 1)
+                    stopped = await bridge.send_command(BOOTH, "stop_recording", {}, timeout=5)
+            finally:
+                await supervisor.stop()
+        assert supervisor.starts == 2
+        assert supervisor.exit_codes[0] == -signal.SIGKILL
+        assert stopped.ok
+        files = stopped.result["files"]
+        assert files["agent"].endswith("interaction-5-part2-agent.parquet")
+        assert len(read_recording(files["agent"])) > 10
+        # What the killed worker had recorded was recovered from its journal.
+        assert len(read_recording(recordings / "interaction-5-participant.parquet")) > 10
+
+    with FurhatPeer() as robot:
+        asyncio.run(scenario(robot))
+    configs = [r.message for r in robot.of_type("request.face.config")]
+    assert configs[-1]["face_id"] == "adult-02"  # the face came back after the restart
+    assert all(c["blinking"] is False and c["head_sway"] is False for c in configs)
