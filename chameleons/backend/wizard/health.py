@@ -76,11 +76,11 @@ def evaluate(telemetry: Mapping[str, Any] | None, age: float | None) -> dict[str
         checks = {name: Check(name, None, "unknown") for name in (*CHECKS, "speaking")}
         checks["worker"] = Check("worker", False, why)
         return checks
-    fps = _number(telemetry, "input_fps", "input_frame_rate", "ingest.fps")
-    tick = _number(telemetry, "tick_rate", "tick_hz", "renderer.tick_rate")
-    nominal = _number(telemetry, "tick_target", "nominal_tick_rate") or NOMINAL_TICK_HZ
-    jitter = _number(telemetry, "jitter_p99_ms", "tick_jitter_ms.p99", "jitter.p99")
-    robot = _flag(telemetry, "robot_connected", "driver_connected", "robot")
+    fps = _number(telemetry, "input_fps")
+    tick = _number(telemetry, "tick_rate_hz")
+    nominal = _number(telemetry, "tick_target_hz") or NOMINAL_TICK_HZ
+    jitter = _number(telemetry, "jitter_ms.p99")
+    robot = _flag(telemetry, "robot_connected")
     speaking = _flag(telemetry, "speaking")
     tick_ok = tick is not None and tick >= MIN_TICK_RATIO * nominal
     jitter_ok = jitter is not None and jitter <= MAX_JITTER_P99_MS

@@ -9,26 +9,24 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import inspect
-import logging
 import random
-from collections.abc import Callable
-from typing import Any, TypeVar
-from urllib.parse import quote
+from collections.abc import Callable, Coroutine
+from types import SimpleNamespace
+from typing import Any, TypeVar, cast
 
+from fastapi import FastAPI
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
+from chameleons.backend.display.media import media_path
+from chameleons.backend.display.tokens import signing_key
 from chameleons.backend.events.unit_of_work import write_scope
 from chameleons.backend.models.base import utcnow
-from chameleons.backend.wizard import service, worker_link
+from chameleons.backend.wizard import service, speech, worker_link
 from chameleons.backend.wizard.service import Cue, Outcome
 from chameleons.worker.control import PLAY_PROMPT, STOP_PROMPT
 
-log = logging.getLogger(__name__)
 T = TypeVar("T")
-SPEECH_START_TIMEOUT = 5.0
-SPEECH_END_MARGIN = 10.0
 
 
 def write(state: Any, work: Callable[..., T], *args: Any) -> T:
@@ -54,11 +52,14 @@ async def play(
     if cue.lipsync is not None:
         body["lipsync_path"] = cue.lipsync
     bridge = worker_link.bridge_of(state)
+    events = speech.open_events(bridge, cue.booth)
     outcome = await worker_link.send_command(bridge, cue.booth, PLAY_PROMPT, body)
     acked_at = utcnow()
     event = await run_in_threadpool(write, state, service.record_outcome, cue, outcome, acked_at)
-    if outcome.sent:
-        _watch_speech(state, bridge, cue)
+    if outcome.sent and events is not None:
+        _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue)))
+    else:
+        speech.close(events)
     return {
         **cue.summary(),
         "sent": outcome.sent,
@@ -77,51 +78,41 @@ async def stop(state: Any, session_id: int) -> dict[str, Any]:
 
 
 def audio_url(state: Any, cue: Cue) -> str:
-    """The URL the worker fetches the audio from; empty for a prompt not yet recorded (the
-    worker then only times the prompt by its estimated duration)."""
+    """The keyed URL the robot fetches the audio from (WAV for a Furhat, which cannot play
+    MP3); empty for a prompt not yet recorded (the worker then shows only lip-sync/text)."""
     if cue.audio is None:
         return ""
-    builder = getattr(state, "prompt_audio_url", None)
-    if callable(builder):
-        return str(builder(cue.actor, cue.audio))
-    base = str(state.settings.effective_public_url)
-    return f"{base}/media/prompts/{quote(cue.actor)}/{quote(cue.audio)}"
+    key = signing_key(cast(FastAPI, SimpleNamespace(state=state)))
+    path = media_path(key, cue.actor, cue.audio, wav=_driver(state, cue.booth) == "furhat")
+    return f"{state.settings.effective_public_url}{path}"
 
 
-def _watch_speech(state: Any, bridge: Any, cue: Cue) -> None:
-    """Log the worker's speech start/end for this play, in the background."""
-    waiter = getattr(bridge, "wait_for_speech", None)
-    if not callable(waiter):
-        return
-    tasks = _tasks(state)
-    task = asyncio.get_running_loop().create_task(_speech(state, waiter, cue))
-    tasks.add(task)
-    task.add_done_callback(tasks.discard)
+def _driver(state: Any, booth: str) -> str | None:
+    workers = getattr(worker_link.bridge_of(state), "workers", None)
+    if not callable(workers):
+        return None
+    info = workers().get(booth)
+    hello = getattr(info, "hello", None) or {}
+    return hello.get("driver") if isinstance(hello, dict) else None
 
 
-def _tasks(state: Any) -> set[asyncio.Task[None]]:
+def _logger(state: Any, cue: Cue) -> speech.OnSpeech:
+    async def log_speech(started: bool, worker_time: float | None) -> None:
+        await run_in_threadpool(
+            write, state, service.record_speech, cue, started, utcnow(), worker_time
+        )
+
+    return log_speech
+
+
+def _spawn(state: Any, work: Coroutine[Any, Any, None]) -> None:
+    """Run ``work`` in the background, keeping a reference so it is not collected."""
     tasks: set[asyncio.Task[None]] | None = getattr(state, "wizard_speech_tasks", None)
     if tasks is None:
         tasks = state.wizard_speech_tasks = set()
-    return tasks
-
-
-async def _speech(state: Any, waiter: Callable[..., Any], cue: Cue) -> None:
-    timeouts = {"start": SPEECH_START_TIMEOUT, "end": cue.duration + SPEECH_END_MARGIN}
-    for phase in ("start", "end"):
-        try:
-            answer = waiter(cue.booth, cue.prompt.id, phase, timeout=timeouts[phase])
-            worker_time = await answer if inspect.isawaitable(answer) else answer
-        except TimeoutError:
-            return
-        except Exception:
-            log.exception("waiting for speech %s of %s failed", phase, cue.prompt.id)
-            return
-        received = utcnow()
-        moment = float(worker_time) if isinstance(worker_time, int | float) else None
-        await run_in_threadpool(
-            write, state, service.record_speech, cue, phase == "start", received, moment
-        )
+    task = asyncio.get_running_loop().create_task(work)
+    tasks.add(task)
+    task.add_done_callback(tasks.discard)
 
 
 __all__ = ["Outcome", "audio_url", "play", "read", "stop", "write"]

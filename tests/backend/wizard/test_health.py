@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from chameleons.backend.wizard.health import HealthTracker, evaluate
 
+# The fields of the worker's heartbeat (chameleons.worker.hub.ControlHub.status).
 GOOD = {
     "input_fps": 59.8,
-    "tick_rate": 124.9,
-    "jitter_p99_ms": 0.4,
+    "tick_rate_hz": 124.9,
+    "jitter_ms": {"p50": 0.1, "p99": 0.4, "max": 0.9},
     "robot_connected": True,
     "speaking": False,
 }
@@ -21,7 +22,7 @@ def test_good_telemetry_passes_every_check() -> None:
 
 
 def test_each_failure_is_its_own_check() -> None:
-    bad = {**GOOD, "input_fps": 3.0, "tick_rate": 90.0, "jitter_p99_ms": 5.0}
+    bad = {**GOOD, "input_fps": 3.0, "tick_rate_hz": 90.0, "jitter_ms": {"p99": 5.0}}
     bad["robot_connected"] = False
     checks = evaluate(bad, age=0.5)
     failing = sorted(name for name, check in checks.items() if check.ok is False)
