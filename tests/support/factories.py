@@ -334,9 +334,7 @@ def _write_recording(
     directory: Path, session: Session, interaction: Interaction, stream: str, rng: random.Random
 ) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
-    path = (
-        directory / f"session-{session.id}" / f"interaction-{interaction.position}-{stream}.parquet"
-    )
+    path = directory / f"session-{session.id}" / f"interaction-{interaction.id}-{stream}.parquet"
     path.parent.mkdir(parents=True, exist_ok=True)
     frames = 60
     table = pa.table(

@@ -27,7 +27,7 @@ from chameleons.backend.models import (
     Session,
     Suggestion,
 )
-from chameleons.backend.withdrawal.files import delete_files, recording_file
+from chameleons.backend.withdrawal.files import delete_files, files_of, recording_file
 
 WITHDRAWN_EVENT = "participant.withdrawn"
 
@@ -71,12 +71,13 @@ def withdraw_participant(
     interaction_ids = list(
         db.scalars(select(Interaction.id).where(Interaction.session_id.in_(session_ids)))
     )
-    files = [
+    indexed = [
         recording_file(data_dir, stored)
         for stored in db.scalars(
             select(Recording.path).where(Recording.interaction_id.in_(interaction_ids))
         )
     ]
+    files = files_of(indexed, interaction_ids, data_dir)
     row = _plan_row_of(db, participant, session_ids)
     _delete_rows(db, participant, session_ids, interaction_ids)
     if row is not None:

@@ -182,3 +182,26 @@ def test_withdraw_api_needs_pi_and_csrf(client: TestClient, engine: Engine) -> N
     assert response.json() == {"plan_row": 1, "sessions": 1, "files_deleted": 0}
     again = client.post(url, json={"confirm": "P001"}, headers={"X-CSRF-Token": token})
     assert again.status_code == 404
+
+
+def test_journals_and_unindexed_worker_files_go_too(
+    db_session: DbSession, populated: PopulatedStudy, tmp_path: Path
+) -> None:
+    data_dir = tmp_path / "data"
+    ids = ids_of(db_session, "P001")["interaction_id"]
+    indexed = [
+        p for p in populated.recording_paths if f"session-{populated.session_ids[0]}" in str(p)
+    ]
+    journal = indexed[0].with_name(indexed[0].name + ".journal")
+    journal.write_bytes(b"crash leftover")
+    first = min(ids)
+    unindexed = data_dir / "recordings" / "booth-1" / f"interaction-{first}-part2-agent.parquet"
+    unindexed.parent.mkdir(parents=True)
+    unindexed.write_bytes(b"never indexed")
+    unrelated = unindexed.with_name(f"interaction-{first}0-part2-agent.parquet")
+    unrelated.write_bytes(b"someone else")
+    result = withdraw_participant(db_session, populated.study_id, "P001", "P001", data_dir)
+    assert result.files_deleted == len(indexed) + 2
+    assert not journal.exists()
+    assert not unindexed.exists()
+    assert unrelated.exists()
