@@ -1,7 +1,21 @@
-"""The wizard's JSON API: create and drive a session. Any logged-in staff member may.
+"""The wizard's JSON API: create and drive a session. Any logged-in staff member may;
+unsafe methods need the ``X-CSRF-Token`` header.
+
+    POST /api/sessions                {study_id, participant_code?, booth?, rehearsal?} -> 201
+    GET  /api/sessions?study_id=&state=                                  -> [summary]
+    GET  /api/sessions/{id}                                              -> snapshot
+    POST /api/sessions/{id}/start     {worker_time?}                     -> snapshot
+    POST /api/sessions/{id}/advance   {position, to, worker_time?}       -> snapshot
+    POST /api/sessions/{id}/decide    {position, index, accepted, worker_time?} -> snapshot
+    POST /api/sessions/{id}/undo      {position, index}                  -> snapshot
+    POST /api/sessions/{id}/condition {condition, position?, worker_time?} -> snapshot
+    POST /api/sessions/{id}/events    {kind, payload?, position?, worker_time?} -> 201 event
+    GET  /api/sessions/{id}/events?after=&limit=                         -> [event]
+    GET  /api/sessions/{id}/phone-qr.svg                                 -> image/svg+xml
+    WS   /ws/sessions/{id}            (see ``live.py``)
 
 Every change answers with the session's full snapshot (see ``snapshot.py``); an illegal
-step answers 409 with a sentence saying why and what is allowed now.
+step answers 409 with a sentence saying why and what is allowed now, bad input 422.
 """
 
 from __future__ import annotations

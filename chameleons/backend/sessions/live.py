@@ -2,7 +2,8 @@
 
 On connect: ``{"type": "snapshot", "session": ...}``. Then, for every committed change, each
 new event as ``{"type": "event", "event": ...}`` followed by a fresh snapshot; anything else
-published on the session's channel (e.g. worker telemetry) is forwarded as it is.
+published on the session's channel with ``hub.publish(session_channel(id), message)``
+(e.g. worker telemetry) is forwarded as it is, without a snapshot.
 """
 
 from __future__ import annotations
@@ -72,8 +73,10 @@ async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
             for message in messages:
                 if message.get("type") != "resync":
                     await live.send_json(websocket, message)
-            snapshot = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
-            await live.send_json(websocket, snapshot)
+            # Telemetry and other pass-through messages change nothing stored: no snapshot.
+            if any(m.get("type") in ("event", "resync") for m in messages):
+                snapshot = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
+                await live.send_json(websocket, snapshot)
             return False
 
         await live.serve(websocket, subscription, on_change)

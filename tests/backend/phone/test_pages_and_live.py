@@ -9,6 +9,7 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
+from chameleons.backend.events.hub import session_channel
 from tests.backend.sessions.conftest import refused
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot, run_session
 
@@ -106,6 +107,9 @@ def test_the_wizard_socket_needs_login_and_streams_events_and_snapshots(
         assert event["event"]["kind"] == "session.started"
         snapshot = _until(socket, lambda m: m["type"] == "snapshot")
         assert snapshot["session"]["state"] == "running"
+        channel = session_channel(wizard.session_id)
+        app.state.live_hub.publish(channel, {"type": "telemetry", "fps": 60})
+        assert socket.receive_json() == {"type": "telemetry", "fps": 60}
 
 
 def _until(socket: Any, matches: Any, limit: int = 20) -> dict[str, Any]:
