@@ -7,14 +7,12 @@ the worker path (ack and speech latencies) needs the lead's bridge wiring.
 
 from __future__ import annotations
 
-import random
 import re
 
 import pytest
 from playwright.sync_api import Page, expect
 
 from tests.e2e.wizard.conftest import Console
-from tests.support.bots import answers_for
 
 pytestmark = pytest.mark.browser
 
@@ -76,33 +74,34 @@ def test_prompts_play_by_click_shortcut_and_search(console: Console) -> None:
     assert len(played(console)) == 5, "Space stops; it must not also press a focused button"
 
 
-def test_a_full_interaction_with_the_participant(console: Console) -> None:
-    page = console.page
+def test_a_full_interaction_with_the_participant(console: Console, phone_page: Page) -> None:
+    page, phone = console.page, phone_page
+    expect(phone.locator("#connection")).to_have_text("Connected")
+    expect(page.locator("#phone-state")).to_have_text("phone connected")
     start_discussion(page)
+    robot = console.wizard.interaction(1)["robot_name"]
+    expect(phone.get_by_role("heading", name=f"Listen to {robot}")).to_be_visible()
     page.keyboard.press("Control+Enter")
     expect(page.locator("#bar-step")).to_have_text("ranking")
     expect(page.locator("#primary-action")).to_contain_text("Waiting for the participant's ranking")
 
-    presented = list(console.wizard.interaction(1)["presented_order"])
-    ranking = list(reversed(presented))
-    console.phone.submit_ranking(1, ranking)
+    ranking = rank_on_the_phone(console, phone)
     names = {item["id"]: item["name"] for item in console.wizard.interaction(1)["items"]}
     expect(page.locator("#live-ranking li")).to_have_count(5)
     expect(page.locator("#live-ranking li").first).to_have_text(names[ranking[0]])
+    expect(page.locator("#timeline")).to_contain_text("Phone: ranking submitted")
 
     page.keyboard.press("Control+Enter")
     panel = page.locator("#negotiation-body")
     expect(panel).to_contain_text("Suggestion 1 of 3")
-    suggested = page.locator("#suggestion-prompts button.pb")
-    expect(suggested.first).to_be_visible()
+    expect(page.locator("#suggestion-prompts button.pb").first).to_be_visible()
     page.keyboard.press("m")
-    phrasing = expect_played(console, 1)
-    assert phrasing["payload"]["stage"] == "suggestion"  # type: ignore[index]
+    assert expect_played(console, 1)["payload"]["stage"] == "suggestion"  # type: ignore[index]
 
     page.keyboard.press("a")
     expect(panel).to_contain_text("Suggestion 2 of 3")
-    after_accept = console.wizard.refresh()["interactions"][0]["current_ranking"]
-    assert console.phone.state()["ranking"] == after_accept
+    phone_shows_the_current_ranking(console, phone)
+    expect(phone.locator("#current-ranking li.moved").first).to_be_visible()
     expect(page.locator("#live-ranking li.moved").first).to_be_visible()
 
     page.keyboard.press("d")
@@ -118,17 +117,17 @@ def test_a_full_interaction_with_the_participant(console: Console) -> None:
     expect(page.locator("#negotiation-body li.no")).to_have_count(1)
     decisions = [s["accepted"] for s in console.wizard.refresh()["interactions"][0]["suggestions"]]
     assert decisions == [True, False, True]
-    assert console.phone.state()["ranking"] == console.wizard.interaction(1)["current_ranking"]
+    phone_shows_the_current_ranking(console, phone)
 
     switch_to_an_unplanned_condition(console)
 
     page.keyboard.press("Control+Enter")
     expect(page.locator("#bar-step")).to_have_text("questionnaire")
-    rng = random.Random(5)
-    page_one = console.phone.state()["questionnaire"]
-    console.phone.submit_questionnaire(1, page_one["id"], answers_for(page_one, rng))
+    expect(phone.get_by_role("heading", name=f"Questions about {robot}")).to_be_visible()
+    answer_page(phone, 1)
     expect(page.locator("#participant-view")).to_contain_text("1 of 4 done")
-    console.phone.answer_questionnaires(1, rng)
+    for part in (2, 3, 4):
+        answer_page(phone, part)
     expect(page.locator("#primary-action")).to_contain_text("Start interaction 2")
     expect(page.locator("#timeline li[data-kind='questionnaire.submitted']")).to_have_count(4)
 
@@ -136,6 +135,38 @@ def test_a_full_interaction_with_the_participant(console: Console) -> None:
     page.reload()
     timeline_holds_every_event(console)
     expect(page.locator("#bar-position")).to_have_text("2 of 3")
+
+
+def rank_on_the_phone(console: Console, phone: Page) -> list[str]:
+    """The participant moves the last item up once and submits; returns the ranking."""
+    expect(phone.get_by_role("heading", name="Rank the items")).to_be_visible()
+    rows = phone.locator("#ranking-list li")
+    before = rows.evaluate_all("els => els.map(e => e.dataset.id)")
+    last = console.wizard.interaction(1)["items"][-1]["name"]
+    phone.get_by_role("button", name=f"Move {last} up").click()
+    phone.get_by_role("button", name="Submit my ranking").click()
+    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    ranking = [*before[:-2], before[-1], before[-2]]
+    assert console.wizard.refresh()["interactions"][0]["initial_ranking"] == ranking
+    return ranking
+
+
+def phone_shows_the_current_ranking(console: Console, phone: Page) -> None:
+    current = console.wizard.refresh()["interactions"][0]["current_ranking"]
+    rows = phone.locator("#current-ranking li")
+    for index, item in enumerate(current):
+        expect(rows.nth(index)).to_have_attribute("data-id", item)
+
+
+def answer_page(phone: Page, part: int) -> None:
+    expect(phone.locator(".progress-label")).to_have_text(f"Part {part} of 4")
+    for field in phone.locator("fieldset.question").all():
+        if field.locator("textarea").count():
+            field.locator("textarea").fill("It was fine.")
+        else:
+            field.locator("label.point").nth(3).click()
+    phone.get_by_role("button", name=re.compile(r"^Save")).click()
+    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
 
 
 def switch_to_an_unplanned_condition(console: Console) -> None:
