@@ -1,0 +1,80 @@
+"""The console with a real bridge and a real worker (null driver): a click is acknowledged,
+the robot's speech start comes back, and both latencies show on the timeline; the health
+strip shows the worker's heartbeat."""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import AsyncIterator, Iterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fastapi import FastAPI
+from playwright.sync_api import expect
+
+from chameleons.worker.runtime import Worker, WorkerConfig
+from tests.e2e.wizard.conftest import Console
+
+pytestmark = pytest.mark.browser
+Bridge = pytest.importorskip("chameleons.backend.bridge").Bridge
+ANY_PORT = "tcp://127.0.0.1:*"
+
+
+@pytest.fixture
+def app(app: FastAPI) -> FastAPI:
+    """The app with a bridge started in its own lifespan (on the server's event loop), the
+    way the embedded setup runs it."""
+    original = app.router.lifespan_context
+
+    @asynccontextmanager
+    async def with_bridge(application: FastAPI) -> AsyncIterator[Any]:
+        bridge = Bridge(ANY_PORT, ANY_PORT)
+        await bridge.start()
+        application.state.bridge = bridge
+        try:
+            async with original(application) as state:
+                yield state
+        finally:
+            await bridge.stop()
+
+    app.router.lifespan_context = with_bridge
+    return app
+
+
+@pytest.fixture
+def worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[Worker]:
+    bridge = app.state.bridge
+    config = WorkerConfig(booth=console.wizard.snapshot["booth"], driver="null",
+                          livelink_port=None, facecapturex_port=None, data_dir=tmp_path,
+                          command_endpoint=bridge.command_endpoint,
+                          telemetry_endpoint=bridge.telemetry_endpoint)  # fmt: skip
+    with Worker(config) as running:
+        deadline = time.monotonic() + 10
+        while config.booth not in bridge.workers():  # polls the hello; not a fixed wait
+            assert time.monotonic() < deadline, "the worker did not say hello"
+            time.sleep(0.02)
+        yield running
+
+
+@pytest.mark.usefixtures("worker")
+def test_a_click_shows_its_ack_and_speech_latency(console: Console) -> None:
+    page = console.page
+    expect(page.locator("#health .chip[data-check='worker']")).to_have_attribute(
+        "data-state", "ok", timeout=15_000
+    )
+    page.keyboard.press("y")
+    played = page.locator("#timeline li[data-kind='prompt.played']")
+    expect(played).to_have_count(1)
+    expect(played.locator(".tl-latency")).to_have_text(
+        re.compile(r"^ack \d+(\.\d)? ms · speech \d+(\.\d)? ms$")
+    )
+    expect(page.locator("#timeline li[data-kind='prompt.acked']")).to_have_count(1)
+    expect(page.locator("#timeline li[data-kind='prompt.speech_start']")).to_have_count(1)
+    expect(page.locator("#timeline li[data-kind='prompt.speech_end']")).to_have_count(1)
+    expect(page.locator("#timeline li[data-kind='prompt.not_sent']")).to_have_count(0)
+    expect(page.locator("#now-playing")).to_have_attribute("data-phase", "finished")
+    kinds = [e["kind"] for e in console.events() if str(e["kind"]).startswith("prompt.")]
+    assert kinds == ["prompt.played", "prompt.acked", "prompt.speech_start", "prompt.speech_end"]
