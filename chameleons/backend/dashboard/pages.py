@@ -13,6 +13,7 @@ from chameleons.backend.dashboard.context import page_context, study_or_404
 from chameleons.backend.dashboard.progress import live_balance, plan_progress
 from chameleons.backend.dashboard.sessions import session_detail, session_summaries
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
+from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.withdrawal.files import recording_file
 from chameleons.experiment.study import study_from_config
@@ -48,7 +49,13 @@ def overview_page(
     study: int | None = None,
     include_rehearsal: bool = False,
 ) -> Response:
-    found = study_or_404(db, study)
+    try:
+        found = resolve_study(db, study)
+    except StudyNotFoundError as exc:
+        context = page_context(request, user, None, "overview", message=str(exc))
+        return templates.TemplateResponse(
+            request, "pi/no_study.html", context, status_code=status.HTTP_404_NOT_FOUND
+        )
     context = page_context(
         request, user, found, "overview", **_overview(db, found, include_rehearsal)
     )

@@ -82,3 +82,4 @@ def test_without_a_study_the_overview_says_so(client: TestClient, engine: Engine
     response = client.get("/pi")
     assert response.status_code == 404
     assert "there is no study yet" in response.text
+    assert 'href="/studies"' in response.text
