@@ -32,7 +32,23 @@ BOOTH = "booth-1"
 
 
 def run(coroutine: Any) -> Any:
-    return asyncio.run(coroutine)
+    """``asyncio.run`` in a thread of its own (Playwright's sync API, when browser tests ran
+    first in this process, leaves an event loop running in the main thread)."""
+    result: list[Any] = []
+    errors: list[BaseException] = []
+
+    def target() -> None:
+        try:
+            result.append(asyncio.run(coroutine))
+        except BaseException as exc:
+            errors.append(exc)
+
+    thread = threading.Thread(target=target)
+    thread.start()
+    thread.join(timeout=30)
+    if errors:
+        raise errors[0]
+    return result[0]
 
 
 def test_late_joiners_get_the_face_and_last_frame_first() -> None:

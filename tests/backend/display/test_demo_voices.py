@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import soundfile
 
-from chameleons.prompts import load_catalogues
+from chameleons.prompts import Catalogue, load_catalogues
 from chameleons.worker.lipsync import LIPSYNC_NAMES, load_lipsync
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -82,18 +82,18 @@ def test_the_language_variant_is_kept(espeak: object) -> None:
     assert not np.array_equal(plain.samples[:4000], female.samples[:4000])
 
 
-def demo_catalogues() -> dict[str, object]:
+def demo_catalogues() -> dict[str, Catalogue]:
     catalogues = load_catalogues(PROMPTS)  # also checks every listed file exists
-    if not all(p.audio for c in catalogues.values() for p in c.prompts):  # type: ignore[attr-defined]
+    if not all(p.audio for c in catalogues.values() for p in c.prompts):
         pytest.skip("the demo voices are not generated yet")
-    return catalogues  # type: ignore[return-value]
+    return catalogues
 
 
 def test_every_demo_prompt_speaks_compactly() -> None:
     catalogues = demo_catalogues()
     assert len(catalogues) == 4
     for catalogue in catalogues.values():
-        assert all(p.lipsync for p in catalogue.prompts)  # type: ignore[attr-defined]
+        assert all(p.lipsync for p in catalogue.prompts)
     total = sum(path.stat().st_size for path in PROMPTS.glob("*/audio/*.mp3"))
     assert total < MAX_DEMO_AUDIO_BYTES
 
@@ -102,7 +102,7 @@ def test_demo_curves_last_as_long_as_their_audio() -> None:
     catalogues = demo_catalogues()
     rng = random.Random(3)
     for actor, catalogue in catalogues.items():
-        for prompt in rng.sample(list(catalogue.prompts), 3):  # type: ignore[attr-defined]
+        for prompt in rng.sample(list(catalogue.prompts), 3):
             audio = soundfile.info(PROMPTS / actor / str(prompt.audio))
             curves = load_lipsync(PROMPTS / actor / str(prompt.lipsync))
             assert audio.samplerate == 16000
