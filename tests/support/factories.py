@@ -86,12 +86,13 @@ def populate(
     recordings_dir: Path | None = None,
     spec: StudySpec | None = None,
     effects: dict[str, float] | None = None,
+    name: str | None = None,
 ) -> PopulatedStudy:
     """A study with ``participants`` completed sessions (codes P001...), then ``rehearsals``
     rehearsal ones (R001..., on the next rows without holding them), and ``free_rows``
     plan rows nobody used."""
     spec = spec or load_default_study()
-    study = create_study(db, spec)
+    study = create_study(db, spec, name)
     rows = create_plan(db, study, spec, participants + rehearsals + free_rows)
     rng = random.Random(seed)
     result = PopulatedStudy(study_id=study.id, spec=spec)

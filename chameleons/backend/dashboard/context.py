@@ -5,7 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import HTTPException, Request, status
+from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
+from sqlalchemy.orm import object_session
 
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import StaffUser, Study
@@ -32,7 +34,10 @@ def page_context(
     request: Request, user: StaffUser, study: Study | None, section: str, **extra: Any
 ) -> dict[str, Any]:
     message = request.session.pop(FLASH_KEY, None)
+    db = object_session(study) if study is not None else None
+    studies = list(db.scalars(select(Study).order_by(Study.id))) if db is not None else []
     return {
+        "studies": studies,
         "user": user,
         "study": study,
         "study_query": study_query(study),

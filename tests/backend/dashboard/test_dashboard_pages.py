@@ -83,3 +83,19 @@ def test_without_a_study_the_overview_says_so(client: TestClient, engine: Engine
     assert response.status_code == 404
     assert "there is no study yet" in response.text
     assert 'href="/studies"' in response.text
+
+
+def test_several_studies_can_be_switched(client: TestClient, engine: Engine) -> None:
+    from chameleons.experiment.study import load_default_study
+
+    for db in session_scope(build_sessionmaker(engine)):
+        first = populate(db, 1)
+        second = populate(db, 2, spec=load_default_study(), name="Replication")
+    add_user(engine, "pia", "correct horse", "pi")
+    login(client, "pia", "correct horse")
+    newest = client.get("/pi/analysis")
+    assert f"Study {second.study_id}: Replication" in newest.text
+    assert f'href="/pi/analysis?study={first.study_id}"' in newest.text
+    older = client.get("/pi", params={"study": first.study_id}).text
+    assert 'data-participant="P002"' not in older
+    assert client.get("/pi", params={"study": 999}).status_code == 404
