@@ -9,13 +9,14 @@ from fastapi import Depends, Request
 from fastapi.templating import Jinja2Templates
 from sqlalchemy.orm import Session
 
-from chameleons.backend.db import session_scope
+from chameleons.backend.events.unit_of_work import write_scope
 from chameleons.settings import Settings
 
 
 def get_db(request: Request) -> Iterator[Session]:
-    """The one place that commits: the request's unit of work commits or rolls back here."""
-    yield from session_scope(request.app.state.sessionmaker)
+    """The one place that commits: the request's unit of work commits or rolls back here,
+    and events recorded in it reach the live hub after the commit."""
+    yield from write_scope(request.app.state.sessionmaker, request.app.state.live_hub)
 
 
 def get_settings(request: Request) -> Settings:
@@ -28,6 +29,8 @@ def get_templates(request: Request) -> Jinja2Templates:
     return templates
 
 
-DbSession = Annotated[Session, Depends(get_db)]
+# scope="function": the commit happens before the response is sent, so a client told
+# "saved" can rely on it (the default scope would commit after the response went out).
+DbSession = Annotated[Session, Depends(get_db, scope="function")]
 AppSettings = Annotated[Settings, Depends(get_settings)]
 Templates = Annotated[Jinja2Templates, Depends(get_templates)]
