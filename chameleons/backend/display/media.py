@@ -9,6 +9,11 @@ WAV decoded on first request and cached under ``<data_dir>/media-cache``. The pl
 command's URL (:func:`prompt_audio_url_builder`) is that WAV: a Furhat needs WAV
 (``request.speak.audio``) and every browser plays PCM WAV too, so one URL serves both
 robots. Staff may fetch without the key.
+
+Browsers: Chromium, Firefox and Safari play both the MP3 and the WAV. Safari (and any
+browser without ``--autoplay-policy=no-user-gesture-required``) plays sound only after a
+user gesture on the page: click or tap the booth screen once after opening the display;
+the page then reuses that unlocked audio element for every prompt.
 """
 
 from __future__ import annotations

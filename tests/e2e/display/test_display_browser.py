@@ -193,6 +193,21 @@ def test_stop_ends_the_audio(
     assert (end["event"], end["reason"]) == ("end", "stopped")
 
 
+def test_a_new_prompt_interrupts_the_one_playing(
+    app: FastAPI, display_page: Page, channel: DisplayChannel,
+    reports: queue.Queue[tuple[str, Message]],
+) -> None:  # fmt: skip
+    first = play(app, channel, "long", lipsync=False)
+    assert next_report(reports, "speech")["event"] == "start"
+    second = play(app, channel, "short", lipsync=False)
+    events = [next_report(reports, "speech") for _ in range(3)]
+    assert [(e["play_id"], e["event"]) for e in events] == [
+        (first, "end"), (second, "start"), (second, "end"),
+    ]  # fmt: skip
+    assert events[0]["reason"] == "interrupted"
+    assert events[2]["reason"] == "ended"
+
+
 def test_missing_audio_is_reported_as_an_error_end(
     app: FastAPI, display_page: Page, channel: DisplayChannel,
     reports: queue.Queue[tuple[str, Message]],

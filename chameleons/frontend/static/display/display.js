@@ -147,29 +147,41 @@
   }
 
   // ---- audio and lip-sync -----------------------------------------------------------
+  // One audio element for every prompt: Safari lets a page play sound only from an element
+  // a user gesture has started once (see unlockAudio), Chromium in a kiosk needs
+  // --autoplay-policy=no-user-gesture-required or one click on the page.
+  const audio = new Audio();
+  audio.preload = "auto";
+  const SILENCE = "data:audio/wav;base64,UklGRiQAAABXQVZFZm10IBAAAAABAAEAQB8AAEAfAAABAAgAZGF0YQAAAAA=";
+  audio.addEventListener("playing", () => {
+    const p = playback;
+    if (!p || p.started || p.done) return;
+    p.started = true;
+    send({ type: "speech", event: "start", play_id: p.id, prompt_id: p.prompt,
+           audio_delay_ms: performance.now() - p.received }, true);
+  });
+  audio.addEventListener("ended", () => { if (playback && playback.started) finish(playback, "ended"); });
+  audio.addEventListener("error", () => { if (playback && audio.src === playback.url) finish(playback, "error"); });
+
+  function unlockAudio() {
+    if (playback) return;
+    audio.src = SILENCE;
+    audio.play().then(() => audio.pause()).catch(() => {});
+  }
+
   function play(m, now) {
     if (playback) finish(playback, "interrupted");
-    const audio = new Audio();
-    audio.preload = "auto";
-    const p = { id: m.play_id, prompt: m.prompt_id, audio, curves: null, received: now,
-                started: false, done: false, clock: null };
+    const p = { id: m.play_id, prompt: m.prompt_id, url: new URL(m.url, location.href).href,
+                curves: null, received: now, started: false, done: false, clock: null };
     playback = p;
-    audio.addEventListener("playing", () => {
-      if (p.started || p.done) return;
-      p.started = true;
-      send({ type: "speech", event: "start", play_id: p.id, prompt_id: p.prompt,
-             audio_delay_ms: performance.now() - p.received }, true);
-    });
-    audio.addEventListener("ended", () => finish(p, "ended"));
-    audio.addEventListener("error", () => finish(p, "error"));
-    audio.src = m.url;
+    audio.src = p.url;
     const curves = m.lipsync_url
       ? fetch(m.lipsync_url).then((r) => (r.ok ? r.text() : Promise.reject(new Error(r.status))))
           .then((text) => LipSync.parse(text, FaceRenderer.INDEX))
           .catch((err) => { note("lip-sync unavailable: " + err); return null; })
       : Promise.resolve(null);
     curves.then((c) => {
-      if (p.done) return;
+      if (p.done) return undefined;
       p.curves = c;
       return audio.play();
     }).catch((err) => finish(p, err && err.name === "NotAllowedError" ? "autoplay_blocked" : "error"));
@@ -178,16 +190,18 @@
   function finish(p, reason) {
     if (p.done) return;
     p.done = true;
-    p.audio.pause();
-    if (playback === p) playback = null;
+    if (playback === p) {
+      playback = null;
+      audio.pause();
+    }
     send({ type: "speech", event: "end", play_id: p.id, prompt_id: p.prompt, reason }, true);
   }
 
   /** The audio clock, extrapolated between the element's coarse currentTime updates. */
   function audioTime(p, now) {
-    const t = p.audio.currentTime;
+    const t = audio.currentTime;
     if (!p.clock || p.clock.t !== t) p.clock = { t, at: now };
-    return p.audio.paused ? t : p.clock.t + (now - p.clock.at) / 1000;
+    return audio.paused ? t : p.clock.t + (now - p.clock.at) / 1000;
   }
 
   // ---- painting ---------------------------------------------------------------------
@@ -253,8 +267,10 @@
     if (debug) console.warn("[display]", text);
   }
 
-  // Any click or key unlocks sound in browsers without the autoplay flag; double-click
+  // A click or key unlocks sound in browsers without the autoplay flag; double-click
   // toggles full screen; the wake lock keeps the booth screen on.
+  document.addEventListener("pointerdown", unlockAudio, { once: true });
+  document.addEventListener("keydown", unlockAudio, { once: true });
   document.addEventListener("dblclick", () => {
     if (document.fullscreenElement) document.exitFullscreen(); else document.documentElement.requestFullscreen().catch(() => {});
   });
