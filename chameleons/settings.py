@@ -47,9 +47,15 @@ class Settings(BaseSettings):
     worker_command_endpoint: str = "tcp://127.0.0.1:5555"
     worker_telemetry_endpoint: str = "tcp://127.0.0.1:5556"
 
+    # The server's ZeroMQ link to workers; off only for tests that need no worker.
+    bridge_enabled: bool = True
+    # Embedded setup (`chameleons demo`): the server runs and supervises a local worker.
+    embedded_worker: bool = False
+    embedded_worker_booth: str = "booth-1"
+
     # Face capture inputs of a worker.
-    livelink_port: int = Field(default=11111, ge=1, le=65535)
-    facecapturex_port: int = Field(default=19977, ge=1, le=65535)
+    livelink_port: int = Field(default=11111, ge=0, le=65535)  # 0: any free port
+    facecapturex_port: int = Field(default=19977, ge=0, le=65535)
     capture_bind_host: str = "0.0.0.0"  # the iPhone is on the LAN by design
     # Unit of Live Link head/eye rotations on the wire: "degrees/180" (value * 180), "radians",
     # "degrees", or a plain factor. Calibrate: turn the head ~45 deg; the raw HeadYaw reads

@@ -106,6 +106,7 @@ def settings(database_url: str, tmp_path: Path) -> Settings:
         secret_key=secrets.token_urlsafe(32),
         login_max_failures=3,
         login_lockout_seconds=60,
+        bridge_enabled=False,  # tests that need a worker start their own bridge
         _env_file=None,
     )
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import secrets
 from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
+from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
 
 from fastapi import FastAPI, Request
@@ -20,6 +20,7 @@ from chameleons.backend.auth import pages as auth_pages
 from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.bridge.wiring import worker_link
 from chameleons.backend.dashboard import pages as dashboard_pages
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.display import endpoints as display_endpoints
@@ -56,8 +57,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     engine = build_engine(settings.effective_database_url)
 
     @asynccontextmanager
-    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
-        yield
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        async with AsyncExitStack() as stack:
+            if settings.bridge_enabled:
+                await stack.enter_async_context(worker_link(app, settings))
+            yield
         engine.dispose()
 
     app = FastAPI(title="Mechanical Chameleons", version=__version__, lifespan=lifespan)
@@ -66,6 +70,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.sessionmaker = build_sessionmaker(engine)
     app.state.templates = build_templates()
     app.state.live_hub = LiveHub()
+    app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
     )

@@ -1,0 +1,60 @@
+"""Starts the app's link to its workers for the lifetime of the server.
+
+The bridge binds its ZeroMQ sockets (loopback unless configured), relays the virtual
+robot's frames to the display pages and the pages' speech events back to the worker, and,
+in the embedded setup (``embedded_worker``), supervises a local worker process.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from chameleons.backend.bridge.bridge import Bridge
+from chameleons.backend.bridge.supervisor import WorkerSupervisor
+from chameleons.backend.display.channel import get_display_channel
+from chameleons.backend.display.relay import forward_speech_events, relay_envelope
+from chameleons.settings import Settings
+from chameleons.worker.envelope import Message
+
+log = logging.getLogger(__name__)
+
+
+def embedded_worker_args(settings: Settings) -> list[str]:
+    """The local worker of the embedded setup: the virtual robot, the capture ports set."""
+    return [
+        "--driver", "virtual",
+        "--livelink-port", str(settings.livelink_port),
+        "--facecapturex-port", str(settings.facecapturex_port),
+    ]  # fmt: skip
+
+
+@asynccontextmanager
+async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]:
+    bridge = Bridge.from_settings(settings)
+    await bridge.start()
+    app.state.bridge = bridge
+    channel = get_display_channel(app)
+
+    def relay(message: Message) -> None:
+        relay_envelope(channel, message)
+
+    bridge.add_listener("display.", relay)
+    forward_speech_events(channel, bridge.send_command)
+    supervisor: WorkerSupervisor | None = None
+    if settings.embedded_worker:
+        supervisor = WorkerSupervisor(
+            bridge, settings.embedded_worker_booth, embedded_worker_args(settings)
+        )
+        await supervisor.start()
+        log.info("supervising a local worker for %s", settings.embedded_worker_booth)
+    try:
+        yield bridge
+    finally:
+        if supervisor is not None:
+            await supervisor.stop()
+        app.state.bridge = None
+        await bridge.stop()
