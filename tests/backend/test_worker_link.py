@@ -56,16 +56,17 @@ async def _first_telemetry(bridge: Any) -> dict[str, Any]:
 def test_embedded_worker_heartbeats_and_drives_the_display(embedded_settings: Settings) -> None:
     app = create_app(embedded_settings)
     with TestClient(app) as client:
-        bridge = app.state.bridge
+        bridge, portal = app.state.bridge, client.portal
         assert bridge is not None
+        assert portal is not None
         assert bridge.command_endpoint.startswith("tcp://127.0.0.1:")  # loopback only
-        telemetry = client.portal.call(_first_telemetry, bridge)
+        telemetry = portal.call(_first_telemetry, bridge)
         assert BOOTH in bridge.workers()
         assert "tick_rate" in json.dumps(telemetry)
         token = display_token(signing_key(app), BOOTH)
         with client.websocket_connect(f"/ws/display/{BOOTH}?token={token}") as ws:
             assert ws.receive_json()["type"] == "hello"
-            ack = client.portal.call(bridge.send_command, BOOTH, "set_face", {"face_id": "face-3"})
+            ack = portal.call(bridge.send_command, BOOTH, "set_face", {"face_id": "face-3"})
             assert ack.ok
             for _ in range(2000):  # face/head frames stream meanwhile; bounded read
                 message = ws.receive_json()
