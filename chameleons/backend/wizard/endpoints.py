@@ -15,7 +15,7 @@ from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.dependencies import DbSession
 from chameleons.backend.studies.errors import http_errors
-from chameleons.backend.wizard import layout, playback, repository
+from chameleons.backend.wizard import layout, playback, repository, robot
 from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
 from chameleons.backend.wizard.console_state import console_state
 
@@ -113,3 +113,11 @@ async def play_prompt(
 async def stop_prompt(session_id: int, request: Request, _user: CurrentStaff) -> dict[str, Any]:
     with http_errors():
         return await playback.stop(request.app.state, session_id)
+
+
+@router.post("/sessions/{session_id}/robot/apply", dependencies=WRITE)
+async def apply_to_robot(session_id: int, request: Request, _user: CurrentStaff) -> dict[str, Any]:
+    """Send the current interaction's condition (behaviour) and face to the booth's worker;
+    logged as ``robot.applied`` or, with the reasons, ``robot.not_applied``."""
+    with http_errors():
+        return await robot.apply(request.app.state, session_id)

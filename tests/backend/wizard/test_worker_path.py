@@ -112,3 +112,36 @@ def test_a_bridge_without_the_booth_s_worker_says_unreachable(
     assert result["reason"] == "unreachable"
     assert "unreachable" in result["detail"]
     assert prompt_events(wizard)["prompt.not_sent"]["payload"]["reason"] == "unreachable"
+
+
+@pytest.mark.usefixtures("worker")
+def test_the_robot_is_set_to_the_interaction_s_condition_and_face(
+    wizard: WizardBot, bridge: Any
+) -> None:
+    wizard.switch_condition("copy", 1)
+    result = wizard.staff.post(f"{api(wizard)}/robot/apply")
+    assert result["kind"] == "robot.applied", result
+    assert (result["condition"], result["face"]) == ("copy", wizard.interaction(1)["face"])
+    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    assert bridge.state(BOOTH).face == {"face_id": wizard.interaction(1)["face"]}
+    events = wizard.staff.get(f"/api/sessions/{wizard.session_id}/events")
+    assert events[-1]["kind"] == "robot.applied"
+
+
+@pytest.mark.usefixtures("worker")
+def test_a_refusal_by_the_worker_is_logged_with_its_reason(wizard: WizardBot) -> None:
+    wizard.switch_condition("natural", 1)
+    result = wizard.staff.post(f"{api(wizard)}/robot/apply")
+    assert result["kind"] == "robot.not_applied"
+    assert result["behaviour"]["reason"] == "bad_behaviour"
+    assert "natural needs a 'path'" in result["behaviour"]["detail"]
+    assert result["face_result"]["sent"] is True
+
+
+def test_without_a_worker_the_robot_set_up_is_logged_as_not_applied(
+    bridge: Any, wizard: WizardBot
+) -> None:
+    result = wizard.staff.post(f"{api(wizard)}/robot/apply")
+    assert result["kind"] == "robot.not_applied"
+    assert result["behaviour"]["reason"] == "unreachable"
+    assert result["face_result"]["reason"] == "unreachable"

@@ -36,6 +36,9 @@ def start_discussion(page: Page) -> None:
     expect(primary).to_contain_text("Start interaction 1")
     page.keyboard.press("Control+Enter")
     expect(page.locator("#bar-step")).to_have_text("discussion")
+    # Starting the interaction sets the robot up; without a worker that is logged as failed.
+    expect(page.locator("#timeline li[data-kind='robot.not_applied']")).to_have_count(1)
+    expect(page.locator("#flash")).to_contain_text("Robot not set")
 
 
 def test_prompts_play_by_click_shortcut_and_search(console: Console) -> None:

@@ -78,3 +78,21 @@ def test_a_click_shows_its_ack_and_speech_latency(console: Console) -> None:
     expect(page.locator("#now-playing")).to_have_attribute("data-phase", "finished")
     kinds = [e["kind"] for e in console.events() if str(e["kind"]).startswith("prompt.")]
     assert kinds == ["prompt.played", "prompt.acked", "prompt.speech_start", "prompt.speech_end"]
+
+
+@pytest.mark.usefixtures("worker")
+def test_starting_an_interaction_sets_the_robot_up(console: Console) -> None:
+    page = console.page
+    console.wizard.switch_condition("copy", 1)  # "natural" would need a recording to replay
+    primary = page.locator("#primary-action")
+    expect(primary).to_contain_text("Start the session")
+    page.keyboard.press("Control+Enter")
+    expect(primary).to_contain_text("Start interaction 1")
+    page.keyboard.press("Control+Enter")
+    expect(page.locator("#timeline li[data-kind='robot.applied']")).to_have_count(1)
+    expect(page.locator("#timeline li[data-kind='robot.applied']")).to_contain_text(
+        "Robot set to copy"
+    )
+    chip = page.locator("#health .chip[data-check='behaviour']")
+    expect(chip).to_have_attribute("data-state", "ok", timeout=15_000)
+    expect(chip).to_contain_text("copy")

@@ -39,6 +39,7 @@ export function createApi(sessionId, csrf, onReachable) {
     prompts: (position) => call("GET", `${wizard}/prompts?position=${position}`),
     play: (group) => call("POST", `${wizard}/prompts/play`, { group }),
     stop: () => call("POST", `${wizard}/prompts/stop`, {}),
+    robotApply: () => call("POST", `${wizard}/robot/apply`, {}),
     start: () => call("POST", `${session}/start`, {}),
     advance: (position, to) => call("POST", `${session}/advance`, { position, to }),
     decide: (position, index, accepted) =>

@@ -60,13 +60,33 @@ function flash(message, kind = "error") {
   flashTimer = setTimeout(() => (node.hidden = true), kind === "error" ? 9000 : 4000);
 }
 
-async function perform(what, run) {
+async function perform(what, run, thenApplyRobot = false) {
   try {
     await run();
+    if (thenApplyRobot) await applyRobot();
     if (!link.live) await refresh();
   } catch (error) {
     flash(`${what}: ${error.message}`);
   }
+}
+
+/** Put the robot in the interaction's condition and face (logged either way). */
+async function applyRobot() {
+  try {
+    const result = await api.robotApply();
+    if (result.kind !== "robot.applied") {
+      const failed = [result.behaviour, result.face_result].filter((r) => !r.sent);
+      flash(`Robot not set to ${result.condition}: ${failed.map((r) => r.detail).join("; ")}`, "warn");
+    }
+  } catch (error) {
+    flash(`Robot not set: ${error.message}`, "warn");
+  }
+}
+
+function expectedBehaviour() {
+  if (!state || state.session.state !== "running") return null;
+  const interaction = interactionAt(state);
+  return ["discussion", "ranking", "negotiation"].includes(interaction.state) ? interaction.condition : null;
 }
 
 async function refresh() {
@@ -89,7 +109,7 @@ async function apply(next) {
   }
   renderBar(state);
   renderPrimary(state, api, perform);
-  renderCondition(state, requestSwitch);
+  renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
   board.highlight(state.suggestion_prompts);
@@ -140,7 +160,8 @@ function act(what) {
 
 function requestSwitch(interaction, condition) {
   if (condition === interaction.condition) return;
-  const run = () => perform("switch condition", () => api.condition(interaction.position, condition));
+  const run = () =>
+    perform("switch condition", () => api.condition(interaction.position, condition), true);
   if (condition === interaction.planned_condition) {
     run();
     return;
@@ -166,7 +187,7 @@ bindKeys({
   undo: () => act("undo"),
   primary: () => {
     const action = state && primaryAction(state, api);
-    if (action && action.run) perform(action.label, action.run);
+    if (action && action.run) perform(action.label, action.run, action.startsInteraction);
   },
   suggestion: (index) => {
     const group = state && state.suggestion_prompts[index];
@@ -195,7 +216,7 @@ connectLive(sessionId, {
   },
   onMessage(message) {
     if (message.type === "console") apply(message);
-    else if (message.type === "health") health.update(message);
+    else if (message.type === "health") health.update(message, expectedBehaviour());
   },
 });
 refresh();

@@ -8,13 +8,28 @@ export class HealthStrip {
   constructor(container) {
     this.container = container;
     this.lastAt = 0;
+    this.mismatchSince = null;
     setInterval(() => this.checkSilence(), 1000);
   }
 
-  update(message) {
+  update(message, expectedBehaviour) {
     this.lastAt = Date.now();
-    const failing = message.checks.filter((check) => check.ok === false);
-    const chips = message.checks.map((check) => {
+    const running = message.telemetry && message.telemetry.behaviour;
+    const checks = [...message.checks];
+    const mismatch = Boolean(expectedBehaviour && running && running !== expectedBehaviour);
+    if (!mismatch) this.mismatchSince = null;
+    else if (!this.mismatchSince) this.mismatchSince = Date.now();
+    if (expectedBehaviour && running) {
+      checks.push({
+        id: "behaviour",
+        label: "Behaviour",
+        ok: !mismatch,
+        value: mismatch ? `${running}, should be ${expectedBehaviour}` : running,
+        failing_for: mismatch ? (Date.now() - this.mismatchSince) / 1000 : null,
+      });
+    }
+    const failing = checks.filter((check) => check.ok === false);
+    const chips = checks.map((check) => {
       const state = check.ok === null ? "unknown" : check.ok ? "ok" : "bad";
       return el(
         "span",

@@ -60,7 +60,8 @@ export function primaryAction(state, api) {
   if (action.action === "start") return { label: "Start the session", run: () => api.start() };
   if (action.action === "advance") {
     const label = STEP_ACTIONS[action.to](action.position);
-    return { label, run: () => api.advance(action.position, action.to) };
+    const startsInteraction = action.to === "discussion";
+    return { label, run: () => api.advance(action.position, action.to), startsInteraction };
   }
   if (action.action === "decide") return { label: `Decide suggestion ${action.index}: A accept / D decline`, run: null };
   if (action.action === "wait") return { label: WAITING[action.for] || "Waiting…", run: null };
@@ -72,11 +73,11 @@ export function renderPrimary(state, api, perform) {
   const node = $("primary-action");
   node.replaceChildren(action.label, " ", action.run ? kbd("Ctrl+↵") : null);
   node.disabled = !action.run;
-  node.onclick = action.run ? () => perform(action.label, action.run) : null;
+  node.onclick = action.run ? () => perform(action.label, action.run, action.startsInteraction) : null;
   $("primary-hint").textContent = state.session.allowed_sentence;
 }
 
-export function renderCondition(state, requestSwitch) {
+export function renderCondition(state, requestSwitch, applyRobot) {
   const interaction = interactionAt(state);
   const closed = interaction.state === "done" || !["pending", "running"].includes(state.session.state);
   const buttons = state.session.conditions.map((condition) =>
@@ -95,9 +96,12 @@ export function renderCondition(state, requestSwitch) {
     ),
   );
   $("condition-switch").replaceChildren(...buttons);
-  $("condition-note").textContent = interaction.deviates_from_plan
-    ? `Deviation: running ${interaction.condition}, planned ${interaction.planned_condition} (logged).`
-    : `Interaction ${interaction.position} runs as planned.`;
+  $("condition-note").replaceChildren(
+    interaction.deviates_from_plan
+      ? `Deviation: running ${interaction.condition}, planned ${interaction.planned_condition} (logged). `
+      : `Interaction ${interaction.position} runs as planned. `,
+    el("button", { type: "button", class: "link", id: "robot-apply", disabled: closed, onclick: applyRobot }, "Send condition and face to the robot"),
+  );
 }
 
 export function renderNegotiation(state, board, act) {
