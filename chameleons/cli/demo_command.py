@@ -1,74 +1,68 @@
-"""`chameleons demo`: the embedded default on this machine, with printed URLs and logins."""
+"""`chameleons demo`: everything on this machine, with printed URLs, a QR code and logins."""
 
 from __future__ import annotations
 
-import json
-import secrets
-from pathlib import Path
-
 import click
+import segno
 import uvicorn
-from pydantic import SecretStr
 
 from chameleons.backend.app import create_app
-from chameleons.backend.auth import repository, service
-from chameleons.backend.auth.schemas import StaffUserCreate
-from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
-from chameleons.backend.migrate import upgrade
+from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.cli.common import load_settings
-from chameleons.settings import Settings
-
-DEMO_USERS = (("pi", "pi"), ("wizard", "wizard"))
-
-
-def _demo_secret(data_dir: Path) -> str:
-    """A random key kept in the data dir, so demo logins survive a restart."""
-    path = data_dir / "demo-secret-key"
-    if not path.exists():
-        path.write_text(secrets.token_urlsafe(32))
-        path.chmod(0o600)
-    return path.read_text().strip()
+from chameleons.cli.embedded import (
+    DemoData,
+    demo_settings,
+    prepare_demo,
+    start_face_simulator,
+    stop_process,
+)
 
 
-def _demo_credentials(settings: Settings) -> dict[str, str]:
-    """Create the demo staff users once; later runs reuse (and print) the same passwords."""
-    path = settings.data_dir / "demo-credentials.json"
-    stored: dict[str, str] = json.loads(path.read_text()) if path.exists() else {}
-    engine = build_engine(settings.effective_database_url)
-    try:
-        for db in session_scope(build_sessionmaker(engine)):
-            for username, role in DEMO_USERS:
-                password = stored.get(username) or secrets.token_urlsafe(9)
-                user = repository.get_by_username(db, username)
-                if user is None:
-                    data = StaffUserCreate(username=username, password=password, role=role)
-                    service.create_user(db, data)
-                elif username not in stored:
-                    service.set_password(db, user, password)
-                stored[username] = password
-    finally:
-        engine.dispose()
-    path.write_text(json.dumps(stored, indent=2))
-    path.chmod(0o600)
-    return stored
+def _print_welcome(base: str, data: DemoData, display_url: str, data_dir: str) -> None:
+    phone_url = f"{base}/p/{data.phone_token}"
+    click.echo(f"\nMechanical Chameleons demo — data in {data_dir} (SQLite)\n")
+    click.echo("Open these in three browser windows (log in with the staff accounts below):")
+    click.echo(f"  wizard console   {base}/wizard/sessions/{data.session_id}")
+    click.echo(f"  robot display    {display_url}")
+    click.echo(f"  PI dashboard     {base}/pi")
+    click.echo(f"  participant      {phone_url}   (participant {data.participant_code};")
+    click.echo(
+        f"                   on a phone in the same network scan the QR code, or {base}/join)"
+    )
+    click.echo("")
+    segno.make(phone_url, error="m").terminal(compact=True)
+    click.echo("Staff accounts:")
+    for username, password in data.credentials.items():
+        click.echo(f"  {username:<8} password: {password}")
+    click.echo("\nA simulated face stream stands in for the iPhone. Ctrl-C stops everything.\n")
 
 
 @click.command()
-@click.option("--host", default="127.0.0.1", show_default=True)
+@click.option(
+    "--host",
+    default="127.0.0.1",
+    show_default=True,
+    help="Bind address; 0.0.0.0 lets phones in the network connect.",
+)
 @click.option("--port", type=int, default=8000, show_default=True)
-def demo(host: str, port: int) -> None:
-    """Start the whole system on its embedded default (SQLite, demo content)."""
-    settings = load_settings(demo_mode=True, host=host, port=port)
-    settings.data_dir.mkdir(parents=True, exist_ok=True)
-    if not settings.secret_key.get_secret_value():
-        secret = SecretStr(_demo_secret(settings.data_dir))
-        settings = settings.model_copy(update={"secret_key": secret})
-    upgrade(settings.effective_database_url)
-    credentials = _demo_credentials(settings)
+@click.option(
+    "--simulate-face/--no-simulate-face",
+    default=True,
+    show_default=True,
+    help="Send a synthetic face to the local worker (off: use a real iPhone).",
+)
+def demo(host: str, port: int, simulate_face: bool) -> None:
+    """Start the whole system on its embedded default: the server on SQLite with the demo
+    study and plan, a local worker driving the virtual robot, and a simulated face."""
+    settings = demo_settings(load_settings(host=host, port=port))
+    data = prepare_demo(settings)
+    app = create_app(settings)
     base = settings.effective_public_url
-    click.echo("\nMechanical Chameleons demo (SQLite at " + str(settings.data_dir) + ")")
-    click.echo(f"  staff login:   {base}/login")
-    for username, password in credentials.items():
-        click.echo(f"    {username:<8} password: {password}")
-    click.echo(f"  health:        {base}/healthz\n  Ctrl-C stops everything.\n")
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning")
+    display_url = base + display_path(signing_key(app), settings.embedded_worker_booth)
+    _print_welcome(base, data, display_url, str(settings.data_dir.resolve()))
+    simulator = start_face_simulator(settings) if simulate_face else None
+    try:
+        uvicorn.run(app, host=settings.host, port=settings.port, log_level="warning")
+    finally:
+        if simulator is not None:
+            stop_process(simulator)
