@@ -3,6 +3,11 @@
 // on its way.
 
 const DONE_MARGIN_MS = 1500;
+const NOT_SENT = {
+  no_worker: "worker unreachable",
+  unreachable: "worker unreachable",
+  timeout: "worker did not answer",
+};
 
 export function playState(events) {
   let played = null;
@@ -19,7 +24,7 @@ export function playState(events) {
   if (later.some((e) => e.kind === "prompt.stopped")) return { ...base, phase: "stopped" };
   if (related("prompt.speech_end")) return { ...base, phase: "finished" };
   const failed = related("prompt.not_sent");
-  if (failed) return { ...base, phase: "not-sent", detail: failed.payload.detail || failed.payload.reason };
+  if (failed) return { ...base, phase: "not-sent", reason: NOT_SENT[failed.payload.reason] || failed.payload.detail };
   const started = related("prompt.speech_start") || related("prompt.acked");
   if (!started) return { ...base, phase: "sending" };
   const startMs = Date.parse(started.server_time);
@@ -49,7 +54,7 @@ export class NowPlaying {
       idle: "",
       sending: "Sending… ",
       playing: "Playing: ",
-      "not-sent": `NOT SENT (${state.detail}): `,
+      "not-sent": `NOT SENT, ${state.reason}: `,
       stopped: "Stopped: ",
       finished: "Last: ",
     }[state.phase];

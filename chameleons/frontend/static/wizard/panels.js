@@ -71,7 +71,7 @@ export function primaryAction(state, api) {
 export function renderPrimary(state, api, perform) {
   const action = primaryAction(state, api);
   const node = $("primary-action");
-  node.replaceChildren(action.label, " ", action.run ? kbd("Ctrl+↵") : null);
+  node.replaceChildren(...[action.label, " ", action.run ? kbd("Ctrl+↵") : null].filter(Boolean));
   node.disabled = !action.run;
   node.onclick = action.run ? () => perform(action.label, action.run, action.startsInteraction) : null;
   $("primary-hint").textContent = state.session.allowed_sentence;
