@@ -111,3 +111,11 @@ def test_login_never_redirects_off_site(client: TestClient, engine: Engine, targ
         follow_redirects=False,
     )
     assert response.headers["location"] == "/"
+
+
+def test_home_links_by_role(client: TestClient, engine: Engine) -> None:
+    add_user(engine, "wiz", "right password", "wizard")
+    login(client, "wiz", "right password")
+    page = client.get("/").text
+    assert 'href="/wizard"' in page
+    assert 'href="/pi"' not in page

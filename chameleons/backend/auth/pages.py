@@ -73,6 +73,24 @@ def logout(request: Request) -> Response:
     return RedirectResponse("/login", status_code=status.HTTP_303_SEE_OTHER)
 
 
+# (label, url, what it is for, PI only)
+STAFF_LINKS = (
+    ("Wizard console", "/wizard", "Run a session: prompts, condition, negotiation.", False),
+    ("Robot display", "/display", "The virtual robot's face for the booth screen.", False),
+    ("PI dashboard", "/pi", "Progress, balance, sessions, data quality.", True),
+    ("Analysis", "/pi/analysis", "Table I, Friedman tests, plots, LaTeX.", True),
+    ("Export", "/pi/export", "Data for R and pandas.", True),
+    ("Study and plan", "/studies", "Create the study and its counterbalancing plan.", True),
+)
+
+
 @router.get("/", response_class=HTMLResponse)
 def staff_home(request: Request, user: CurrentStaff, templates: Templates) -> Response:
-    return templates.TemplateResponse(request, "staff_home.html", {"user": user})
+    links = [
+        {"label": label, "url": url, "hint": hint}
+        for label, url, hint, pi_only in STAFF_LINKS
+        if user.role == "pi" or not pi_only
+    ]
+    return templates.TemplateResponse(
+        request, "staff_home.html", {"user": user, "staff_links": links}
+    )
