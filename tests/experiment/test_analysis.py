@@ -98,7 +98,11 @@ def test_posthoc_only_where_the_corrected_test_is_significant() -> None:
         ("natural", "copy"), ("natural", "still"), ("copy", "still")
     ]  # fmt: skip
     for test, (i, j) in zip(trust.posthoc, [(0, 1), (0, 2), (1, 2)], strict=True):
-        reference = stats.wilcoxon(data[:, i], data[:, j])
+        x, y = data[:, i], data[:, j]
+        nonzero = np.abs(x - y)[x != y]
+        exact = len(nonzero) < 50 and len(set(nonzero)) == len(nonzero)  # R's wilcox.test rule
+        method = "exact" if exact else "approx"
+        reference = stats.wilcoxon(x, y, method=method, correction=not exact)
         assert test.p == pytest.approx(reference.pvalue)
         assert test.p_bonferroni == pytest.approx(min(1.0, 3 * reference.pvalue))
     assert analysis.measures["accepted"].posthoc == []
@@ -203,3 +207,25 @@ def test_error_score_table() -> None:
     assert table["error_change"]["copy"].mean == -2
     assert table["error_change"]["still"].n == 0
     assert list(table["final_error"]) == ["copy", "still"]
+
+
+def test_wilcoxon_on_tied_counts_uses_the_corrected_normal_approximation() -> None:
+    """Hand-computed as R's wilcox.test does for ties: tie-corrected variance and a
+    continuity correction, independent of SciPy."""
+    from chameleons.experiment.stats.descriptive import wilcoxon_pair
+
+    x = [3, 2, 2, 1, 3, 0, 2, 1, 3, 2, 1, 2]
+    y = [1, 1, 2, 0, 1, 0, 1, 1, 2, 0, 0, 1]
+    d = np.array(x) - np.array(y)
+    d = d[d != 0]
+    ranks = stats.rankdata(np.abs(d))
+    n = len(d)
+    t_plus = ranks[d > 0].sum()
+    _, counts = np.unique(np.abs(d), return_counts=True)
+    var = n * (n + 1) * (2 * n + 1) / 24 - (counts**3 - counts).sum() / 48
+    shift = t_plus - n * (n + 1) / 4
+    z = (shift - 0.5 * np.sign(shift)) / np.sqrt(var)
+    expected = 2 * stats.norm.sf(abs(z))
+    result = wilcoxon_pair("a", "b", x, y, pairs=3)
+    assert result.p == pytest.approx(expected, rel=1e-9)
+    assert result.p_bonferroni == pytest.approx(min(1.0, 3 * expected), rel=1e-9)
