@@ -43,7 +43,7 @@ STATS_INTERVAL = 1.0
 @dataclass(frozen=True, slots=True)
 class BehaviourStageConfig:
     tick_rate: float = 125.0
-    lookahead_ticks: int = 3
+    lookahead_ticks: int = 5
     crossfade_seconds: float = 0.3
     history_seconds: float = 12.0
     head_lead: float = 0.0  # the renderer's FIR group delay, compensated here
@@ -89,6 +89,7 @@ class BehaviourStage:
         poller.register(sub, zmq.POLLIN)
         poller.register(port.socket, zmq.POLLIN)
         next_stats = self.clock() + STATS_INTERVAL
+        self._next = max(self._next, math.ceil(self.clock() / self.period))  # no backlog
         try:
             while not stop.is_set():
                 wait = (self._next * self.period - self.config.lookahead_ticks * self.period

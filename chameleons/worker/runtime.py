@@ -71,7 +71,7 @@ class WorkerConfig:
     render: RenderConfig = field(default_factory=RenderConfig)
     crossfade_seconds: float = 0.3
     history_seconds: float = 12.0
-    lookahead_ticks: int = 3
+    lookahead_ticks: int = 5
     endpoints: Endpoints | None = None  # None: inproc, unique to this worker
 
     def initial_params(self) -> dict[str, Any]:

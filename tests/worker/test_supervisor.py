@@ -78,7 +78,7 @@ def test_a_killed_worker_is_restarted_with_its_state(tmp_path: Path) -> None:
                             break
                     await _until(lambda: robot.connections == 2, START_TIMEOUT)
                     await _until(_copying_since(robot, killed), 15)  # copy was re-sent
-                    await _until(lambda: bridge.state(BOOTH).recording is not None, 1)
+                    await _until(lambda: bridge.workers()[BOOTH].replays == 1, 10)
                     stopped = await bridge.send_command(BOOTH, "stop_recording", {}, timeout=5)
             finally:
                 await supervisor.stop()

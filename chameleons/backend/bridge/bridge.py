@@ -243,6 +243,9 @@ class Bridge:
                     )
             except BridgeError as exc:
                 log.warning("replaying %s to %s failed: %s", kind, booth, exc)
+        info = self._workers.get(booth)
+        if info is not None:
+            info.replays += 1
 
     async def _read_sub(self) -> None:
         assert self._sub is not None

@@ -48,6 +48,7 @@ class WorkerInfo:
     telemetry: dict[str, Any] | None = None
     telemetry_at: float = 0.0
     lost_reported: bool = False
+    replays: int = 0  # state replays completed after restarts
 
     def connected(self, stale_after: float) -> bool:
         return time.monotonic() - self.last_seen < stale_after
@@ -59,6 +60,7 @@ class WorkerInfo:
 
     def summary(self, stale_after: float) -> dict[str, Any]:
         return {"booth": self.booth, "instance": self.instance, "restarts": self.restarts,
+                "replays": self.replays,
                 "connected": self.connected(stale_after),
                 "last_seen_s": round(time.monotonic() - self.last_seen, 3),
                 "hello": self.hello}  # fmt: skip
