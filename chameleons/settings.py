@@ -70,6 +70,18 @@ class Settings(BaseSettings):
     # Mirror the participant (swap left/right, negate yaw and roll) rather than same side.
     mirror: bool = True
 
+    # The realtime worker of a booth (`chameleons worker`; options on its command line win).
+    worker_booth: str = "booth-1"
+    worker_driver: Literal["virtual", "furhat", "record", "null"] = "virtual"
+    worker_robot_url: str = "ws://127.0.0.1:9000/v1/events"  # Furhat Realtime API
+    worker_robot_key: SecretStr | None = None
+    worker_tick_rate: float = Field(default=125.0, gt=0, le=1000)
+    worker_face_rate: float = Field(default=25.0, gt=0, le=1000)  # at most the tick rate
+    worker_fir_taps: int = Field(default=15, ge=1, le=255)  # head smoothing; odd = linear phase
+    worker_fir_cutoff_hz: float = Field(default=6.0, gt=0)
+    worker_crossfade_seconds: float = Field(default=0.3, ge=0, le=5)
+    worker_copy_delay: float = Field(default=4.0, ge=0, le=11.5)
+
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None

@@ -1,0 +1,44 @@
+"""`chameleons worker`: options over settings over defaults."""
+
+from __future__ import annotations
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from chameleons.cli.worker_command import build_config, worker
+from chameleons.settings import Settings
+
+
+def test_defaults_copy_4_000_seconds_at_125_and_25_hz() -> None:
+    config = build_config(Settings(), behaviour="copy")
+    assert config.initial_params() == {"delay": 4.0}
+    assert (config.render.tick_rate, config.render.face_rate) == (125.0, 25.0)
+    assert config.driver == "virtual"
+    assert config.command_endpoint == "tcp://127.0.0.1:5555"
+
+
+def test_options_win_over_settings(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHAMELEONS_WORKER_COPY_DELAY", "2.5")
+    monkeypatch.setenv("CHAMELEONS_WORKER_DRIVER", "furhat")
+    settings = Settings()
+    from_settings = build_config(settings, behaviour="copy")
+    assert from_settings.copy_delay == 2.5
+    assert from_settings.driver == "furhat"
+    config = build_config(settings, behaviour="copy", copy_delay=1.0, driver="null",
+                          booth="b7", control="tcp://10.0.0.2:5555")  # fmt: skip
+    assert (config.copy_delay, config.driver, config.booth) == (1.0, "null", "b7")
+    assert config.command_endpoint == "tcp://10.0.0.2:5555"
+
+
+def test_a_negative_delay_is_refused() -> None:
+    with pytest.raises(click.BadParameter):
+        build_config(Settings(), behaviour="copy", copy_delay=-1.0)
+
+
+def test_help_lists_the_documented_options() -> None:
+    result = CliRunner().invoke(worker, ["--help"])
+    assert result.exit_code == 0
+    for option in ("--booth", "--driver", "--robot-url", "--livelink-port",
+                   "--facecapturex-port", "--behaviour", "--copy-delay", "--control"):  # fmt: skip
+        assert option in result.output
