@@ -11,8 +11,11 @@ import re
 
 import pytest
 from playwright.sync_api import Page, expect
+from sqlalchemy import Engine
 
-from tests.e2e.wizard.conftest import Console
+from tests.e2e.wizard.conftest import Console, log_in
+from tests.support.bots import StaffApi, study_with_plan
+from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
 
@@ -220,3 +223,16 @@ def test_the_console_says_when_the_worker_and_the_server_are_unreachable(
     expect(page.locator("#conn-banner")).to_be_visible(timeout=15_000)
     page.keyboard.press("y")
     expect(page.locator("#conn-banner")).to_contain_text("server is unreachable")
+
+
+def test_the_wizard_opens_the_next_participant_s_session_from_the_picker(
+    live_server: LiveServer, staff: StaffApi, page: Page, engine: Engine
+) -> None:
+    study_with_plan(staff, participants=2)
+    log_in(page, live_server.url, engine, "/wizard")
+    page.get_by_label("Booth").fill("booth-2")
+    page.get_by_role("button", name="Register and open session").click()
+    expect(page.locator("#bar-participant")).to_have_text("P001")
+    expect(page.locator("#primary-action")).to_contain_text("Start the session")
+    expect(page.locator("#phone-qr")).to_be_visible()
+    expect(page.locator("#health")).to_contain_text("Robot booth-2")
