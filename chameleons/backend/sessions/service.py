@@ -87,11 +87,8 @@ def _row_for(db: Session, study: StudyRow, participant: Participant) -> PlanRow:
         row = db.get(PlanRow, participant.plan_row_id)
         if row is not None:
             return row
-    # A rehearsal borrows the row the next participant would get, without holding it.
-    row = studies.next_free_row(db, study)
-    if row is None:
-        rows = studies.plan_rows(db, study.id)
-        row = rows[0] if rows else None
+    # A rehearsal borrows a row without holding it (see ``studies.rehearsal_row``).
+    row = studies.rehearsal_row(db, study)
     if row is None:
         raise ConflictError("The study has no plan yet. Generate the plan first.")
     return row

@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Participant, PlanRow
+from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.studies.errors import ConflictError, InvalidInputError, NotFoundError
 from chameleons.backend.studies.planner import planned_rows
@@ -122,6 +123,24 @@ def next_free_row(db: Session, study: StudyRow) -> PlanRow | None:
         .order_by((PlanRow.withdrawals > 0).desc(), PlanRow.row_number)
     )
     return db.scalars(query).first()
+
+
+def rehearsal_row(db: Session, study: StudyRow) -> PlanRow | None:
+    """The row a rehearsal session borrows (it never holds one): the row the fewest
+    rehearsal sessions have used, the next participant's row first among equals, then row
+    order. Consecutive rehearsals so walk the whole plan, and a number of rehearsals that
+    is a multiple of the plan's balance period is as balanced as the plan itself."""
+    rows = plan_rows(db, study.id)
+    if not rows:
+        return None
+    counts = (
+        select(SessionRow.plan_row_id, func.count())
+        .where(SessionRow.study_id == study.id, SessionRow.is_rehearsal.is_(True))
+        .group_by(SessionRow.plan_row_id)
+    )
+    used = dict(db.execute(counts).tuples().all())
+    upcoming = next_free_row(db, study)
+    return min(rows, key=lambda row: (used.get(row.id, 0), row is not upcoming, row.row_number))
 
 
 def register_participant(db: Session, study: StudyRow, rehearsal: bool = False) -> Participant:
