@@ -114,7 +114,11 @@
   }
 
   const handlers = {
-    hello() {},
+    hello(m) {
+      if (m.blendshapes && m.blendshapes.join() !== FaceRenderer.NAMES.join()) {
+        note("the server's blendshape order differs from this page's");
+      }
+    },
     face(m, now) {
       faceTrack.push(now, m.t, m.bs);
       faceTrack.samples[faceTrack.samples.length - 1].ts = m.ts;
