@@ -158,6 +158,8 @@ class RenderCore:
         self.keyframes_in = 0
         self.keyframe_resets = 0
         self.underruns = 0  # ticks past the newest keyframe (the behaviour stage fell behind)
+        self._last_tick: float | None = None
+        self._scratch = np.zeros(VECTOR_SIZE + 1, dtype=np.float32)
 
     def push_keyframe(self, t: float, vector: F32Array, input_time: float) -> None:
         """Store the agent face for local time ``t`` (any thread)."""
@@ -173,6 +175,11 @@ class RenderCore:
 
     def tick(self, t: float) -> float:
         """Render the frame for scheduled time ``t``; returns its participant input time."""
+        if self._last_tick is not None:
+            skipped = round((t - self._last_tick) * self.config.tick_rate) - 1
+            if skipped > 0:
+                self._fill_filter(t, skipped)
+        self._last_tick = t
         with self._lock:
             newest = self._keyframes.last_time
             found = self._keyframes.sample(t, self._sample)
@@ -190,6 +197,16 @@ class RenderCore:
             self._face_phase -= 1.0
             self.driver.send_face(agent[:N_BLENDSHAPES])
         return t - float(self._sample[VECTOR_SIZE])
+
+    def _fill_filter(self, t: float, skipped: int) -> None:
+        """Feed the head filter the ticks the loop skipped (sampled, not sent), so its time
+        base stays uniform and its group delay stays what it says."""
+        period = 1.0 / self.config.tick_rate
+        for j in range(min(skipped, len(self.filter.taps)), 0, -1):
+            with self._lock:
+                found = self._keyframes.sample(t - j * period, self._scratch)
+            if not math.isnan(found):
+                self.filter.push(self._scratch[HEAD_SLICE])
 
 
 class TickStats:
