@@ -66,16 +66,20 @@ def prepare_demo(settings: Settings) -> DemoData:
     and an open session for the next participant; a second run reuses all of it."""
     upgrade(settings.effective_database_url)
     engine = build_engine(settings.effective_database_url)
+    data: DemoData | None = None
     try:
-        for db in session_scope(build_sessionmaker(engine)):
+        # Leave the loop normally: a return inside it would close the scope's generator,
+        # which rolls the transaction back instead of committing it.
+        with session_scope(build_sessionmaker(engine)) as db:
             credentials = _demo_users(db, settings.data_dir / "demo-credentials.json")
             study = _demo_study(db)
             session = _open_session(db, study, settings.embedded_worker_booth)
             code = load_flow(db, session.id, lock=False).participant.code
-            return DemoData(credentials, study.id, session.id, session.phone_token, code)
+            data = DemoData(credentials, study.id, session.id, session.phone_token, code)
     finally:
         engine.dispose()
-    raise AssertionError("unreachable")
+    assert data is not None
+    return data
 
 
 def _demo_users(db: Session, path: Path) -> dict[str, str]:
