@@ -12,6 +12,7 @@ from chameleons.cli import (
     export_command,
     plan_command,
     prompts_command,
+    rehearse_command,
     serve_command,
     simulate_face_command,
     user_commands,
@@ -35,6 +36,7 @@ cli.add_command(plan_command.plan_command)
 cli.add_command(worker_command.worker)
 cli.add_command(analyze_command.analyze_command)
 cli.add_command(prompts_command.prompts)
+cli.add_command(rehearse_command.rehearse)
 
 
 def main() -> None:

@@ -1,0 +1,108 @@
+"""`chameleons rehearse`: run N whole sessions with a scripted wizard and participant."""
+
+from __future__ import annotations
+
+import click
+
+from chameleons.cli.common import load_settings
+from chameleons.rehearsal import runner
+from chameleons.rehearsal.patterns import PATTERNS
+from chameleons.rehearsal.runner import Options, RehearsalError, Summary, Target
+from chameleons.rehearsal.script import SCRIPTS
+
+
+@click.command()
+@click.option(
+    "--participants",
+    "-n",
+    type=click.IntRange(1, 1000),
+    required=True,
+    help="How many rehearsal sessions to run, one after the other.",
+)
+@click.option(
+    "--seed",
+    type=int,
+    default=0,
+    show_default=True,
+    help="Seed of the participants' answers (same seed, same answers).",
+)
+@click.option(
+    "--pattern",
+    type=click.Choice(sorted(PATTERNS)),
+    default="neutral",
+    show_default=True,
+    help="How participants answer; 'effect' builds in an effect of the copy "
+    "condition for the analysis to find.",
+)
+@click.option(
+    "--server",
+    default=None,
+    metavar="URL",
+    help="Rehearse against a running server (with --username/--password); "
+    "without it an embedded system is started and stopped again.",
+)
+@click.option("--username", default=None, help="Staff login on --server.")
+@click.option(
+    "--password",
+    default=None,
+    help="Its password (or CHAMELEONS_REHEARSE_PASSWORD).",
+    envvar="CHAMELEONS_REHEARSE_PASSWORD",
+)
+@click.option(
+    "--study",
+    "study_id",
+    type=int,
+    default=None,
+    help="Study id (default: the newest active study).",
+)
+@click.option("--booth", default=None, help="Booth of the sessions on --server. [booth-1]")
+@click.option(
+    "--script",
+    type=click.Choice(SCRIPTS),
+    default="full",
+    show_default=True,
+    help="Prompts the wizard plays: all of them, a few, or none.",
+)
+@click.option(
+    "--simulate-face/--no-simulate-face",
+    default=True,
+    show_default=True,
+    help="Embedded system: feed the worker a synthetic face.",
+)
+def rehearse(
+    participants: int, seed: int, pattern: str, server: str | None, username: str | None,
+    password: str | None, study_id: int | None, booth: str | None, script: str,
+    simulate_face: bool,
+) -> None:  # fmt: skip
+    """Run whole sessions with a scripted wizard and participant, marked as rehearsals.
+
+    They use the server's HTTP API and WebSockets as people do, with a real worker
+    driving the virtual robot. Rehearsals stay out of balance tables, exports and the
+    analysis unless asked for (chameleons export --include-rehearsal).
+    """
+    options = Options(participants, seed, pattern, script)
+    try:
+        if server is not None:
+            if not username or not password:
+                raise click.UsageError("--server needs --username and --password.")
+            target = Target(server.rstrip("/"), username, password, study_id, booth or "booth-1")
+            _report(rehearse_sessions(target, options))
+            return
+        from chameleons.rehearsal.embedded import embedded_system
+
+        click.echo("Starting an embedded server, worker (virtual robot) and simulated face...")
+        with embedded_system(load_settings(), study_id, simulate_face) as target:
+            click.echo(f"Server on {target.base_url}; rehearsing {participants} sessions.")
+            _report(rehearse_sessions(target, options))
+    except RehearsalError as error:
+        raise click.ClickException(str(error)) from error
+
+
+def rehearse_sessions(target: Target, options: Options) -> Summary:
+    return runner.rehearse(target, options, progress=click.echo)
+
+
+def _report(summary: Summary) -> None:
+    click.echo("")
+    for line in summary.lines():
+        click.echo(line)

@@ -1,0 +1,195 @@
+"""Run N rehearsal sessions against a server and summarise them.
+
+The server may be anywhere (``chameleons rehearse --server URL``) or started on this
+machine by :mod:`chameleons.rehearsal.embedded`. Everything goes through the server's
+public HTTP API and WebSockets with a staff login, as the people running a study do.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from statistics import mean
+from typing import Any
+
+import httpx
+
+from chameleons.backend.sessions.bot import ApiError, ParticipantBot, StaffApi, WizardBot
+from chameleons.experiment.model import Study
+from chameleons.experiment.study import load_default_study
+from chameleons.rehearsal.patterns import PATTERNS, Keying, Persona, not_keyed
+from chameleons.rehearsal.script import ConsoleWizard, PhoneParticipant, Tally, run_session
+from chameleons.rehearsal.sockets import DisplayScreen, PhoneSocket
+
+Json = dict[str, Any]
+Progress = Callable[[str], None]
+
+
+class RehearsalError(RuntimeError):
+    """The rehearsal cannot run (no study, a refused login, a session that broke off)."""
+
+
+@dataclass(frozen=True)
+class Target:
+    """Where to rehearse: the server's URL, a staff login, the study and booth."""
+
+    base_url: str
+    username: str
+    password: str
+    study_id: int | None = None  # None: the server's newest active study
+    booth: str = "booth-1"
+    local: bool = False  # a server on this machine (no HTTP proxies)
+    studies: Sequence[Study] = ()  # configurations whose reverse-keyed items are known
+
+
+@dataclass(frozen=True)
+class Options:
+    participants: int
+    seed: int = 0
+    pattern: str = "neutral"
+    script: str = "full"  # prompts the wizard plays: full, brief or silent
+    display: bool = True  # also be the virtual robot's display page
+
+
+@dataclass
+class Summary:
+    study_id: int
+    study_name: str
+    codes: list[str]
+    session_ids: list[int]
+    seconds: float
+    options: Options
+    tally: Tally
+    display: dict[str, int] = field(default_factory=dict)
+
+    def lines(self) -> list[str]:
+        count = len(self.codes)
+        span = f"{self.codes[0]}-{self.codes[-1]}" if count > 1 else "".join(self.codes)
+        per = self.seconds / count if count else 0.0
+        tally = self.tally
+        lines = [
+            f"Rehearsed {count} sessions ({count} participants, {span}) of study "
+            f"{self.study_id} ({self.study_name}) in {self.seconds:.1f} s ({per:.1f} s each); "
+            f"pattern {self.options.pattern}, seed {self.options.seed}.",
+            f"Prompts: {tally.prompts_played} played through the worker, "
+            f"{tally.prompts_not_sent} not sent; robot set up {tally.robot_applied} times, "
+            f"{tally.robot_not_applied} not.",
+        ]
+        if self.display:
+            lines.append(
+                f"Virtual robot display: {self.display.get('face', 0)} face frames, "
+                f"{self.display.get('head', 0)} head poses, "
+                f"{self.display.get('play_audio', 0)} prompts voiced."
+            )
+        accepted = ", ".join(
+            f"{condition} {mean(values):.2f}"
+            for condition, values in sorted(tally.accepted.items())
+        )
+        lines.append(f"Accepted suggestions per interaction (mean): {accepted or '-'}.")
+        lines += [f"Note: {problem}" for problem in tally.problems[:5]]
+        lines.append("Export with: chameleons export --include-rehearsal --out DIR")
+        return lines
+
+
+def keying_for(config_hash: str, studies: Sequence[Study]) -> Keying:
+    """Which items of the study are reverse-keyed (a participant reads the anchors; a script
+    needs the configuration). Unknown configurations: none, and a note in the summary."""
+    for spec in (*studies, load_default_study()):
+        if spec.content_hash == config_hash:
+            reverse = {(q.id, i.id) for q in spec.questionnaires for i in q.items if i.reverse}
+            return lambda questionnaire, item: (questionnaire, item) in reverse
+    return not_keyed
+
+
+def pick_study(staff: StaffApi, study_id: int | None) -> Json:
+    studies: list[Json] = staff.get("/api/studies")
+    if study_id is not None:
+        found = [s for s in studies if s["id"] == study_id]
+    else:
+        found = sorted(studies, key=lambda s: (s["is_active"], s["id"]))[-1:]
+    if not found:
+        raise RehearsalError(
+            f"The server has no study {study_id}." if study_id is not None
+            else "The server has no study yet: create one (and its plan) first."
+        )  # fmt: skip
+    if not found[0]["plan_rows"]:
+        raise RehearsalError(f"Study {found[0]['id']} has no plan yet: generate it first.")
+    return found[0]
+
+
+def rehearse(target: Target, options: Options, progress: Progress | None = None) -> Summary:
+    if options.pattern not in PATTERNS:
+        raise RehearsalError(f"Unknown answer pattern {options.pattern!r}.")
+    say = progress or (lambda _line: None)
+    started = time.monotonic()
+    trust_env = not target.local
+    with (
+        httpx.Client(base_url=target.base_url, timeout=30, trust_env=trust_env) as http,
+        httpx.Client(base_url=target.base_url, timeout=30, trust_env=trust_env) as phone_http,
+    ):
+        staff = _log_in(http, target)
+        study = pick_study(staff, target.study_id)
+        display = _open_display(target, http) if options.display else None
+        try:
+            summary = _sessions(target, options, staff, phone_http, study, say)
+        finally:
+            if display is not None:
+                display.close()
+        summary.display = dict(display.received) if display is not None else {}
+    summary.seconds = time.monotonic() - started
+    return summary
+
+
+def _log_in(http: httpx.Client, target: Target) -> StaffApi:
+    try:
+        return StaffApi(http).login(target.username, target.password)
+    except ApiError as error:
+        raise RehearsalError(
+            f"Cannot log in to {target.base_url} as {target.username!r} ({error})."
+        ) from error
+    except httpx.HTTPError as error:
+        raise RehearsalError(f"Cannot reach {target.base_url}: {error}") from error
+
+
+def _open_display(target: Target, http: httpx.Client) -> DisplayScreen:
+    cookie = "; ".join(f"{name}={value}" for name, value in http.cookies.items())
+    return DisplayScreen(target.base_url, target.booth, cookie, proxy=not target.local)
+
+
+def _sessions(
+    target: Target,
+    options: Options,
+    staff: StaffApi,
+    phone_http: httpx.Client,
+    study: Json,
+    say: Progress,
+) -> Summary:
+    pattern = PATTERNS[options.pattern]
+    rng = random.Random(options.seed)
+    tally = Tally()
+    summary = Summary(study["id"], study["name"], [], [], 0.0, options, tally)
+    for number in range(1, options.participants + 1):
+        persona = Persona.draw(pattern, random.Random(rng.getrandbits(64)))
+        wizard_rng = random.Random(rng.getrandbits(64))
+        bot = WizardBot.create(staff, study["id"], booth=target.booth, rehearsal=True)
+        wizard = ConsoleWizard(bot, options.script, tally, wizard_rng)
+        keying = keying_for(bot.snapshot["config_hash"], target.studies)
+        if keying is not_keyed:
+            tally.note("unknown study configuration: reverse-keyed items answered as plain")
+        socket = PhoneSocket(target.base_url, bot.token, proxy=not target.local)
+        try:
+            participant = PhoneParticipant(ParticipantBot(phone_http, bot.token), socket,
+                                           persona, keying)  # fmt: skip
+            snapshot = run_session(wizard, participant, tally)
+        except (ApiError, TimeoutError) as error:
+            code = bot.snapshot["participant"]["code"]
+            raise RehearsalError(f"Session {bot.session_id} ({code}) broke off: {error}") from error
+        finally:
+            socket.close()
+        code = snapshot["participant"]["code"]
+        summary.codes.append(code)
+        summary.session_ids.append(bot.session_id)
+        say(f"  {number}/{options.participants}: {code} complete (session {bot.session_id})")
+    return summary
