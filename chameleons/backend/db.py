@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -38,8 +39,10 @@ def build_sessionmaker(engine: Engine) -> sessionmaker[Session]:
     return sessionmaker(bind=engine, expire_on_commit=False)
 
 
+@contextmanager
 def session_scope(factory: sessionmaker[Session]) -> Iterator[Session]:
-    """Yield a session; commit if the caller finished cleanly, roll back otherwise."""
+    """``with session_scope(factory) as db:`` commits when the block ends normally (also by
+    ``return``) and rolls back when it raises."""
     session = factory()
     try:
         yield session

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import signal
+import sys
+
 import click
 import segno
 import uvicorn
@@ -61,6 +64,9 @@ def demo(host: str, port: int, simulate_face: bool) -> None:
     display_url = base + display_path(signing_key(app), settings.embedded_worker_booth)
     _print_welcome(base, data, display_url, str(settings.data_dir.resolve()))
     simulator = start_face_simulator(settings) if simulate_face else None
+    # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
+    # so the face simulator is stopped too (the worker stops with the app's lifespan).
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     try:
         uvicorn.run(app, host=settings.host, port=settings.port, log_level="warning")
     finally:

@@ -66,10 +66,7 @@ def prepare_demo(settings: Settings) -> DemoData:
     and an open session for the next participant; a second run reuses all of it."""
     upgrade(settings.effective_database_url)
     engine = build_engine(settings.effective_database_url)
-    data: DemoData | None = None
     try:
-        # Leave the loop normally: a return inside it would close the scope's generator,
-        # which rolls the transaction back instead of committing it.
         with session_scope(build_sessionmaker(engine)) as db:
             credentials = _demo_users(db, settings.data_dir / "demo-credentials.json")
             study = _demo_study(db)
@@ -78,7 +75,6 @@ def prepare_demo(settings: Settings) -> DemoData:
             data = DemoData(credentials, study.id, session.id, session.phone_token, code)
     finally:
         engine.dispose()
-    assert data is not None
     return data
 
 

@@ -34,7 +34,7 @@ def user_add(name: str, role: str, password: str | None) -> None:
     settings = load_settings()
     engine = build_engine(settings.effective_database_url)
     try:
-        for db in session_scope(build_sessionmaker(engine)):
+        with session_scope(build_sessionmaker(engine)) as db:
             service.create_user(db, data)
     except service.UserExistsError as exc:
         raise click.ClickException(str(exc)) from exc

@@ -12,7 +12,7 @@ from chameleons.backend.db import build_sessionmaker, session_scope
 
 
 def add_user(engine: Engine, name: str, password: str, role: str) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         service.create_user(db, StaffUserCreate(username=name, password=password, role=role))
 
 

@@ -40,7 +40,7 @@ PASSWORD = "a long password"
 
 
 def add_staff(engine: Engine, username: str, role: str) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         db.add(StaffUser(username=username, password_hash=_CHEAP_HASHER.hash(PASSWORD), role=role))
 
 

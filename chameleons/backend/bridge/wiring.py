@@ -8,14 +8,17 @@ in the embedded setup (``embedded_worker``), supervises a local worker process.
 from __future__ import annotations
 
 import logging
+from functools import partial
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
+import zmq
 from fastapi import FastAPI
 
 from chameleons.backend.bridge.bridge import Bridge
 from chameleons.backend.bridge.supervisor import WorkerSupervisor
 from chameleons.backend.display.channel import get_display_channel
+from chameleons.backend.display.media import lipsync_url_for
 from chameleons.backend.display.relay import forward_speech_events, relay_envelope
 from chameleons.settings import Settings
 from chameleons.worker.envelope import Message
@@ -35,12 +38,21 @@ def embedded_worker_args(settings: Settings) -> list[str]:
 @asynccontextmanager
 async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]:
     bridge = Bridge.from_settings(settings)
-    await bridge.start()
+    try:
+        await bridge.start()
+    except zmq.ZMQError as exc:
+        raise RuntimeError(
+            f"cannot bind the worker endpoints {settings.worker_command_endpoint} and "
+            f"{settings.worker_telemetry_endpoint}: {exc}. Is another chameleons server "
+            "running? Stop it, or set CHAMELEONS_WORKER_COMMAND_ENDPOINT and "
+            "CHAMELEONS_WORKER_TELEMETRY_ENDPOINT to free ports."
+        ) from exc
     app.state.bridge = bridge
     channel = get_display_channel(app)
 
     def relay(message: Message) -> None:
-        relay_envelope(channel, message)
+        # With the prompt's lip-sync URL the page moves the lips on the audio's own clock.
+        relay_envelope(channel, message, lipsync_for=partial(lipsync_url_for, settings))
 
     bridge.add_listener("display.", relay)
     forward_speech_events(channel, bridge.send_command)

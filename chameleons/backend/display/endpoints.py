@@ -71,7 +71,7 @@ def _same_origin(websocket: WebSocket) -> bool:
 
 
 def _active_staff(websocket: WebSocket, staff_id: int) -> bool:
-    for db in session_scope(websocket.app.state.sessionmaker):
+    with session_scope(websocket.app.state.sessionmaker) as db:
         user = repository.get_by_id(db, staff_id)
         return user is not None and user.is_active
     return False

@@ -118,7 +118,7 @@ def test_plots_in_every_format(db_session: DbSession, populated: PopulatedStudy)
 
 
 def _client_with_data(client: TestClient, engine: Engine, participants: int = 6) -> Any:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, participants)
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
@@ -155,7 +155,7 @@ def test_analysis_without_data_explains_itself(client: TestClient, engine: Engin
     from chameleons.experiment.study import load_default_study
 
     spec = load_default_study()
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         db.add(Study(name=spec.name, config=spec.config, config_hash=spec.content_hash))
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")

@@ -18,7 +18,7 @@ def test_database_mode_matches_the_exported_scores(sqlite_template: Path, tmp_pa
     database = tmp_path / "study.sqlite3"
     shutil.copyfile(sqlite_template, database)
     engine = build_engine(f"sqlite:///{database}")
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         populate(db, 12, rehearsals=1, seed=3)
     engine.dispose()
     env = {k: v for k, v in os.environ.items() if not k.startswith("CHAMELEONS_")}

@@ -13,7 +13,7 @@ from tests.support.factories import PopulatedStudy, add_event, populate
 
 
 def _populate(engine: Engine, settings: Any, **kwargs: Any) -> PopulatedStudy:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, recordings_dir=settings.data_dir / "recordings", **kwargs)
     return data
 
@@ -22,7 +22,7 @@ def test_overview_shows_progress_sessions_and_balance(
     client: TestClient, engine: Engine, settings: Any
 ) -> None:
     data = _populate(engine, settings, participants=3, rehearsals=1, free_rows=2)
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         add_event(db, data.session_ids[1], "worker.outage", {"reason": "crashed"}, 2)
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
@@ -88,7 +88,7 @@ def test_without_a_study_the_overview_says_so(client: TestClient, engine: Engine
 def test_several_studies_can_be_switched(client: TestClient, engine: Engine) -> None:
     from chameleons.experiment.study import load_default_study
 
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         first = populate(db, 1)
         second = populate(db, 2, spec=load_default_study(), name="Replication")
     add_user(engine, "pia", "correct horse", "pi")

@@ -74,7 +74,7 @@ def test_sessions_run_by_the_flow_export_analyse_and_withdraw(
         headers={"X-CSRF-Token": token},
     )
     assert response.status_code == 200, response.text
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         everything = {
             t.name: [dict(r._mapping) for r in db.execute(select(t))]
             for t in Base.metadata.sorted_tables

@@ -169,7 +169,7 @@ def test_unknown_study_is_a_clear_error(db_session: DbSession, tmp_path: Path) -
 
 
 def test_zip_download_streams_the_bundle(client: TestClient, engine: Engine) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         populate(db, 3, rehearsals=1)
     add_user(engine, "pia", "correct horse", "pi")
     assert client.get("/api/pi/export.zip").status_code == 401
@@ -202,7 +202,7 @@ def test_a_large_export_streams_in_bounded_chunks(engine: Engine) -> None:
     from chameleons.backend.models import Event
 
     factory = build_sessionmaker(engine)
-    for db in session_scope(factory):
+    with session_scope(factory) as db:
         data = populate(db, 1)
         rows = [
             {

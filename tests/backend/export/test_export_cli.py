@@ -27,7 +27,7 @@ def test_export_command_writes_the_bundle(sqlite_template: Path, tmp_path: Path)
     database = tmp_path / "study.sqlite3"
     shutil.copyfile(sqlite_template, database)
     engine = build_engine(f"sqlite:///{database}")
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         populate(db, 4, rehearsals=1)
     engine.dispose()
     out = tmp_path / "out"

@@ -67,7 +67,7 @@ def test_participants_get_codes_and_the_next_free_row_replacements_first(
     assert "All 3 plan rows are taken" in refused(lambda: pi.post(people, {}), 409)
     rehearsal = pi.post(people, {"rehearsal": True})
     assert (rehearsal["code"], rehearsal["row_number"]) == ("R001", None)
-    for db in session_scope(build_sessionmaker(engine)):  # the PI withdraws P002
+    with session_scope(build_sessionmaker(engine)) as db:  # the PI withdraws P002
         withdrawn = db.scalars(select(Participant).where(Participant.code == "P002")).one()
         service.release_plan_row(db, withdrawn)
         db.delete(withdrawn)

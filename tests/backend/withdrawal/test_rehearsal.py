@@ -53,7 +53,7 @@ def test_unmarking_refuses_when_the_row_was_given_away(db_session: DbSession) ->
 def test_rehearsal_form_needs_pi_and_csrf(
     client: TestClient, engine: Engine, tmp_path: Path
 ) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, 2)
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
@@ -62,7 +62,7 @@ def test_rehearsal_form_needs_pi_and_csrf(
     assert client.post(url, data={"rehearsal": "true"}).status_code == 403
     done = client.post(url, data={"rehearsal": "true", "csrf_token": token}, follow_redirects=False)
     assert done.status_code == 303
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         assert codes_in_scores(db) == {"P001"}
     api = client.post(
         "/api/pi/participants/P002/rehearsal",

@@ -142,7 +142,7 @@ def test_a_wrong_confirmation_deletes_nothing(
 def test_pi_withdraws_through_the_confirmation_form(
     client: TestClient, engine: Engine, settings: Any
 ) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, 2, recordings_dir=settings.data_dir / "recordings")
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
@@ -158,14 +158,14 @@ def test_pi_withdraws_through_the_confirmation_form(
     done = client.post(url, data={"confirm": "P001", "csrf_token": token}, follow_redirects=False)
     assert done.status_code == 303
     assert done.headers["location"] == f"/pi?study={data.study_id}"
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         assert "P001" not in text_of(all_rows(db))
     assert not any(p.exists() for p in data.recording_paths[:6])
     assert client.get(url).status_code == 404
 
 
 def test_withdraw_api_needs_pi_and_csrf(client: TestClient, engine: Engine) -> None:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         populate(db, 1)
     add_user(engine, "wiz", "right password", "wizard")
     add_user(engine, "pia", "correct horse", "pi")

@@ -31,7 +31,7 @@ def database_url(sqlite_template: Path, tmp_path: Path) -> str:
 
 @pytest.fixture
 def study(engine: Engine, settings: Any) -> PopulatedStudy:
-    for db in session_scope(build_sessionmaker(engine)):
+    with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, 6, rehearsals=1, recordings_dir=settings.data_dir / "recordings")
     add_user(engine, "pia", "correct horse", "pi")
     return data
