@@ -8,9 +8,9 @@ in the embedded setup (``embedded_worker``), supervises a local worker process.
 from __future__ import annotations
 
 import logging
-from functools import partial
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from functools import partial
 
 import zmq
 from fastapi import FastAPI
