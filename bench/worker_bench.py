@@ -32,9 +32,10 @@ import zmq
 from bench.probes import AMPLITUDE, ProbeWorker, TrianglePhone, delay_errors
 from chameleons.worker.envelope import Message, deserialize, serialize
 from chameleons.worker.renderer import RenderLoop
-from chameleons.worker.runtime import Worker, WorkerConfig
+from chameleons.worker.runtime import GIL_SWITCH_INTERVAL, Worker, WorkerConfig
 
 TICK = 1 / 125
+WARMUP_BEATS = 2  # heartbeats (seconds) a fresh booth runs before it is measured
 NO_SERVER = "inproc://bench-no-server"  # the hub connects; nothing is bound there
 Row = dict[str, Any]
 
@@ -186,7 +187,7 @@ def booths(count: int, duration: float) -> Row:
             ready = body.get("tick_rate_hz") and body.get("input_fps")
             if started is None and ready:
                 beats[body["booth"]].append(body)
-                if all(beats.values()):
+                if all(len(v) > WARMUP_BEATS for v in beats.values()):
                     started = time.monotonic()
                     cpu0 = [_cpu_seconds(p.pid) for p in processes[::2]]
                     beats = {booth: [] for booth in beats}
@@ -214,6 +215,7 @@ def booths(count: int, duration: float) -> Row:
 # --- the table ------------------------------------------------------------------------------
 def run(args: argparse.Namespace) -> dict[str, Any]:
     duration = args.duration
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)  # as in a worker process (runtime.run_worker)
     results: dict[str, Any] = {"load_before": os.getloadavg(), "cpus": os.cpu_count()}
     results["bare_loop"] = bare_loop_jitter(duration)
     results["worker"] = worker_jitter(duration)

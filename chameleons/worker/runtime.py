@@ -33,6 +33,7 @@ from chameleons.worker.stage import Endpoints, ParticipantBus
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
+GIL_SWITCH_INTERVAL = 0.0005  # seconds
 
 
 class Stage(Protocol):
@@ -202,6 +203,9 @@ class Worker:
 
 def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> int:
     """Run until SIGINT/SIGTERM (or a stage crash); returns the process exit code."""
+    # A thread that wakes for a tick must get the GIL quickly; Python's default hand-over
+    # interval (5 ms) would show up directly as tick jitter. This process is the worker's own.
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     worker = Worker(config)
     previous: dict[int, Any] = {}
 

@@ -199,3 +199,15 @@ def test_switching_behaviour_never_jumps(crossfade: float) -> None:
     extreme = np.abs(_frame(0, 1.0).to_vector())
     assert np.all(max_step <= extreme * tick / crossfade * 1.01 + 1e-6)
     assert out[HEAD_YAW] == pytest.approx(30.0)  # ended up copying
+
+
+def test_natural_without_a_recording_plays_a_synthetic_face() -> None:
+    behaviour = create_behaviour("natural", {"seed": 3}, build_context())
+    behaviour.start(0.0)
+    out = _out()
+    values = []
+    for t in (0.0, 1.0, 2.0, 3.0):
+        behaviour.sample(t, out)
+        values.append(out.copy())
+    assert behaviour.describe()["source"] == "synthetic:3"
+    assert np.ptp(np.array(values)[:, HEAD_YAW]) > 0.1  # it moves

@@ -3,6 +3,8 @@ recorded stream — the yoked control), looping, starting at a chosen offset.
 
 The loop seam is crossfaded: with period ``P = duration - seam``, the first ``seam``
 seconds of each pass blend the clip's tail into its head, so output is continuous.
+Parameters: ``path`` (take CSV, Parquet recording or ``.npz``), ``offset`` seconds, ``loop``;
+without a ``path``, a synthetic face from the simulator (``seed``) stands in.
 """
 
 from __future__ import annotations
@@ -27,6 +29,18 @@ from chameleons.worker.behaviours.registry import register_behaviour
 from chameleons.worker.frames import F32Array
 
 MAX_SEAM = 0.5
+SYNTHETIC_SECONDS = 60.0
+
+
+def synthetic_clip(seed: int = 0, seconds: float = SYNTHETIC_SECONDS) -> MotionClip:
+    """A plausible face (blinks, head sway, smiles, talking) from the face simulator."""
+    from chameleons.worker.simulate import SyntheticFace
+
+    samples = list(SyntheticFace(seed).samples(30.0, seconds))
+    return MotionClip.from_arrays(
+        [s.time for s in samples], np.stack([s.blendshapes for s in samples]),
+        np.stack([s.head for s in samples]), np.stack([s.eyes for s in samples]),
+    )  # fmt: skip
 
 
 @register_behaviour("natural")
@@ -49,14 +63,18 @@ class NaturalBehaviour(Behaviour):
 
     @classmethod
     def from_params(cls, context: BehaviourContext, params: Mapping[str, Any]) -> Behaviour:
-        reject_unknown(params, {"path", "offset", "loop"})
-        path = params.get("path")
-        if not isinstance(path, str) or not path:
-            raise BehaviourError("natural needs a 'path' to a take CSV, Parquet or .npz clip")
+        reject_unknown(params, {"path", "offset", "loop", "seed"})
         loop = params.get("loop", True)
         if not isinstance(loop, bool):
             raise BehaviourError(f"loop must be true or false, got {loop!r}")
         offset = number_param(params, "offset", 0.0, low=0.0, high=1e6)
+        path = params.get("path")
+        if path is None:  # no recording given: a synthetic stand-in, so demos work
+            seed = int(number_param(params, "seed", 0, low=0, high=2**31))
+            return cls(context, synthetic_clip(seed), offset=offset, loop=loop,
+                       source=f"synthetic:{seed}")  # fmt: skip
+        if not isinstance(path, str) or not path:
+            raise BehaviourError("path must name a take CSV, Parquet recording or .npz clip")
         return cls(context, load_clip(path), offset=offset, loop=loop, source=path)
 
     def start(self, t: float) -> None:
