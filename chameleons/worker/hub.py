@@ -63,6 +63,8 @@ ROUTES: dict[str, str] = {
     STOP_RECORDING: "recorder",
 }  # fmt: skip
 StatsSource = Callable[[], Mapping[str, Any]]
+STAGE_WAIT = 2.0  # seconds a command waits for its stage to connect
+RETRY_INTERVAL = 0.01
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,6 +92,7 @@ class ControlHub:
         self.errors: Counter[str] = Counter()
         self.commands: Counter[str] = Counter()
         self._heartbeats = 0
+        self._waiting: list[tuple[float, Command, list[bytes]]] = []
 
     def run(self, stop: threading.Event) -> None:
         sockets = self._open()
@@ -109,6 +112,9 @@ class ControlHub:
                     next_beat += self.config.heartbeat_interval
                     send_message(uplink, self.heartbeat())
                 timeout = max(0.0, min(next_hello, next_beat) - time.monotonic())
+                if self._waiting:  # commands for a stage that is still connecting
+                    self._retry(server, stages)
+                    timeout = min(timeout, RETRY_INTERVAL)
                 events = dict(poller.poll(min(POLL_MS, int(timeout * 1000) + 1)))
                 if server in events:
                     self._drain(server, lambda f: self._on_command(f, server, stages))
@@ -170,9 +176,28 @@ class ControlHub:
         stage = ROUTES[command.type]
         try:
             stages.send_multipart([stage.encode(), *frames], zmq.NOBLOCK)
-        except zmq.ZMQError as exc:
-            raise CommandError("stage_unavailable", f"{stage}: {exc.strerror}",
-                               seq=command.seq, command=command.type) from exc  # fmt: skip
+        except zmq.ZMQError:
+            # Not connected (yet): over ipc/tcp a stage's connection completes a moment
+            # after it starts. Retry for a while before answering with an error.
+            deadline = time.monotonic() + STAGE_WAIT
+            self._waiting.append((deadline, command, frames))
+
+    def _retry(self, server: zmq.Socket[bytes], stages: zmq.Socket[bytes]) -> None:
+        waiting, self._waiting = self._waiting, []
+        now = time.monotonic()
+        for deadline, command, frames in waiting:
+            stage = ROUTES[command.type]
+            try:
+                stages.send_multipart([stage.encode(), *frames], zmq.NOBLOCK)
+            except zmq.ZMQError as exc:
+                if now < deadline:
+                    self._waiting.append((deadline, command, frames))
+                    continue
+                error = CommandError("stage_unavailable", f"{stage}: {exc.strerror}",
+                                     seq=command.seq, command=command.type)  # fmt: skip
+                self.errors["command_stage_unavailable"] += 1
+                self.commands["failed"] += 1
+                send_message(server, make_error_ack(error, source=self.name))
 
     def _on_stage_reply(self, frames: list[bytes], server: zmq.Socket[bytes]) -> None:
         try:

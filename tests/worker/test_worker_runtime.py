@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -12,6 +14,7 @@ from chameleons.worker.control import make_command
 from chameleons.worker.envelope import serialize
 from chameleons.worker.recording import read_recording
 from chameleons.worker.runtime import Worker, WorkerConfig
+from chameleons.worker.stage import Endpoints
 from tests.worker.control_peer import ControlPeer
 
 BOOTH = "booth-t"
@@ -133,3 +136,19 @@ def test_default_copy_delay_is_4_000_seconds(context: zmq.Context[zmq.Socket[byt
         status = peer.command(BOOTH, "status").result
         assert running.behaviour.router.current_name == "copy"
     assert status["booth"] == BOOTH
+
+
+def test_the_same_stages_run_over_ipc_sockets(
+    context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer
+) -> None:
+    """Only the endpoints change between threads (inproc) and processes (ipc/tcp)."""
+    directory = Path(tempfile.mkdtemp(prefix="chm-", dir="/tmp"))  # ipc paths must be short
+    try:
+        config = _config(peer, endpoints=Endpoints.ipc(BOOTH, directory))
+        with Worker(config, context=context) as running:
+            assert peer.command(BOOTH, "set_behaviour", {"name": "natural"}).ok
+            peer.wait(lambda: running.renderer.core is not None
+                      and running.renderer.core.keyframes_in > 20)  # fmt: skip
+            assert sorted(p.name for p in directory.iterdir())[0].endswith(".sock")
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
