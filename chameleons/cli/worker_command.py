@@ -37,7 +37,8 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 )
 @click.option("--natural", "natural_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None,
-              help="Recording `natural` replays (take CSV, Parquet, .npz).")  # fmt: skip
+              help="Recording `natural` replays (take CSV, Parquet, .npz); "
+                   "without it, a synthetic face.")  # fmt: skip
 @click.option("--control", default=None, help="Server command endpoint (ROUTER) to connect to.")
 @click.option("--telemetry", default=None, help="Server telemetry endpoint (SUB) to connect to.")
 @click.option("--tick-rate", type=float, default=None, help="Renderer rate in Hz. [125]")
@@ -86,6 +87,8 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
     params: dict[str, Any] = {}
     if options.get("natural_path") is not None:
         params["path"] = str(options["natural_path"])
+    elif options["behaviour"] == "natural":
+        params["seed"] = 0  # standalone without a recording: the synthetic face
     render = RenderConfig(
         tick_rate=float(pick("tick_rate", "worker_tick_rate", 125.0)),
         face_rate=float(pick("face_rate", "worker_face_rate", 25.0)),

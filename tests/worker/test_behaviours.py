@@ -66,6 +66,8 @@ def test_unknown_behaviour_and_bad_params_are_clear_errors() -> None:
         create_behaviour("copy", {"speed": 2}, context)
     with pytest.raises(BehaviourError, match="takes no parameters"):
         create_behaviour("still", {"x": 1}, context)
+    with pytest.raises(BehaviourError, match="natural needs a 'path'"):
+        create_behaviour("natural", {}, context)  # never a silent synthetic stand-in
 
 
 def test_copy_default_delay_is_four_seconds() -> None:

@@ -4,7 +4,7 @@ recorded stream — the yoked control), looping, starting at a chosen offset.
 The loop seam is crossfaded: with period ``P = duration - seam``, the first ``seam``
 seconds of each pass blend the clip's tail into its head, so output is continuous.
 Parameters: ``path`` (take CSV, Parquet recording or ``.npz``), ``offset`` seconds, ``loop``;
-without a ``path``, a synthetic face from the simulator (``seed``) stands in.
+or, instead of ``path``, ``seed``: a synthetic face from the simulator (demos, tests).
 """
 
 from __future__ import annotations
@@ -69,12 +69,14 @@ class NaturalBehaviour(Behaviour):
             raise BehaviourError(f"loop must be true or false, got {loop!r}")
         offset = number_param(params, "offset", 0.0, low=0.0, high=1e6)
         path = params.get("path")
-        if path is None:  # no recording given: a synthetic stand-in, so demos work
+        if path is None and "seed" in params:  # asked for explicitly: a synthetic stand-in
             seed = int(number_param(params, "seed", 0, low=0, high=2**31))
             return cls(context, synthetic_clip(seed), offset=offset, loop=loop,
                        source=f"synthetic:{seed}")  # fmt: skip
         if not isinstance(path, str) or not path:
-            raise BehaviourError("path must name a take CSV, Parquet recording or .npz clip")
+            # Never a silent stand-in: the yoked control must replay a real recording.
+            raise BehaviourError("natural needs a 'path' to a take CSV, Parquet recording or "
+                                 ".npz clip (or a 'seed' for a synthetic face)")  # fmt: skip
         return cls(context, load_clip(path), offset=offset, loop=loop, source=path)
 
     def start(self, t: float) -> None:
