@@ -69,8 +69,9 @@ class Summary:
         span = f"{self.codes[0]}-{self.codes[-1]}" if count > 1 else "".join(self.codes)
         per = self.seconds / count if count else 0.0
         tally = self.tally
+        sessions, people = _count(count, "session"), _count(count, "participant")
         lines = [
-            f"Rehearsed {count} sessions ({count} participants, {span}) of study "
+            f"Rehearsed {sessions} ({people}, {span}) of study "
             f"{self.study_id} ({self.study_name}) in {self.seconds:.1f} s ({per:.1f} s each); "
             f"pattern {self.options.pattern}, seed {self.options.seed}.",
             f"Prompts: {tally.prompts_played} played through the worker, "
@@ -91,6 +92,10 @@ class Summary:
         lines += [f"Note: {problem}" for problem in tally.problems[:5]]
         lines.append("Export with: chameleons export --include-rehearsal --out DIR")
         return lines
+
+
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}{'' if number == 1 else 's'}"
 
 
 def keying_for(config_hash: str, studies: Sequence[Study]) -> Keying:

@@ -1,0 +1,78 @@
+"""`chameleons rehearse`: on an embedded system it starts itself, and against a running
+server with a staff login; refused logins and missing credentials say what is wrong."""
+
+from __future__ import annotations
+
+import secrets
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from sqlalchemy import select
+
+from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.models import Participant, Session, StaffUser
+from chameleons.cli.main import cli
+from chameleons.rehearsal.embedded import BOT_USERNAME, embedded_system
+from chameleons.settings import Settings
+
+pytestmark = pytest.mark.slow
+
+
+def _sessions(settings: Settings) -> list[tuple[str, str, bool]]:
+    """(participant code, session state, rehearsal) of every session in the database."""
+    engine = build_engine(settings.effective_database_url)
+    try:
+        with build_sessionmaker(engine)() as db:
+            query = select(Participant.code, Session.state, Session.is_rehearsal).join(
+                Participant, Participant.id == Session.participant_id
+            )
+            return [tuple(row) for row in db.execute(query.order_by(Session.id))]
+    finally:
+        engine.dispose()
+
+
+def _bot_active(settings: Settings) -> bool | None:
+    engine = build_engine(settings.effective_database_url)
+    try:
+        with build_sessionmaker(engine)() as db:
+            query = select(StaffUser.is_active).where(StaffUser.username == BOT_USERNAME)
+            return db.scalars(query).first()
+    finally:
+        engine.dispose()
+
+
+def test_without_a_server_it_starts_one_and_stops_it(tmp_path: Path) -> None:
+    data = tmp_path / "data"
+    env = {"CHAMELEONS_DATA_DIR": str(data)}
+    args = ["rehearse", "-n", "2", "--script", "silent", "--pattern", "random", "--seed", "4"]
+    result = CliRunner().invoke(cli, args, env=env, catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    assert "Rehearsed 2 sessions (2 participants, R001-R002)" in result.output
+    assert "chameleons export --include-rehearsal" in result.output
+    settings = Settings(data_dir=data, _env_file=None)
+    assert _sessions(settings) == [("R001", "complete", True), ("R002", "complete", True)]
+    assert _bot_active(settings) is False, "the bot account stays usable after the run"
+
+
+def test_against_a_running_server_with_a_staff_login(tmp_path: Path) -> None:
+    settings = Settings(data_dir=tmp_path / "data", secret_key=secrets.token_urlsafe(32),
+                        _env_file=None)  # fmt: skip
+    runner = CliRunner()
+    with embedded_system(settings, simulate_face=False) as target:
+        login = ["--server", target.base_url, "--username", target.username]
+        args = ["rehearse", "-n", "1", "--script", "brief", *login, "--booth", target.booth]
+        result = runner.invoke(cli, [*args, "--password", target.password])
+        assert result.exit_code == 0, result.output
+        assert "Rehearsed 1 session (1 participant, R001)" in result.output
+        assert "prompts voiced" in result.output
+        refused = runner.invoke(cli, [*args, "--password", "not the password"])
+        assert refused.exit_code == 1
+        assert f"Cannot log in to {target.base_url}" in refused.output
+    assert _sessions(settings) == [("R001", "complete", True)]
+
+
+def test_a_server_needs_a_login() -> None:
+    result = CliRunner().invoke(cli, ["rehearse", "-n", "1", "--server", "http://127.0.0.1:9"])
+    assert result.exit_code == 2
+    assert "--server needs --username and --password" in result.output
