@@ -146,7 +146,9 @@ def test_the_same_stages_run_over_ipc_sockets(
     try:
         config = _config(peer, endpoints=Endpoints.ipc(BOOTH, directory))
         with Worker(config, context=context) as running:
-            assert peer.command(BOOTH, "set_behaviour", {"name": "natural"}).ok
+            assert peer.command(
+                BOOTH, "set_behaviour", {"name": "natural", "params": {"seed": 1}}
+            ).ok
             peer.wait(lambda: running.renderer.core is not None
                       and running.renderer.core.keyframes_in > 20)  # fmt: skip
             assert sorted(p.name for p in directory.iterdir())[0].endswith(".sock")
