@@ -111,7 +111,7 @@ def message_frame(message: Message) -> FaceFrame:
     except (KeyError, TypeError, ValueError) as exc:
         raise EnvelopeError("bad_face", "missing frame times") from exc
     vector = message.array()
-    if vector.shape != (FaceFrame.VECTOR_SIZE,) or not math.isfinite(capture + receive):
+    if vector.shape != (FaceFrame.VECTOR_SIZE,) or not (math.isfinite(capture) and math.isfinite(receive)):
         raise EnvelopeError("bad_face", f"face payload has {vector.size} values")
     if not np.all(np.isfinite(vector)):
         raise EnvelopeError("bad_face", "non-finite values")
