@@ -128,3 +128,15 @@ def live_server(app: FastAPI) -> Iterator[LiveServer]:
     server.start()
     yield server
     server.stop()
+
+
+BROWSER_FIXTURES = {"playwright_instance", "browser", "context", "page", "phone_context"}
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Every test that drives Chromium is marked ``browser``: Playwright's sync API keeps an
+    asyncio loop running in the main thread for the rest of the process, so `make test`
+    runs browser tests in a pytest run of their own (``-m browser``)."""
+    for item in items:
+        if BROWSER_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.browser)
