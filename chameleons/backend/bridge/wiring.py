@@ -1,8 +1,10 @@
 """Starts the app's link to its workers for the lifetime of the server.
 
 The bridge binds its ZeroMQ sockets (loopback unless configured), relays the virtual
-robot's frames to the display pages and the pages' speech events back to the worker, and,
-in the embedded setup (``embedded_worker``), supervises a local worker process.
+robot's frames to the display pages and the pages' speech events back to the worker, starts
+the booth flow (the robot and the recordings follow the session, outages reach the
+timeline: :mod:`chameleons.backend.booth.flows`), and, in the embedded setup
+(``embedded_worker``), supervises a local worker process.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from functools import partial
 import zmq
 from fastapi import FastAPI
 
+from chameleons.backend.booth.flows import BoothFlow
 from chameleons.backend.bridge.bridge import Bridge
 from chameleons.backend.bridge.supervisor import WorkerSupervisor
 from chameleons.backend.display.channel import get_display_channel
@@ -56,6 +59,7 @@ async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]
 
     bridge.add_listener("display.", relay)
     forward_speech_events(channel, bridge.send_command)
+    flow = app.state.booth_flow = BoothFlow(app.state).start(bridge)  # before any worker hello
     supervisor: WorkerSupervisor | None = None
     if settings.embedded_worker:
         supervisor = WorkerSupervisor(
@@ -68,5 +72,6 @@ async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]
     finally:
         if supervisor is not None:
             await supervisor.stop()
+        await flow.stop(drain_seconds=5.0)  # the worker's last recordings get indexed
         app.state.bridge = None
         await bridge.stop()

@@ -11,11 +11,14 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 from collections import Counter, defaultdict
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncIterator, Callable, Iterator
 from typing import Any
 
+log = logging.getLogger(__name__)
 Message = dict[str, Any]
+Listener = Callable[[str, Message], None]
 RESYNC: Message = {"type": "resync"}
 
 
@@ -56,6 +59,21 @@ class LiveHub:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._subscribers: dict[str, set[Subscription]] = defaultdict(set)
         self._present: Counter[str] = Counter()
+        self._listeners: list[Listener] = []
+
+    def add_listener(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(channel, message)`` for every message published on any channel,
+        on the hub's event loop (server-side reactions to committed events, e.g. the booth
+        flow). It must return at once (queue the work); its exceptions are logged. Call this
+        from the running loop; returns a function that removes the listener."""
+        self._loop = asyncio.get_running_loop()
+        self._listeners.append(listener)
+
+        def remove() -> None:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
+        return remove
 
     def publish(self, channel: str, message: Message) -> None:
         """Deliver ``message`` to the channel's subscribers; safe from any thread."""
@@ -106,3 +124,8 @@ class LiveHub:
     def _deliver(self, channel: str, message: Message) -> None:
         for subscription in list(self._subscribers.get(channel, ())):
             subscription.offer(message)
+        for listener in list(self._listeners):
+            try:
+                listener(channel, message)
+            except Exception:  # a listener's bug must not stop live updates
+                log.exception("live hub listener failed on %s", channel)

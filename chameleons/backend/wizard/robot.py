@@ -1,25 +1,31 @@
 """Put the robot in the interaction's condition and face: ``set_behaviour`` and ``set_face``
 to the booth's worker, both logged (``robot.applied`` or ``robot.not_applied``).
 
-The console calls this when an interaction starts and after a condition switch, and the
-wizard can repeat it by hand. Behaviour parameters a condition needs (e.g. the recording
-``natural`` replays) come from ``app.state.behaviour_params[condition]`` when the server
-provides them; without them the worker's own defaults apply, and a refusal is shown.
+The console calls :func:`apply` when an interaction starts and after a condition switch, and
+the wizard can repeat it by hand; the server's booth flow (:mod:`chameleons.backend.booth`)
+calls :func:`apply_with` for the interaction whose events it reacts to, sending only what the
+worker has not acknowledged already, so the two never fight. Behaviour parameters come from
+:func:`chameleons.backend.booth.service.behaviour_params`: ``app.state.behaviour_params``
+per condition, and for ``natural`` the clip it replays (the yoked control or the demo clip),
+logged with the set-up.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
+from chameleons.backend.booth.service import behaviour_params
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
 from chameleons.backend.wizard import repository, worker_link
-from chameleons.backend.wizard.playback import read, write
+from chameleons.backend.wizard.playback import write
 from chameleons.backend.wizard.service import Outcome
 from chameleons.worker.control import SET_BEHAVIOUR, SET_FACE
 
@@ -36,6 +42,17 @@ class Target:
     booth: str
     condition: str
     face: str
+    params: dict[str, Any] | None = None
+    natural_source: dict[str, Any] | None = None
+
+    def behaviour_body(self) -> dict[str, Any]:
+        body: dict[str, Any] = {"name": self.condition}
+        if self.params:
+            body["params"] = dict(self.params)
+        return body
+
+
+Finder = Callable[[Session], Target]
 
 
 def target_of(db: Session, session_id: int) -> Target:
@@ -50,36 +67,78 @@ def target_of(db: Session, session_id: int) -> Target:
                   view.session.booth, interaction.condition, interaction.face)  # fmt: skip
 
 
+def prepared(db: Session, state: Any, find: Finder) -> Target:
+    """The target with its behaviour parameters (choosing ``natural``'s clip once)."""
+    target = find(db)
+    params, source = behaviour_params(db, state, target.interaction_id, target.condition)
+    return replace(target, params=params, natural_source=source)
+
+
 def _result(outcome: Outcome) -> dict[str, Any]:
-    return {"sent": outcome.sent, "reason": outcome.reason, "detail": outcome.detail}
+    result = {"sent": outcome.sent, "reason": outcome.reason, "detail": outcome.detail}
+    if outcome.result and outcome.result.get("unchanged"):
+        result["unchanged"] = True
+    return result
 
 
-def record(db: Session, target: Target, behaviour: Outcome, face: Outcome) -> Event:
+def record(
+    db: Session, target: Target, behaviour: Outcome, face: Outcome, source: str = "wizard"
+) -> Event:
+    payload: dict[str, Any] = {
+        "position": target.position,
+        "condition": target.condition,
+        "face": target.face,
+        "behaviour": _result(behaviour),
+        "face_result": _result(face),
+    }
+    if target.params:
+        payload["params"] = dict(target.params)
+    if target.natural_source is not None:
+        payload["natural_source"] = dict(target.natural_source)
     return events.record(
         db,
         APPLIED if behaviour.sent and face.sent else NOT_APPLIED,
-        source="wizard",
+        source=source,
         study_id=target.study_id,
         session_id=target.session_id,
         interaction_id=target.interaction_id,
-        payload={
-            "position": target.position,
-            "condition": target.condition,
-            "face": target.face,
-            "behaviour": _result(behaviour),
-            "face_result": _result(face),
-        },
+        payload=payload,
     )
 
 
 async def apply(state: Any, session_id: int) -> dict[str, Any]:
-    target = await run_in_threadpool(read, state, target_of, session_id)
+    """The console's set-up of the session's current interaction (always sent)."""
+    return await apply_with(state, partial(target_of, session_id=session_id))
+
+
+async def apply_with(
+    state: Any, find: Finder, *, source: str = "wizard", only_changes: bool = False
+) -> dict[str, Any]:
+    """Set up the robot for the target ``find`` picks; with ``only_changes`` a command whose
+    body the booth's worker has acknowledged already is not sent again (it would restart a
+    ``natural`` clip or a ``copy`` delay)."""
+    target = await run_in_threadpool(write, state, prepared, state, find)
     bridge = worker_link.bridge_of(state)
-    params = (getattr(state, "behaviour_params", None) or {}).get(target.condition)
-    body: dict[str, Any] = {"name": target.condition}
-    if params:
-        body["params"] = dict(params)
-    behaviour = await worker_link.send_command(bridge, target.booth, SET_BEHAVIOUR, body)
-    face = await worker_link.send_command(bridge, target.booth, SET_FACE, {"face_id": target.face})
-    event = await run_in_threadpool(write, state, record, target, behaviour, face)
+    behaviour = await _send(bridge, target.booth, SET_BEHAVIOUR, target.behaviour_body(),
+                            only_changes)  # fmt: skip
+    face = await _send(bridge, target.booth, SET_FACE, {"face_id": target.face}, only_changes)
+    event = await run_in_threadpool(write, state, record, target, behaviour, face, source)
     return {"event_id": event.id, "kind": event.kind, **event.payload}
+
+
+async def _send(
+    bridge: Any | None, booth: str, command: str, body: dict[str, Any], only_changes: bool
+) -> Outcome:
+    if only_changes and _acknowledged(bridge, booth, command) == body:
+        return Outcome(True, result={"unchanged": True})
+    return await worker_link.send_command(bridge, booth, command, body)
+
+
+def _acknowledged(bridge: Any | None, booth: str, command: str) -> dict[str, Any] | None:
+    """What the bridge last had acknowledged for this command on this booth."""
+    reader = getattr(bridge, "state", None)
+    if not callable(reader):
+        return None
+    state = reader(booth)
+    value = state.behaviour if command == SET_BEHAVIOUR else state.face
+    return value if isinstance(value, dict) else None

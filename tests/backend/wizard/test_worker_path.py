@@ -129,12 +129,17 @@ def test_the_robot_is_set_to_the_interaction_s_condition_and_face(
 
 
 @pytest.mark.usefixtures("worker")
-def test_a_refusal_by_the_worker_is_logged_with_its_reason(wizard: WizardBot) -> None:
+def test_a_refusal_by_the_worker_is_logged_with_its_reason(
+    app: FastAPI, wizard: WizardBot, tmp_path: Path
+) -> None:
+    # ``natural`` works out of the box (yoked or demo clip): a lab-configured clip that is
+    # missing on the worker's disk is refused instead.
+    app.state.behaviour_params = {"natural": {"path": str(tmp_path / "missing.npz")}}
     wizard.switch_condition("natural", 1)
     result = wizard.staff.post(f"{api(wizard)}/robot/apply")
     assert result["kind"] == "robot.not_applied"
     assert result["behaviour"]["reason"] == "bad_behaviour"
-    assert "natural needs a 'path'" in result["behaviour"]["detail"]
+    assert "motion recording not found" in result["behaviour"]["detail"]
     assert result["face_result"]["sent"] is True
 
 

@@ -1,0 +1,320 @@
+"""The booth follows the session on its own: server-side reactions to committed events.
+
+- ``interaction.advanced`` to ``discussion`` (the interaction starts): the robot is set to
+  the interaction's condition and face (:func:`chameleons.backend.wizard.robot.apply_with`,
+  sending only what the worker has not acknowledged already, so the console's own set-up
+  and this one never fight), and the worker starts recording it;
+- ``condition.switched`` on a running interaction: the robot is set up again;
+- ``interaction.advanced`` to ``done``: the recording stops and its files are indexed as
+  Recording rows (from the worker's answer, plus a scan of the directory that recovers crash
+  journals); a ``recording_stopped`` event from the worker (e.g. the recorder closing on a
+  clean worker stop) is indexed too;
+- the bridge's ``worker.<booth>`` messages and the driver's robot-state events become
+  ``worker.lost`` / ``worker.restarted`` / ``worker.connected`` / ``robot.disconnected`` /
+  ``robot.connected`` events of the session running on that booth, so the dashboard's
+  outage flags see them.
+
+Nothing here runs inside a request: the hub's listener only queues a job. Jobs run on the
+event loop in order per session (and per booth for outages); database work goes to the
+thread pool. A missing or silent worker never raises: it is logged (``robot.not_applied``,
+``recording.not_started``, ``recording.not_stopped``) with the reason.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections import deque
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, TypeVar
+
+from sqlalchemy.orm import Session
+from starlette.concurrency import run_in_threadpool
+
+from chameleons.backend.booth import repository, service
+from chameleons.backend.events import repository as events
+from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.studies.errors import ConflictError, NotFoundError
+from chameleons.backend.wizard import robot, worker_link
+from chameleons.backend.wizard.service import Outcome
+from chameleons.worker.control import START_RECORDING, STOP_RECORDING
+from chameleons.worker.envelope import Message
+
+log = logging.getLogger(__name__)
+T = TypeVar("T")
+Job = Callable[[], Awaitable[None]]
+SOURCE = "server"
+WORKER_KINDS = {
+    "worker_lost": "worker.lost",
+    "worker_restarted": "worker.restarted",
+    "worker_connected": "worker.connected",
+}
+SUMMARY_FIELDS = ("instance", "restarts", "last_seen_s")
+ROBOT_KINDS = {"disconnected": "robot.disconnected", "closed": "robot.disconnected",
+               "connected": "robot.connected"}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Slot:
+    """Where an interaction runs."""
+
+    study_id: int
+    session_id: int
+    interaction_id: int
+    position: int
+    booth: str
+    running: bool
+
+
+def slot_of(db: Session, interaction_id: int) -> Slot | None:
+    located = repository.locate(db, interaction_id)
+    if located is None:
+        return None
+    s, i = located.session, located.interaction
+    return Slot(s.study_id, s.id, i.id, i.position, s.booth, located.running)
+
+
+def running_target(db: Session, interaction_id: int) -> robot.Target:
+    """The robot set-up of this interaction, while it runs (else a conflict: skip it)."""
+    located = repository.locate(db, interaction_id)
+    if located is None or not located.running:
+        raise ConflictError(f"Interaction {interaction_id} is not running.")
+    s, i = located.session, located.interaction
+    return robot.Target(s.study_id, s.id, i.id, i.position, s.booth, i.condition, i.face)
+
+
+class BoothFlow:
+    def __init__(self, state: Any) -> None:
+        self.state = state
+        self._lanes: dict[str, deque[Job]] = {}
+        self._tasks: dict[str, asyncio.Task[None]] = {}
+        self._remove_listener: Callable[[], None] | None = None
+        self._stopped = False
+
+    # --- lifecycle -------------------------------------------------------------------------
+    def start(self, bridge: Any | None = None) -> BoothFlow:
+        """Listen to committed events (and to ``bridge``); call from the running loop."""
+        self._remove_listener = self.state.live_hub.add_listener(self._on_committed)
+        if bridge is not None:
+            bridge.add_listener("worker.", self._on_worker)
+            bridge.add_listener("event.", self._on_worker_event)
+        return self
+
+    async def stop(self, drain_seconds: float = 0.0) -> None:
+        """Stop listening; with ``drain_seconds``, let queued jobs finish that long first."""
+        if self._remove_listener is not None:
+            self._remove_listener()
+        if drain_seconds > 0:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self.settled(), drain_seconds)
+        self._stopped = True
+        tasks = list(self._tasks.values())
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+
+    async def settled(self) -> None:
+        """Wait until every queued job has run (tests, shutdown)."""
+        while self._tasks:
+            await asyncio.gather(*list(self._tasks.values()), return_exceptions=True)
+
+    # --- listeners (on the loop; they only queue) --------------------------------------------
+    def _on_committed(self, _channel: str, message: dict[str, Any]) -> None:
+        event = message.get("event") if message.get("type") == "event" else None
+        if not isinstance(event, dict) or event.get("interaction_id") is None:
+            return
+        interaction_id, kind = int(event["interaction_id"]), event.get("kind")
+        step = (event.get("payload") or {}).get("to")
+        lane = f"session:{event.get('session_id')}"
+        if kind == "interaction.advanced" and step == "discussion":
+            self._enqueue(lane, partial(self._interaction_started, interaction_id))
+        elif kind == "condition.switched":
+            self._enqueue(lane, partial(self._set_up_robot, interaction_id))
+        elif kind == "interaction.advanced" and step == "done":
+            self._enqueue(lane, partial(self._interaction_done, interaction_id))
+
+    def _on_worker(self, message: Message) -> None:
+        kind = WORKER_KINDS.get(message.type)
+        booth = message.topic.partition(".")[2]
+        if kind is not None:
+            body = message.body
+            payload = {"booth": booth, **{k: body.get(k) for k in SUMMARY_FIELDS}}
+            self._enqueue(f"booth:{booth}", partial(self._log_outage, booth, kind, payload, None))
+
+    def _on_worker_event(self, message: Message) -> None:
+        booth = message.topic.partition(".")[2]
+        body = message.body
+        if message.type == "robot_state":
+            kind = ROBOT_KINDS.get(str(body.get("state")))
+            if kind is not None:
+                payload = {"booth": booth, **{k: v for k, v in body.items() if k != "wall_time"}}
+                worker_time = body.get("worker_time")
+                when = float(worker_time) if isinstance(worker_time, int | float) else None
+                self._enqueue(f"booth:{booth}",
+                              partial(self._log_outage, booth, kind, payload, when))  # fmt: skip
+        elif message.type == "recording_stopped":
+            self._enqueue(f"booth:{booth}", partial(self._route_reported, dict(body)))
+
+    # --- lanes ---------------------------------------------------------------------------------
+    def _enqueue(self, key: str, job: Job) -> None:
+        if self._stopped:
+            return
+        lane = self._lanes.get(key)
+        if lane is None:
+            lane = self._lanes[key] = deque()
+            self._tasks[key] = asyncio.create_task(self._drain(key, lane))
+        lane.append(job)
+
+    async def _drain(self, key: str, lane: deque[Job]) -> None:
+        try:
+            while lane:
+                job = lane.popleft()
+                try:
+                    await job()
+                except Exception:  # one failed reaction must not stop the others
+                    log.exception("booth flow job on %s failed", key)
+        finally:
+            # No await between the empty check and here: nothing can be queued meanwhile.
+            if self._lanes.get(key) is lane:
+                del self._lanes[key]
+                del self._tasks[key]
+
+    # --- database helpers ----------------------------------------------------------------------
+    def _read(self, work: Callable[..., T], *args: Any) -> Awaitable[T]:
+        def run() -> T:
+            db: Session = self.state.sessionmaker()
+            try:
+                return work(db, *args)
+            finally:
+                db.close()
+
+        return run_in_threadpool(run)
+
+    def _write(self, work: Callable[..., T], *args: Any) -> Awaitable[T]:
+        def run() -> T:
+            with write_session(self.state.sessionmaker, self.state.live_hub) as db:
+                return work(db, *args)
+
+        return run_in_threadpool(run)
+
+    def _log(self, slot: Slot, kind: str, payload: dict[str, Any]) -> Awaitable[Any]:
+        return self._write(
+            lambda db: events.record(
+                db, kind, source=SOURCE, study_id=slot.study_id, session_id=slot.session_id,
+                interaction_id=slot.interaction_id, payload={"position": slot.position, **payload},
+            )
+        )  # fmt: skip
+
+    # --- jobs ----------------------------------------------------------------------------------
+    async def _interaction_started(self, interaction_id: int) -> None:
+        slot = await self._read(slot_of, interaction_id)
+        if slot is None or not slot.running:
+            return
+        await self._set_up_robot(interaction_id)
+        if service.config_of(self.state).record:
+            await self._start_recording(slot)
+
+    async def _set_up_robot(self, interaction_id: int) -> None:
+        find = partial(running_target, interaction_id=interaction_id)
+        with contextlib.suppress(ConflictError, NotFoundError):  # over already: nothing to do
+            await robot.apply_with(self.state, find, source=SOURCE, only_changes=True)
+
+    async def _start_recording(self, slot: Slot) -> None:
+        directory = self._directory(slot)
+        body = {"interaction_id": slot.interaction_id, "directory": str(directory)}
+        outcome = await self._command(slot.booth, START_RECORDING, body)
+        if outcome.sent:
+            files = (outcome.result or {}).get("files", {})
+            payload = {"directory": str(directory), "files": files}
+            await self._log(slot, repository.RECORDING_STARTED, payload)
+        else:
+            await self._log(slot, "recording.not_started", _why(outcome))
+
+    async def _interaction_done(self, interaction_id: int) -> None:
+        slot = await self._read(slot_of, interaction_id)
+        if slot is None or not service.config_of(self.state).record:
+            return
+        body = {"interaction_id": interaction_id}
+        outcome = await self._command(slot.booth, STOP_RECORDING, body)
+        directory = self._directory(slot)
+        if outcome.sent:
+            rows = await self._index(slot, outcome.result, directory)
+            kind, payload = "recording.stopped", {"recordings": rows}
+        else:
+            # A worker that is gone cannot be writing: its journals are safe to recover now;
+            # one that is only slow reports the files itself when it closes them.
+            gone = not self._worker_connected(slot.booth)
+            rows = await self._index(slot, None, directory) if gone else []
+            kind, payload = "recording.not_stopped", {**_why(outcome), "recordings": rows}
+        started: bool = await self._read(repository.recording_started, interaction_id)
+        if rows or started:
+            await self._log(slot, kind, payload)
+
+    async def _route_reported(self, body: dict[str, Any]) -> None:
+        """A ``recording_stopped`` event: index its files in the interaction's own lane."""
+        try:
+            interaction_id = int(body.get("interaction_id"))  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return
+        slot = await self._read(slot_of, interaction_id)
+        if slot is not None:
+            job = partial(self._index_reported, slot, body)
+            self._enqueue(f"session:{slot.session_id}", job)
+
+    async def _index_reported(self, slot: Slot, body: dict[str, Any]) -> None:
+        rows = await self._index(slot, body, None)
+        if rows:
+            await self._log(slot, "recording.indexed", {"recordings": rows})
+
+    async def _index(
+        self, slot: Slot, reported: dict[str, Any] | None, scan: Path | None
+    ) -> list[dict[str, Any]]:
+        data_dir = service.data_dir_of(self.state)
+
+        def work(db: Session) -> list[dict[str, Any]]:
+            added = service.index_recordings(db, slot.interaction_id, data_dir, reported, scan)
+            return service.describe(added)
+
+        return await self._write(work)
+
+    async def _log_outage(
+        self, booth: str, kind: str, payload: dict[str, Any], worker_time: float | None
+    ) -> None:
+        def work(db: Session) -> None:
+            session = repository.active_session(db, booth)
+            if session is None:
+                return  # nobody is in the booth: nothing to flag
+            interaction = repository.running_interaction(db, session)
+            events.record(
+                db, kind, source="bridge", study_id=session.study_id, session_id=session.id,
+                interaction_id=interaction.id if interaction else None,
+                payload={"position": interaction.position if interaction else None, **payload},
+                worker_time=worker_time,
+            )  # fmt: skip
+
+        await self._write(work)
+
+    # --- the worker ----------------------------------------------------------------------------
+    def _directory(self, slot: Slot) -> Path:
+        data_dir = service.data_dir_of(self.state)
+        return service.recording_directory(data_dir, slot.study_id, slot.session_id)
+
+    async def _command(self, booth: str, command: str, body: dict[str, Any]) -> Outcome:
+        bridge = worker_link.bridge_of(self.state)
+        return await worker_link.send_command(bridge, booth, command, body)
+
+    def _worker_connected(self, booth: str) -> bool:
+        bridge = worker_link.bridge_of(self.state)
+        workers = getattr(bridge, "workers", None)
+        if not callable(workers):
+            return False
+        info = workers().get(booth)
+        return bool(info is not None and info.connected(getattr(bridge, "stale_after", 3.0)))
+
+
+def _why(outcome: Outcome) -> dict[str, Any]:
+    return {"reason": outcome.reason, "detail": outcome.detail}
