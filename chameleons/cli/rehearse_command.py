@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import signal
+import sys
+
 import click
 
 from chameleons.cli.common import load_settings
@@ -90,6 +93,9 @@ def rehearse(
             return
         from chameleons.rehearsal.embedded import embedded_system
 
+        # A plain SIGTERM would end the process without stopping what it started: leave
+        # through SystemExit instead, so the embedded system's clean-up runs.
+        signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
         click.echo("Starting an embedded server, worker (virtual robot) and simulated face...")
         with embedded_system(load_settings(), study_id, simulate_face) as target:
             click.echo(f"Server on {target.base_url}; rehearsing {participants} sessions.")

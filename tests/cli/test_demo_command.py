@@ -80,11 +80,19 @@ def _children(pid: int) -> set[int]:
     pending = [pid]
     while pending:
         parent = pending.pop()
-        path = Path(f"/proc/{parent}/task/{parent}/children")
-        kids = [int(p) for p in path.read_text().split()] if path.exists() else []
+        # Per thread: a child started from another thread is listed under that thread.
+        listed = Path(f"/proc/{parent}/task").glob("*/children")
+        kids = [int(pid) for path in listed for pid in _read(path).split()]
         found.update(kids)
         pending.extend(kids)
     return found
+
+
+def _read(path: Path) -> str:
+    try:
+        return path.read_text()
+    except (FileNotFoundError, ProcessLookupError):  # the thread or process has just ended
+        return ""
 
 
 def _alive(pid: int) -> bool:

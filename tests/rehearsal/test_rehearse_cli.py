@@ -3,7 +3,11 @@ server with a staff login; refused logins and missing credentials say what is wr
 
 from __future__ import annotations
 
+import os
 import secrets
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -76,3 +80,47 @@ def test_a_server_needs_a_login() -> None:
     result = CliRunner().invoke(cli, ["rehearse", "-n", "1", "--server", "http://127.0.0.1:9"])
     assert result.exit_code == 2
     assert "--server needs --username and --password" in result.output
+
+
+def _running_in_session(session_id: int) -> dict[int, str]:
+    """Live (not zombie) processes of a session and their command lines (Linux /proc)."""
+    running = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            command = (stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        if int(fields[3]) == session_id and fields[0] != "Z":  # fields: state, ppid, pgrp, sid
+            running[int(stat.parent.name)] = command
+    return running
+
+
+@pytest.mark.parametrize("stop", ["ctrl-c", "kill"])
+def test_ctrl_c_or_sigterm_stops_everything_it_started(tmp_path: Path, stop: str) -> None:
+    env = {**os.environ, "CHAMELEONS_DATA_DIR": str(tmp_path / "data"), "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "chameleons", "rehearse", "-n", "50", "--script", "silent"]
+    process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, text=True,
+                               stderr=subprocess.STDOUT, start_new_session=True)  # fmt: skip
+    try:
+        assert process.stdout is not None
+        output = []
+        for line in process.stdout:  # the first finished session is the event to act on
+            output.append(line)
+            if "1/50" in line:
+                break
+        assert len(_running_in_session(process.pid)) >= 3, output  # itself, worker, face
+        if stop == "ctrl-c":
+            os.killpg(process.pid, signal.SIGINT)  # a terminal's Ctrl-C reaches the group
+        else:
+            process.terminate()  # `kill PID`: only the command itself hears it
+        assert process.wait(timeout=30) != 0
+        assert _running_in_session(process.pid) == {}
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        for pid in _running_in_session(process.pid):  # what a failed run left behind
+            os.kill(pid, signal.SIGKILL)
+        if process.stdout is not None:
+            process.stdout.close()
