@@ -3,9 +3,11 @@ threads in this process, a Live Link receiver on a free port) that a simulated p
 
 from __future__ import annotations
 
+import contextlib
 import random
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -72,18 +74,34 @@ def flow(app: FastAPI, client: TestClient, bridge: Bridge) -> Iterator[BoothFlow
     yield from start_flow(app, client, bridge)
 
 
-@pytest.fixture
-def worker(bridge: Bridge, tmp_path: Path) -> Iterator[Worker]:
+def worker_config(bridge: Bridge, tmp_path: Path, **changes: Any) -> WorkerConfig:
     config = WorkerConfig(booth=BOOTH, driver="null", livelink_port=0, facecapturex_port=None,
                           capture_host="127.0.0.1", data_dir=tmp_path / "worker",
                           command_endpoint=bridge.command_endpoint,
                           telemetry_endpoint=bridge.telemetry_endpoint)  # fmt: skip
+    return replace(config, **changes)
+
+
+@pytest.fixture
+def worker(bridge: Bridge, tmp_path: Path) -> Iterator[Worker]:
+    with running_worker(bridge, worker_config(bridge, tmp_path)) as running:
+        yield running
+
+
+@contextlib.contextmanager
+def running_worker(bridge: Bridge, config: WorkerConfig) -> Iterator[Worker]:
+    """A started worker, known to the bridge; stopped at the end unless stopped already."""
     running = Worker(config).start()
     try:
-        until(lambda: BOOTH in bridge.workers(), what="the worker's hello")
+        until(lambda: running.hub.instance in _instances(bridge), what="the worker's hello")
         yield running
     finally:
-        running.stop()
+        if not running.stop_event.is_set():
+            running.stop()
+
+
+def _instances(bridge: Bridge) -> set[str]:
+    return {info.instance for info in bridge.workers().values()}
 
 
 def new_session(pi: StaffApi, study_id: int) -> tuple[WizardBot, ParticipantBot]:
