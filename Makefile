@@ -22,6 +22,10 @@ test: $(STAMP)
 	$(BIN)/pytest -n $(PYTEST_WORKERS) -m "not browser"
 	$(BIN)/pytest -n $(PYTEST_WORKERS) -m browser
 
+# The README's screenshots (docs/screenshots/), from a real demo session in Chromium.
+screenshots: $(STAMP)
+	$(BIN)/python scripts/take_screenshots.py
+
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy chameleons tests

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import signal
 import sys
+from urllib.parse import urlsplit
 
 import click
 import segno
@@ -21,23 +22,43 @@ from chameleons.cli.embedded import (
 )
 
 
-def _print_welcome(base: str, data: DemoData, display_url: str, data_dir: str) -> None:
+def _print_welcome(
+    base: str, data: DemoData, display_url: str, data_dir: str, simulate_face: bool
+) -> None:
     phone_url = f"{base}/p/{data.phone_token}"
     click.echo(f"\nMechanical Chameleons demo — data in {data_dir} (SQLite)\n")
     click.echo("Open these in three browser windows (log in with the staff accounts below):")
     click.echo(f"  wizard console   {base}/wizard/sessions/{data.session_id}")
     click.echo(f"  robot display    {display_url}")
+    click.echo("                   (click it once so the browser lets it play the robot's voice)")
     click.echo(f"  PI dashboard     {base}/pi")
     click.echo(f"  participant      {phone_url}   (participant {data.participant_code};")
-    click.echo(
-        f"                   on a phone in the same network scan the QR code, or {base}/join)"
-    )
+    click.echo(f"                   or type the phone code of the wizard console at {base}/join)")
+    if _loopback(base):
+        click.echo(
+            "  These links work on this computer only. For a real phone in the same network,"
+            "\n  restart with --host 0.0.0.0 and CHAMELEONS_PUBLIC_URL=http://<this computer's"
+            " LAN address>:PORT\n  (the QR code below then holds that address)."
+        )
+    else:
+        click.echo("  On a phone in the same network, scan the QR code.")
     click.echo("")
     segno.make(phone_url, error="m").terminal(compact=True)
     click.echo("Staff accounts:")
     for username, password in data.credentials.items():
         click.echo(f"  {username:<8} password: {password}")
-    click.echo("\nA simulated face stream stands in for the iPhone. Ctrl-C stops everything.\n")
+    face = (
+        "A simulated face stream stands in for the iPhone."
+        if simulate_face
+        else "Waiting for a real iPhone (Live Link Face or FaceCaptureX)."
+    )
+    click.echo(f"\n{face} Ctrl-C stops everything.\n")
+
+
+def _loopback(base: str) -> bool:
+    """Whether phones elsewhere cannot reach ``base`` (its host is this computer only)."""
+    host = urlsplit(base).hostname or ""
+    return host == "localhost" or host.startswith("127.") or host == "::1"
 
 
 @click.command()
@@ -62,7 +83,7 @@ def demo(host: str, port: int, simulate_face: bool) -> None:
     app = create_app(settings)
     base = settings.effective_public_url
     display_url = base + display_path(signing_key(app), settings.embedded_worker_booth)
-    _print_welcome(base, data, display_url, str(settings.data_dir.resolve()))
+    _print_welcome(base, data, display_url, str(settings.data_dir.resolve()), simulate_face)
     simulator = start_face_simulator(settings) if simulate_face else None
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
