@@ -76,7 +76,7 @@ def prepared(db: Session, state: Any, find: Finder) -> Target:
 
 def _result(outcome: Outcome) -> dict[str, Any]:
     result = {"sent": outcome.sent, "reason": outcome.reason, "detail": outcome.detail}
-    if outcome.result and outcome.result.get("unchanged"):
+    if _unchanged(outcome):
         result["unchanged"] = True
     return result
 
@@ -107,23 +107,31 @@ def record(
 
 
 async def apply(state: Any, session_id: int) -> dict[str, Any]:
-    """The console's set-up of the session's current interaction (always sent)."""
-    return await apply_with(state, partial(target_of, session_id=session_id))
+    """The console's set-up of the session's current interaction (always sent and logged)."""
+    result = await apply_with(state, partial(target_of, session_id=session_id))
+    assert result is not None  # without only_changes every command is sent
+    return result
 
 
 async def apply_with(
     state: Any, find: Finder, *, source: str = "wizard", only_changes: bool = False
-) -> dict[str, Any]:
+) -> dict[str, Any] | None:
     """Set up the robot for the target ``find`` picks; with ``only_changes`` a command whose
     body the booth's worker has acknowledged already is not sent again (it would restart a
-    ``natural`` clip or a ``copy`` delay)."""
+    ``natural`` clip), and when nothing needed sending nothing is logged (None)."""
     target = await run_in_threadpool(write, state, prepared, state, find)
     bridge = worker_link.bridge_of(state)
     behaviour = await _send(bridge, target.booth, SET_BEHAVIOUR, target.behaviour_body(),
                             only_changes)  # fmt: skip
     face = await _send(bridge, target.booth, SET_FACE, {"face_id": target.face}, only_changes)
+    if _unchanged(behaviour) and _unchanged(face):
+        return None
     event = await run_in_threadpool(write, state, record, target, behaviour, face, source)
     return {"event_id": event.id, "kind": event.kind, **event.payload}
+
+
+def _unchanged(outcome: Outcome) -> bool:
+    return bool(outcome.result and outcome.result.get("unchanged"))
 
 
 async def _send(
