@@ -15,6 +15,7 @@ from statistics import mean
 from typing import Any
 
 import httpx
+from websockets.exceptions import InvalidHandshake
 
 from chameleons.backend.sessions.bot import ApiError, ParticipantBot, StaffApi, WizardBot
 from chameleons.experiment.model import Study
@@ -136,7 +137,7 @@ def rehearse(target: Target, options: Options, progress: Progress | None = None)
     ):
         staff = _log_in(http, target)
         study = pick_study(staff, target.study_id)
-        display = _open_display(target, http) if options.display else None
+        display = _open_display(target, http, say) if options.display else None
         try:
             summary = _sessions(target, options, staff, phone_http, study, say)
         finally:
@@ -158,9 +159,15 @@ def _log_in(http: httpx.Client, target: Target) -> StaffApi:
         raise RehearsalError(f"Cannot reach {target.base_url}: {error}") from error
 
 
-def _open_display(target: Target, http: httpx.Client) -> DisplayScreen:
+def _open_display(target: Target, http: httpx.Client, say: Progress) -> DisplayScreen | None:
+    """The booth's robot display, or None (said why) when the server refuses it: prompts
+    then go unvoiced, as with a display page that is not open, and the sessions still run."""
     cookie = "; ".join(f"{name}={value}" for name, value in http.cookies.items())
-    return DisplayScreen(target.base_url, target.booth, cookie, proxy=not target.local)
+    try:
+        return DisplayScreen(target.base_url, target.booth, cookie, proxy=not target.local)
+    except (InvalidHandshake, OSError, TimeoutError) as error:
+        say(f"No robot display for {target.booth} ({error}); rehearsing without it.")
+        return None
 
 
 def _sessions(
