@@ -10,7 +10,8 @@ cannot see is still indexed, from the worker's own frame count, with size 0.
 ``natural`` replays, in this order: a clip the lab configured
 (``app.state.behaviour_params["natural"]["path"]``); the yoked control — the participant
 stream of the most recent finished ``copy``/``still`` interaction of another participant of
-this study, at least ``min_yoked_frames`` long; else the shipped demo clip. The choice is
+this study, at least ``min_yoked_frames`` long; else the demo clip
+(``<prompts>/_natural/demo-natural.npz``, shipped in the repository's ``prompts/``). The choice is
 made once per interaction and logged (``behaviour.natural_source``), so every later set-up of
 that interaction replays the same recording and the export can say which one it was.
 """
@@ -31,11 +32,12 @@ from chameleons.backend.booth import repository
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Recording
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR, recording_file
+from chameleons.backend.wizard.catalogues import REPOSITORY_PROMPTS, prompts_root
 from chameleons.worker.recording import RecordingError, journal_path, recover_recording
 
 log = logging.getLogger(__name__)
-REPOSITORY_ROOT = Path(__file__).resolve().parents[3]
-DEMO_NATURAL_CLIP = REPOSITORY_ROOT / "prompts" / "_natural" / "demo-natural.npz"
+DEMO_CLIP_NAME = Path("_natural") / "demo-natural.npz"  # made by scripts/make_demo_natural_clip.py
+DEMO_NATURAL_CLIP = REPOSITORY_PROMPTS / DEMO_CLIP_NAME
 STREAMS = ("participant", "agent")
 PARQUET = ".parquet"
 
@@ -45,7 +47,7 @@ class BoothConfig:
     """Knobs of the booth flow (``app.state.booth_config`` overrides the defaults)."""
 
     min_yoked_frames: int = 1800  # 30 s at the phone's 60 fps
-    demo_clip: Path = DEMO_NATURAL_CLIP
+    demo_clip: Path | None = None  # None: <prompts>/_natural/demo-natural.npz
     record: bool = True  # start/stop the worker's recording with each interaction
 
 
@@ -56,6 +58,16 @@ def config_of(state: Any) -> BoothConfig:
 
 def data_dir_of(state: Any) -> Path:
     return Path(state.settings.data_dir)
+
+
+def demo_clip_of(state: Any) -> Path:
+    """The configured demo clip, else the one in the prompts folder in use, else the one
+    shipped in the repository."""
+    configured = config_of(state).demo_clip
+    if configured is not None:
+        return configured
+    in_use = prompts_root(state.settings) / DEMO_CLIP_NAME
+    return in_use if in_use.is_file() else DEMO_NATURAL_CLIP
 
 
 # --- recordings --------------------------------------------------------------------------------
@@ -207,6 +219,7 @@ def _choose(db: Session, state: Any, located: repository.Located) -> dict[str, A
                 "source": "yoked", "path": str(path.resolve()), "recording_id": recording.id,
                 "from_interaction_id": recording.interaction_id, "frames": recording.frames,
             }  # fmt: skip
-    if config.demo_clip.is_file():
-        return {"source": "demo", "path": str(config.demo_clip.resolve())}
-    return {"source": "none", "reason": f"no yoked recording and no demo clip {config.demo_clip}"}
+    demo = demo_clip_of(state)
+    if demo.is_file():
+        return {"source": "demo", "path": str(demo.resolve())}
+    return {"source": "none", "reason": f"no yoked recording and no demo clip {demo}"}
