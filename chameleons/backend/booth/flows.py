@@ -94,6 +94,7 @@ class BoothFlow:
         self._tasks: dict[str, asyncio.Task[None]] = {}
         self._remove_listener: Callable[[], None] | None = None
         self._stopped = False
+        self._robot_kinds: dict[str, str] = {}  # booth -> last robot.* kind logged
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self, bridge: Any | None = None) -> BoothFlow:
@@ -150,7 +151,9 @@ class BoothFlow:
         body = message.body
         if message.type == "robot_state":
             kind = ROBOT_KINDS.get(str(body.get("state")))
-            if kind is not None:
+            # A robot that stays away is retried with backoff: log the change, not each retry.
+            if kind is not None and self._robot_kinds.get(booth) != kind:
+                self._robot_kinds[booth] = kind
                 payload = {"booth": booth, **{k: v for k, v in body.items() if k != "wall_time"}}
                 worker_time = body.get("worker_time")
                 when = float(worker_time) if isinstance(worker_time, int | float) else None
