@@ -12,6 +12,7 @@ RUN pip install --no-cache-dir . \
     && mkdir -p /data && chown chameleons /data
 
 USER chameleons
-ENV CHAMELEONS_DATA_DIR=/data
+ENV CHAMELEONS_DATA_DIR=/data \
+    CHAMELEONS_PROMPTS_DIR=/app/prompts
 EXPOSE 8000 5555 5556 11111/udp 19977
 CMD ["chameleons", "serve", "--host", "0.0.0.0"]

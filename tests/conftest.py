@@ -48,7 +48,8 @@ def postgres_url(worker_id: str) -> Iterator[str]:
             pytest.fail("CHAMELEONS_REQUIRE_POSTGRES_TESTS is set but TEST_DATABASE_URL is not")
         pytest.skip("TEST_DATABASE_URL is not set: PostgreSQL tests skipped")
     url = make_url(base).set(drivername="postgresql+psycopg")
-    name = f"{url.database}_{worker_id}"
+    # Unique per run, so two test runs against one server never drop each other's database.
+    name = f"{url.database}_{worker_id}_{secrets.token_hex(3)}"
     admin = build_engine(url.render_as_string(hide_password=False))
     with admin.connect().execution_options(isolation_level="AUTOCOMMIT") as conn:
         conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))

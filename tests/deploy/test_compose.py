@@ -103,3 +103,9 @@ def test_dockerfile_installs_the_package() -> None:
     dockerfile = (ROOT / "Dockerfile").read_text()
     assert "pip install" in dockerfile
     assert re.search(r'CMD \["chameleons", "serve"', dockerfile)
+    fields = {f"CHAMELEONS_{field.upper()}" for field in Settings.model_fields}
+    for name in re.findall(r"\b(CHAMELEONS_[A-Z_]+)=", dockerfile):
+        assert name in fields, f"Dockerfile sets {name}, which is not a setting"
+    # The image ships the prompt catalogue and points the server at it.
+    assert "COPY prompts ./prompts" in dockerfile
+    assert "CHAMELEONS_PROMPTS_DIR=/app/prompts" in dockerfile
