@@ -111,8 +111,10 @@ def message_frame(message: Message) -> FaceFrame:
     except (KeyError, TypeError, ValueError) as exc:
         raise EnvelopeError("bad_face", "missing frame times") from exc
     vector = message.array()
-    if vector.shape != (FaceFrame.VECTOR_SIZE,) or not (math.isfinite(capture) and math.isfinite(receive)):
+    if vector.shape != (FaceFrame.VECTOR_SIZE,):
         raise EnvelopeError("bad_face", f"face payload has {vector.size} values")
+    if not (math.isfinite(capture) and math.isfinite(receive)):
+        raise EnvelopeError("bad_face", "non-finite frame times")
     if not np.all(np.isfinite(vector)):
         raise EnvelopeError("bad_face", "non-finite values")
     return FaceFrame.from_vector(vector, capture, receive, source)
