@@ -12,7 +12,12 @@
 - the bridge's ``worker.<booth>`` messages and the driver's robot-state events become
   ``worker.lost`` / ``worker.restarted`` / ``worker.connected`` / ``robot.disconnected`` /
   ``robot.connected`` events of the session running on that booth, so the dashboard's
-  outage flags see them.
+  outage flags see them;
+- a booth's worker connecting (``worker_connected``, ``worker_restarted``) while an
+  interaction runs there: whatever the worker has not acknowledged of that interaction's
+  set-up and recording is sent now (an interaction started before the worker came up would
+  otherwise run unset and unrecorded). The bridge's own replay after a restart re-sends only
+  what was acknowledged before it, so the two complement each other.
 
 Nothing here runs inside a request: the hub's listener only queues a job. Jobs run on the
 event loop in order per session (and per booth for outages); database work goes to the
@@ -48,6 +53,7 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 Job = Callable[[], Awaitable[None]]
 SOURCE = "server"
+CATCH_UP_KINDS = frozenset({"worker_connected", "worker_restarted"})
 WORKER_KINDS = {
     "worker_lost": "worker.lost",
     "worker_restarted": "worker.restarted",
@@ -76,6 +82,13 @@ def slot_of(db: Session, interaction_id: int) -> Slot | None:
         return None
     s, i = located.session, located.interaction
     return Slot(s.study_id, s.id, i.id, i.position, s.booth, located.running)
+
+
+def running_slot(db: Session, booth: str) -> Slot | None:
+    """The interaction running on ``booth`` now, if any."""
+    session = repository.active_session(db, booth)
+    interaction = repository.running_interaction(db, session) if session else None
+    return slot_of(db, interaction.id) if interaction is not None else None
 
 
 def running_target(db: Session, interaction_id: int) -> robot.Target:
@@ -145,6 +158,8 @@ class BoothFlow:
             body = message.body
             payload = {"booth": booth, **{k: body.get(k) for k in SUMMARY_FIELDS}}
             self._enqueue(f"booth:{booth}", partial(self._log_outage, booth, kind, payload, None))
+        if message.type in CATCH_UP_KINDS:
+            self._enqueue(f"booth:{booth}", partial(self._route_catch_up, booth))
 
     def _on_worker_event(self, message: Message) -> None:
         booth = message.topic.partition(".")[2]
@@ -220,6 +235,22 @@ class BoothFlow:
         await self._set_up_robot(interaction_id)
         if service.config_of(self.state).record:
             await self._start_recording(slot)
+
+    async def _route_catch_up(self, booth: str) -> None:
+        """A worker connected: catch up the interaction running on its booth, in that
+        interaction's own lane (after a start still being handled there)."""
+        slot = await self._read(running_slot, booth)
+        if slot is not None:
+            self._enqueue(f"session:{slot.session_id}", partial(self._catch_up, slot))
+
+    async def _catch_up(self, slot: Slot) -> None:
+        current = await self._read(slot_of, slot.interaction_id)
+        if current is None or not current.running:
+            return
+        await self._set_up_robot(slot.interaction_id)  # only what is not acknowledged
+        record = service.config_of(self.state).record
+        if record and not self._recording_acknowledged(slot.booth, slot.interaction_id):
+            await self._start_recording(current)
 
     async def _set_up_robot(self, interaction_id: int) -> None:
         find = partial(running_target, interaction_id=interaction_id)
@@ -309,6 +340,14 @@ class BoothFlow:
     async def _command(self, booth: str, command: str, body: dict[str, Any]) -> Outcome:
         bridge = worker_link.bridge_of(self.state)
         return await worker_link.send_command(bridge, booth, command, body)
+
+    def _recording_acknowledged(self, booth: str, interaction_id: int) -> bool:
+        """Whether the worker acknowledged recording this interaction (the bridge's state)."""
+        reader = getattr(worker_link.bridge_of(self.state), "state", None)
+        if not callable(reader):
+            return False
+        recording = reader(booth).recording
+        return isinstance(recording, dict) and recording.get("interaction_id") == interaction_id
 
     def _worker_connected(self, booth: str) -> bool:
         bridge = worker_link.bridge_of(self.state)
