@@ -8,7 +8,7 @@ from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
 
 from fastapi import FastAPI, Request
-from fastapi.responses import RedirectResponse, Response
+from fastapi.responses import FileResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 from starlette.middleware.sessions import SessionMiddleware
@@ -18,7 +18,7 @@ from chameleons.backend.analysis import pages as analysis_pages
 from chameleons.backend.auth import endpoints as auth_endpoints
 from chameleons.backend.auth import pages as auth_pages
 from chameleons.backend.auth.csrf import csrf_token
-from chameleons.backend.auth.dependencies import LoginRequiredError
+from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.bridge.wiring import worker_link
 from chameleons.backend.dashboard import pages as dashboard_pages
@@ -83,6 +83,16 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         https_only=settings.session_cookie_secure,
         max_age=12 * 3600,
     )
+
+    @app.exception_handler(PIRequiredError)
+    async def _pi_only(request: Request, _exc: PIRequiredError) -> Response:
+        return app.state.templates.TemplateResponse(  # type: ignore[no-any-return]
+            request, "forbidden.html", {"user": None}, status_code=403
+        )
+
+    @app.get("/favicon.ico", include_in_schema=False)
+    async def _favicon() -> Response:
+        return FileResponse(FRONTEND_DIR / "static" / "favicon.svg", media_type="image/svg+xml")
 
     @app.exception_handler(LoginRequiredError)
     async def _to_login(_request: Request, exc: LoginRequiredError) -> Response:

@@ -64,18 +64,18 @@ def _loopback(base: str) -> bool:
 @click.command()
 @click.option(
     "--host",
-    default="127.0.0.1",
-    show_default=True,
-    help="Bind address; 0.0.0.0 lets phones in the network connect.",
+    default=None,
+    help="Bind address (default CHAMELEONS_HOST or 127.0.0.1); 0.0.0.0 lets phones in the "
+    "network connect.",
 )
-@click.option("--port", type=int, default=8000, show_default=True)
+@click.option("--port", type=int, default=None, help="Port (default CHAMELEONS_PORT or 8000).")
 @click.option(
     "--simulate-face/--no-simulate-face",
     default=True,
     show_default=True,
     help="Send a synthetic face to the local worker (off: use a real iPhone).",
 )
-def demo(host: str, port: int, simulate_face: bool) -> None:
+def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
     study and plan, a local worker driving the virtual robot, and a simulated face."""
     settings = demo_settings(load_settings(host=host, port=port))

@@ -6,6 +6,7 @@ from pydantic import ValidationError
 from chameleons.backend.auth import service
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
+from chameleons.backend.migrate import current_revision, head_revision
 from chameleons.cli.common import load_settings
 
 
@@ -34,6 +35,10 @@ def user_add(name: str, role: str, password: str | None) -> None:
     settings = load_settings()
     engine = build_engine(settings.effective_database_url)
     try:
+        if current_revision(engine) != head_revision():
+            raise click.ClickException(
+                "The database is not set up (or not up to date): run `chameleons db upgrade` first."
+            )
         with session_scope(build_sessionmaker(engine)) as db:
             service.create_user(db, data)
     except service.UserExistsError as exc:

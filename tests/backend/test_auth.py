@@ -119,3 +119,18 @@ def test_home_links_by_role(client: TestClient, engine: Engine) -> None:
     page = client.get("/").text
     assert 'href="/wizard"' in page
     assert 'href="/pi"' not in page
+
+
+def test_a_wizard_on_a_pi_page_gets_a_readable_page(client: TestClient, engine: Engine) -> None:
+    add_user(engine, "wiz", "right password", "wizard")
+    login(client, "wiz", "right password")
+    response = client.get("/pi")
+    assert response.status_code == 403
+    assert "This page is for the PI" in response.text
+    assert client.get("/api/pi/overview").json()["detail"] == "Only the PI can do this."
+
+
+def test_favicon(client: TestClient) -> None:
+    response = client.get("/favicon.ico")
+    assert response.status_code == 200
+    assert response.text.startswith("<svg")

@@ -71,3 +71,10 @@ def test_serve_refuses_without_secret(cli_env: dict[str, str]) -> None:
     result = run_cli("serve", env=cli_env)
     assert result.returncode != 0
     assert "CHAMELEONS_SECRET_KEY" in result.stderr
+
+
+def test_user_add_before_migrations_says_what_to_do(cli_env: dict[str, str]) -> None:
+    result = run_cli("user", "add", "pia", "--role", "pi", "--password", "pw-123456", env=cli_env)
+    assert result.returncode != 0
+    assert "run `chameleons db upgrade` first" in result.stderr
+    assert "Traceback" not in result.stderr

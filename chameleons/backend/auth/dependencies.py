@@ -37,9 +37,15 @@ def current_staff(request: Request, db: DbSession) -> StaffUser:
     return user
 
 
-def require_pi(user: Annotated[StaffUser, Depends(current_staff)]) -> StaffUser:
+class PIRequiredError(Exception):
+    """A wizard opened a PI page; the app answers with a readable 403 page."""
+
+
+def require_pi(request: Request, user: Annotated[StaffUser, Depends(current_staff)]) -> StaffUser:
     if user.role != "pi":
-        raise HTTPException(status.HTTP_403_FORBIDDEN, "Only the PI can do this.")
+        if _is_api(request):
+            raise HTTPException(status.HTTP_403_FORBIDDEN, "Only the PI can do this.")
+        raise PIRequiredError
     return user
 
 
