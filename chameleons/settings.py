@@ -82,6 +82,15 @@ class Settings(BaseSettings):
     worker_crossfade_seconds: float = Field(default=0.3, ge=0, le=5)
     worker_copy_delay: float = Field(default=4.0, ge=0, le=11.5)
 
+    # The wizard console's health strip: a check outside these limits shows amber
+    # ("degraded") and turns red (the alarm) once it has lasted health_alarm_after_s; a
+    # disconnected worker or robot is an alarm at once. A bare Python loop on a 2-core PC
+    # measures ~3 ms p99 jitter (docs/performance.md), so the jitter limit sits above that.
+    health_max_jitter_p99_ms: float = Field(default=5.0, gt=0)
+    health_min_face_fps: float = Field(default=20.0, ge=0)
+    health_min_tick_ratio: float = Field(default=0.9, ge=0, le=1)  # of the nominal tick rate
+    health_alarm_after_s: float = Field(default=3.0, ge=0)
+
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None

@@ -1,6 +1,12 @@
 """The robot's health as the console's strip shows it: checks from the worker's telemetry,
 each ok or failing, and since when it has been failing.
 
+A failing check is ``degraded`` (amber) until it has failed for the grace period
+(``Settings.health_alarm_after_s``), then an ``alarm`` (red): a short dip of the frame
+rate or the jitter on a busy PC is not worth interrupting the wizard. A worker that is
+gone or a robot that is disconnected is an alarm at once. The limits are settings
+(``health_*``), defaults in :class:`Thresholds`.
+
 ``HealthTracker`` keeps the "failing since" moments per booth on ``app.state``, so a
 reloaded console still shows how long an alarm has been on.
 """
@@ -13,10 +19,29 @@ from dataclasses import dataclass, field
 from typing import Any
 
 STALE_AFTER_SECONDS = 3.0  # heartbeats come at 1 Hz: three missed ones mean "gone"
-MIN_INPUT_FPS = 20.0
-MIN_TICK_RATIO = 0.9  # of the nominal tick rate
-MAX_JITTER_P99_MS = 2.0
 NOMINAL_TICK_HZ = 125.0
+ALARM_AT_ONCE = frozenset({"worker", "robot"})  # nothing reaches the robot: no grace
+OK, UNKNOWN, DEGRADED, ALARM = "ok", "unknown", "degraded", "alarm"
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """Limits of the checks (defaults as in :class:`chameleons.settings.Settings`)."""
+
+    max_jitter_p99_ms: float = 5.0
+    min_face_fps: float = 20.0
+    min_tick_ratio: float = 0.9  # of the nominal tick rate
+    alarm_after_s: float = 3.0
+
+    @classmethod
+    def from_settings(cls, settings: Any) -> Thresholds:
+        return cls(
+            max_jitter_p99_ms=float(settings.health_max_jitter_p99_ms),
+            min_face_fps=float(settings.health_min_face_fps),
+            min_tick_ratio=float(settings.health_min_tick_ratio),
+            alarm_after_s=float(settings.health_alarm_after_s),
+        )
+
 
 CHECKS = ("worker", "input", "tick", "jitter", "robot")
 LABELS = {
@@ -37,15 +62,29 @@ class Check:
     ok: bool | None
     value: str
     failing_for: float | None = None
+    level: str = UNKNOWN
 
     def as_dict(self) -> dict[str, Any]:
         return {
             "id": self.id,
             "label": LABELS[self.id],
             "ok": self.ok,
+            "level": self.level,
             "value": self.value,
             "failing_for": None if self.failing_for is None else round(self.failing_for, 1),
         }
+
+    def grade(self, failing_for: float | None, alarm_after_s: float) -> None:
+        """Set ``failing_for`` and the level it gives."""
+        self.failing_for = failing_for
+        if self.ok is None:
+            self.level = UNKNOWN
+        elif self.ok:
+            self.level = OK
+        elif self.id in ALARM_AT_ONCE or (failing_for or 0.0) >= alarm_after_s:
+            self.level = ALARM
+        else:
+            self.level = DEGRADED
 
 
 def _number(data: Mapping[str, Any], *names: str) -> float | None:
@@ -69,8 +108,11 @@ def _flag(data: Mapping[str, Any], *names: str) -> bool | None:
     return None
 
 
-def evaluate(telemetry: Mapping[str, Any] | None, age: float | None) -> dict[str, Check]:
+def evaluate(
+    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None
+) -> dict[str, Check]:
     """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds."""
+    limits = limits or Thresholds()
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
         why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
         checks = {name: Check(name, None, "unknown") for name in (*CHECKS, "speaking")}
@@ -82,11 +124,12 @@ def evaluate(telemetry: Mapping[str, Any] | None, age: float | None) -> dict[str
     jitter = _number(telemetry, "jitter_ms.p99")
     robot = _flag(telemetry, "robot_connected")
     speaking = _flag(telemetry, "speaking")
-    tick_ok = tick is not None and tick >= MIN_TICK_RATIO * nominal
-    jitter_ok = jitter is not None and jitter <= MAX_JITTER_P99_MS
+    tick_ok = tick is not None and tick >= limits.min_tick_ratio * nominal
+    jitter_ok = jitter is not None and jitter <= limits.max_jitter_p99_ms
+    fps_ok = fps is not None and fps >= limits.min_face_fps
     return {
         "worker": Check("worker", True, "connected"),
-        "input": Check("input", fps is not None and fps >= MIN_INPUT_FPS, _fmt(fps, "fps")),
+        "input": Check("input", fps_ok, _fmt(fps, "fps")),
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
         "robot": Check("robot", robot is True, "connected" if robot else "disconnected"),
@@ -103,6 +146,7 @@ class HealthTracker:
     """When each check of each booth started failing (monotonic seconds)."""
 
     since: dict[tuple[str, str], float] = field(default_factory=dict)
+    limits: Thresholds = field(default_factory=Thresholds)
 
     def snapshot(
         self,
@@ -112,17 +156,20 @@ class HealthTracker:
         now: float | None = None,
     ) -> dict[str, Any]:
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age)
+        checks = evaluate(telemetry, age, self.limits)
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:
-                check.failing_for = moment - self.since.setdefault(key, moment)
+                check.grade(moment - self.since.setdefault(key, moment), self.limits.alarm_after_s)
             else:
                 self.since.pop(key, None)
+                check.grade(None, self.limits.alarm_after_s)
         return {
             "type": "health",
             "booth": booth,
             "ok": all(check.ok is not False for check in checks.values()),
+            "alarm": any(check.level == ALARM for check in checks.values()),
+            "alarm_after_s": self.limits.alarm_after_s,
             "checks": [checks[name].as_dict() for name in (*CHECKS, "speaking")],
             "telemetry": dict(telemetry) if telemetry is not None else None,
         }
@@ -131,5 +178,7 @@ class HealthTracker:
 def tracker_of(state: Any) -> HealthTracker:
     tracker: HealthTracker | None = getattr(state, "wizard_health", None)
     if tracker is None:
-        tracker = state.wizard_health = HealthTracker()
+        settings = getattr(state, "settings", None)
+        limits = Thresholds.from_settings(settings) if settings is not None else Thresholds()
+        tracker = state.wizard_health = HealthTracker(limits=limits)
     return tracker

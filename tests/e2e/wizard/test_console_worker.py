@@ -96,3 +96,15 @@ def test_starting_an_interaction_sets_the_robot_up(console: Console) -> None:
     chip = page.locator("#health .chip[data-check='behaviour']")
     expect(chip).to_have_attribute("data-state", "ok", timeout=15_000)
     expect(chip).to_contain_text("copy")
+
+
+@pytest.mark.usefixtures("worker")
+def test_a_failing_check_is_amber_then_red_after_the_grace_period(console: Console) -> None:
+    """No face reaches the worker: the face stream check degrades, then alarms."""
+    page = console.page
+    chip = page.locator("#health .chip[data-check='input']")
+    expect(chip).to_have_attribute("data-state", "degraded", timeout=15_000)
+    expect(chip).to_contain_text("degraded")
+    expect(page.locator("#health .alarm")).to_have_count(0)
+    expect(chip).to_have_attribute("data-state", "bad", timeout=15_000)
+    expect(page.locator("#health .alarm")).to_contain_text("Face stream")

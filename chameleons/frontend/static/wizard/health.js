@@ -1,8 +1,16 @@
-// The health strip: one chip per check from the worker's telemetry, an alarm when any fails.
+// The health strip: one chip per check from the worker's telemetry. A failing check is amber
+// ("degraded") until it has failed for the server's grace period, then red with an alarm line;
+// a lost worker or robot is red at once (the server grades each check: `level`).
 
 import { el, seconds } from "./dom.js";
 
 const SILENT_AFTER_MS = 3500;
+const STATES = { ok: "ok", unknown: "unknown", degraded: "degraded", alarm: "bad" };
+
+function stateOf(check) {
+  if (check.level && STATES[check.level]) return STATES[check.level];
+  return check.ok === null ? "unknown" : check.ok ? "ok" : "bad";
+}
 
 export class HealthStrip {
   constructor(container) {
@@ -20,27 +28,32 @@ export class HealthStrip {
     if (!mismatch) this.mismatchSince = null;
     else if (!this.mismatchSince) this.mismatchSince = Date.now();
     if (expectedBehaviour && running) {
+      // A switch takes a moment to reach the worker: the same grace as the server's checks.
+      const failingFor = mismatch ? (Date.now() - this.mismatchSince) / 1000 : null;
+      const grace = message.alarm_after_s ?? 0;
       checks.push({
         id: "behaviour",
         label: "Behaviour",
         ok: !mismatch,
+        level: !mismatch ? "ok" : failingFor >= grace ? "alarm" : "degraded",
         value: mismatch ? `${running}, should be ${expectedBehaviour}` : running,
-        failing_for: mismatch ? (Date.now() - this.mismatchSince) / 1000 : null,
+        failing_for: failingFor,
       });
     }
-    const failing = checks.filter((check) => check.ok === false);
+    const failing = checks.filter((check) => stateOf(check) === "bad");
     const chips = checks.map((check) => {
-      const state = check.ok === null ? "unknown" : check.ok ? "ok" : "bad";
+      const state = stateOf(check);
       return el(
         "span",
         {
           class: `chip ${state}`,
           dataset: { check: check.id, state },
-          title: state === "bad" ? `failing for ${seconds(check.failing_for || 0)}` : state,
+          title: state === "bad" || state === "degraded" ? `failing for ${seconds(check.failing_for || 0)}` : state,
         },
         el("strong", { text: check.label }),
         " ",
         check.value,
+        state === "degraded" ? el("span", { class: "since", text: " · degraded" }) : null,
         state === "bad" ? el("span", { class: "since", text: ` · ${seconds(check.failing_for || 0)}` }) : null,
       );
     });
