@@ -5,15 +5,12 @@ from __future__ import annotations
 
 import queue
 import shutil
-import socket
-import threading
 import wave
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
-import uvicorn
 from fastapi import FastAPI
 from playwright.sync_api import Page
 
@@ -99,30 +96,3 @@ def next_report(
         _booth, message = received.get(timeout=timeout)
         if message.get("type") == kind:
             return message
-
-
-class PortServer:
-    """uvicorn serving ``app`` on a given loopback port (to restart a server in place)."""
-
-    def __init__(self, app: FastAPI, port: int) -> None:
-        self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self._sock.bind(("127.0.0.1", port))
-        config = uvicorn.Config(app, log_level="warning", lifespan="off", ws="websockets-sansio")
-        self._server = uvicorn.Server(config)
-        self._thread = threading.Thread(
-            target=self._server.run, kwargs={"sockets": [self._sock]}, daemon=True
-        )
-
-    def __enter__(self) -> PortServer:
-        self._thread.start()
-        started = threading.Event()
-        while not self._server.started:  # polls readiness; not a fixed wait
-            if not self._thread.is_alive() or started.wait(0.005):
-                raise RuntimeError("server did not start")
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        self._server.should_exit = True
-        self._thread.join(timeout=10)
-        self._sock.close()

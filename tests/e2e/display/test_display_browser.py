@@ -26,7 +26,7 @@ from chameleons.backend.display.protocol import (
 )
 from chameleons.backend.display.tokens import signing_key
 from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES
-from tests.e2e.display.conftest import ACTOR, BOOTH, PortServer, next_report
+from tests.e2e.display.conftest import ACTOR, BOOTH, next_report
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
@@ -146,7 +146,7 @@ def test_page_reconnects_after_a_server_restart(
 ) -> None:
     live_server.stop()
     display_page.wait_for_function("!window.robotDisplay.connected()")
-    with PortServer(app, live_server.port):
+    with LiveServer(app, live_server.port, lifespan="off"):
         display_page.wait_for_function("window.robotDisplay.connected()")
         channel.publish(BOOTH, set_face_message("face-2"))
         display_page.wait_for_function("window.robotDisplay.state().face === 'face-2'")

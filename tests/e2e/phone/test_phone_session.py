@@ -20,8 +20,8 @@ from chameleons.backend.app import create_app
 from chameleons.backend.db import build_sessionmaker
 from chameleons.backend.models import Event, QuestionnaireResponse
 from chameleons.settings import Settings
-from tests.e2e.phone.servers import PortServer
 from tests.support.bots import PASSWORD, StaffApi, WizardBot, add_staff, study_with_plan
+from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
 SAVE = re.compile(r"^Save")
@@ -36,9 +36,9 @@ def database_url(sqlite_template: Path, tmp_path: Path) -> str:
 
 
 @pytest.fixture
-def server(app: Any) -> Iterator[list[PortServer]]:
+def server(app: Any) -> Iterator[list[LiveServer]]:
     """The running server, in a list so the test can swap in a restarted one."""
-    servers = [PortServer(app).start()]
+    servers = [LiveServer(app).start()]
     yield servers
     servers[-1].stop()
 
@@ -124,7 +124,7 @@ def negotiate(page: Page, wizard: WizardBot, position: int) -> None:
 
 
 def test_a_participant_completes_a_whole_session_on_a_phone(
-    phone_context: BrowserContext, server: list[PortServer], engine: Engine, settings: Settings
+    phone_context: BrowserContext, server: list[LiveServer], engine: Engine, settings: Settings
 ) -> None:
     add_staff(engine, "wiz", "wizard")
     http = httpx.Client(base_url=server[0].url, limits=httpx.Limits(max_keepalive_connections=0))
@@ -187,7 +187,7 @@ def test_a_participant_completes_a_whole_session_on_a_phone(
     page.locator("textarea").fill("The robot listened well.")
     server[0].stop()
     expect(page.locator("#connection")).to_have_text("Reconnecting…")
-    server.append(PortServer(create_app(settings), server[0].port).start())
+    server.append(LiveServer(create_app(settings), server[0].port).start())
     expect(page.locator("#connection")).to_have_text("Connected", timeout=15_000)
     expect_part(page, 4)
     expect(page.locator("textarea")).to_have_value("The robot listened well.")
