@@ -7,6 +7,7 @@
   const canvas = document.getElementById("face");
   const ctx = canvas.getContext("2d", { alpha: false });
   const debugBox = document.getElementById("debug");
+  const soundHint = document.getElementById("sound-hint");
   const debug = new URLSearchParams(location.search).get("debug") === "1";
   const N = FaceRenderer.NAMES.length;
   const MOUTH_JAW = FaceRenderer.NAMES.map((n, i) => (/^(mouth|jaw)/.test(n) ? i : -1)).filter((i) => i >= 0);
@@ -167,10 +168,21 @@
   audio.addEventListener("ended", () => { if (playback && playback.started) finish(playback, "ended"); });
   audio.addEventListener("error", () => { if (playback && audio.src === playback.url) finish(playback, "error"); });
 
+  // Sound counts as unlocked once anything played; until then the page shows a small hint
+  // (a browser without the autoplay flag needs one click or key press first).
+  let audioUnlocked = false;
+
+  function setUnlocked(unlocked) {
+    audioUnlocked = unlocked;
+    if (soundHint) soundHint.hidden = unlocked;
+  }
+
   function unlockAudio() {
-    if (playback) return;
+    if (audioUnlocked || playback) return;
     audio.src = SILENCE;
-    audio.play().then(() => audio.pause()).catch(() => {});
+    audio.play().then(() => { if (!playback) audio.pause(); setUnlocked(true); }).catch((err) => {
+      if (err && err.name === "NotAllowedError") setUnlocked(false);
+    });
   }
 
   function play(m, now) {
@@ -187,8 +199,12 @@
     curves.then((c) => {
       if (p.done) return undefined;
       p.curves = c;
-      return audio.play();
-    }).catch((err) => finish(p, err && err.name === "NotAllowedError" ? "autoplay_blocked" : "error"));
+      return audio.play().then(() => setUnlocked(true));
+    }).catch((err) => {
+      const blocked = Boolean(err && err.name === "NotAllowedError");
+      if (blocked) setUnlocked(false);
+      finish(p, blocked ? "autoplay_blocked" : "error");
+    });
   }
 
   function finish(p, reason) {
@@ -273,8 +289,8 @@
 
   // A click or key unlocks sound in browsers without the autoplay flag; double-click
   // toggles full screen; the wake lock keeps the booth screen on.
-  document.addEventListener("pointerdown", unlockAudio, { once: true });
-  document.addEventListener("keydown", unlockAudio, { once: true });
+  document.addEventListener("pointerdown", unlockAudio);
+  document.addEventListener("keydown", unlockAudio);
   document.addEventListener("dblclick", () => {
     if (document.fullscreenElement) document.exitFullscreen(); else document.documentElement.requestFullscreen().catch(() => {});
   });
@@ -286,11 +302,13 @@
     connected: () => connected,
     telemetry: () => stats.last || null,
     speaking: () => Boolean(playback && playback.started && !playback.done),
+    audioUnlocked: () => audioUnlocked,
   });
 
   window.addEventListener("resize", resize);
   resize();
   connect();
+  unlockAudio();  // succeeds at once where autoplay is allowed (kiosk flag), else the hint shows
   setInterval(report, 1000);
   setInterval(ping, 5000);
   requestAnimationFrame(frame);
