@@ -62,3 +62,12 @@ def same_origin(websocket: WebSocket) -> bool:
         return True  # not a browser (scripts, the rehearsal bot)
     host = websocket.headers.get("host", "")
     return origin.split("://", 1)[-1].rstrip("/") == host
+
+
+def base_url(websocket: WebSocket) -> str:
+    """The URL phones use: the configured public URL, else the one this socket came in on."""
+    configured = websocket.app.state.settings.public_url
+    if configured:
+        return str(configured).rstrip("/")
+    scheme = "https" if websocket.url.scheme == "wss" else "http"
+    return f"{scheme}://{websocket.headers.get('host', 'localhost')}"

@@ -43,14 +43,6 @@ def _snapshot(
         return {"type": "snapshot", "session": session_snapshot(flow, base_url, connections)}
 
 
-def _base_url(websocket: WebSocket) -> str:
-    configured = websocket.app.state.settings.public_url
-    if configured:
-        return str(configured).rstrip("/")
-    scheme = "https" if websocket.url.scheme == "wss" else "http"
-    return f"{scheme}://{websocket.headers.get('host', 'localhost')}"
-
-
 @router.websocket("/ws/sessions/{session_id}")
 async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
     factory = websocket.app.state.sessionmaker
@@ -59,7 +51,7 @@ async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
     if not live.same_origin(websocket) or not await run_in_threadpool(_is_staff, factory, user_id):
         await websocket.close(code=4401)
         return
-    base_url = _base_url(websocket)
+    base_url = live.base_url(websocket)
     try:
         first = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)
     except NotFoundError:

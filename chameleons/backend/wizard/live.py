@@ -52,14 +52,6 @@ def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Messa
     return {"type": "console", **console_state(db, state, session_id, base_url)}
 
 
-def _base_url(websocket: WebSocket) -> str:
-    configured = websocket.app.state.settings.public_url
-    if configured:
-        return str(configured).rstrip("/")
-    scheme = "https" if websocket.url.scheme == "wss" else "http"
-    return f"{scheme}://{websocket.headers.get('host', 'localhost')}"
-
-
 @router.websocket("/ws/wizard/sessions/{session_id}")
 async def console_feed(websocket: WebSocket, session_id: int) -> None:
     state = websocket.app.state
@@ -69,7 +61,7 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
     ):
         await websocket.close(code=UNAUTHORIZED)
         return
-    base_url = _base_url(websocket)
+    base_url = live.base_url(websocket)
     try:
         first = await run_in_threadpool(read, state, _state_message, state, session_id, base_url)
     except NotFoundError:
