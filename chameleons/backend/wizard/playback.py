@@ -53,13 +53,18 @@ async def play(
         body["lipsync_path"] = cue.lipsync
     bridge = worker_link.bridge_of(state)
     events = speech.open_events(bridge, cue.booth)
+    display = speech.open_display(state, cue.booth, cue.prompt.id)
     outcome = await worker_link.send_command(bridge, cue.booth, PLAY_PROMPT, body)
     acked_at = utcnow()
     event = await run_in_threadpool(write, state, service.record_outcome, cue, outcome, acked_at)
     if outcome.sent and events is not None:
         _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue)))
+        if display is not None:
+            _spawn(state, display.wait(_failure_logger(state, cue)))
     else:
         speech.close(events)
+        if display is not None:
+            display.close()
     return {
         **cue.summary(),
         "sent": outcome.sent,
@@ -103,6 +108,16 @@ def _logger(state: Any, cue: Cue) -> speech.OnSpeech:
         )
 
     return log_speech
+
+
+def _failure_logger(state: Any, cue: Cue) -> speech.OnFailure:
+    async def log_failure(reason: str) -> None:
+        detail = speech.DISPLAY_FAILURES.get(reason, reason)
+        await run_in_threadpool(
+            write, state, service.record_display_failure, cue, reason, detail, utcnow()
+        )
+
+    return log_failure
 
 
 def _spawn(state: Any, work: Coroutine[Any, Any, None]) -> None:

@@ -147,6 +147,15 @@ def record_speech(
     return _log(db, cue, kind, "worker", payload, at=received_at, worker_time=worker_time)
 
 
+def record_display_failure(
+    db: Session, cue: Cue, reason: str, detail: str, received_at: datetime
+) -> Event:
+    """Log the end of a play the robot display could not start (e.g. ``autoplay_blocked``)."""
+    payload = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id, "reason": reason,
+               "detail": detail}  # fmt: skip
+    return _log(db, cue, SPEECH_END, "display", payload, at=received_at)
+
+
 def record_stop(db: Session, session_id: int, outcome: Outcome) -> Event:
     view = _running(db, session_id)
     last = repository.last_played(db, session_id)

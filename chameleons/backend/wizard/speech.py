@@ -3,6 +3,11 @@
 The subscription to the booth's events is opened before the command goes out, so a worker
 that starts speaking at once is not missed. Events are ``event.<booth>`` messages of type
 ``speech_start``/``speech_end`` whose body carries ``prompt_id`` and ``worker_time``.
+
+The virtual robot's page also says why a play never started (``autoplay_blocked``: the
+browser wants one click before it plays sound). That reason does not travel through the
+worker, so :class:`DisplayWatch` hears it on the server's display channel, where the page
+reports it, and the play's ``prompt.speech_end`` carries it to the console.
 """
 
 from __future__ import annotations
@@ -19,8 +24,55 @@ SPEECH_END = "speech_end"
 START_TIMEOUT_SECONDS = 5.0
 END_MARGIN_SECONDS = 10.0
 
+DISPLAY_FAILURES = {"autoplay_blocked": "robot display needs a click to enable sound"}
+
 # (started, worker_time) -> logged
 OnSpeech = Callable[[bool, float | None], Awaitable[None]]
+# reason -> logged
+OnFailure = Callable[[str], Awaitable[None]]
+
+
+class DisplayWatch:
+    """Listens on the display channel (from its creation, before the command goes out) for
+    the page's report that this play could not start; call :meth:`wait` once."""
+
+    def __init__(self, channel: Any, booth: str, prompt_id: str) -> None:
+        self.channel, self.booth, self.prompt_id = channel, booth, prompt_id
+        self.failed: asyncio.Future[str] = asyncio.get_running_loop().create_future()
+        channel.add_listener(self._hear)
+
+    def _hear(self, booth: str, message: dict[str, Any]) -> None:
+        reason = message.get("reason")
+        if (booth == self.booth and message.get("type") == "speech"
+                and message.get("event") == "end" and reason in DISPLAY_FAILURES
+                and message.get("prompt_id") == self.prompt_id
+                and not self.failed.done()):  # fmt: skip
+            self.failed.set_result(str(reason))
+
+    def close(self) -> None:
+        with contextlib.suppress(ValueError):
+            self.channel.remove_listener(self._hear)
+
+    async def wait(self, on_failure: OnFailure, timeout: float = START_TIMEOUT_SECONDS) -> None:
+        """Report a failure the page gives within ``timeout``, then stop listening."""
+        try:
+            reason = await asyncio.wait_for(self.failed, timeout)
+            await on_failure(reason)
+        except TimeoutError:
+            return
+        except Exception:
+            log.exception("watching the display for %s failed", self.prompt_id)
+        finally:
+            self.close()
+
+
+def open_display(state: Any, booth: str, prompt_id: str) -> DisplayWatch | None:
+    """A watch on the booth's display page, or None when this server has no display channel
+    (no page ever connected: only a physical robot speaks)."""
+    channel = getattr(state, "display_channel", None)
+    if channel is None or not callable(getattr(channel, "add_listener", None)):
+        return None
+    return DisplayWatch(channel, booth, prompt_id)
 
 
 def open_events(bridge: Any | None, booth: str) -> Any | None:

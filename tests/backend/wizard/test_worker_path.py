@@ -13,6 +13,7 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
+from chameleons.backend.display.channel import get_display_channel
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.backend.wizard.conftest import api
 from tests.backend.wizard.test_live import next_of
@@ -150,3 +151,31 @@ def test_without_a_worker_the_robot_set_up_is_logged_as_not_applied(
     assert result["kind"] == "robot.not_applied"
     assert result["behaviour"]["reason"] == "unreachable"
     assert result["face_result"]["reason"] == "unreachable"
+
+
+@pytest.mark.usefixtures("worker")
+def test_a_play_the_robot_display_cannot_start_tells_the_console_why(
+    app: FastAPI, client: TestClient, wizard: WizardBot
+) -> None:
+    channel = get_display_channel(app)
+    result = wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": "ack_yes"})
+    assert result["sent"] is True, result["detail"]
+    played = prompt_events(wizard)["prompt.played"]
+    # What the page reports when its browser blocks sound (the Chromium case is tested in
+    # tests/e2e/display/test_display_sound_hint.py), through the server's display channel.
+    prompt_id = played["payload"]["prompt_id"]
+    report = {"type": "speech", "event": "end", "play_id": "p#1", "prompt_id": prompt_id,
+              "reason": "autoplay_blocked"}  # fmt: skip
+    assert client.portal is not None
+    client.portal.call(channel.report, BOOTH, report)
+
+    def blocked() -> dict[str, Any] | None:
+        events = wizard.staff.get(f"/api/sessions/{wizard.session_id}/events")
+        return next((e for e in events if e["kind"] == "prompt.speech_end"
+                     and e["payload"].get("reason")), None)  # fmt: skip
+
+    end = until(blocked)
+    assert end["source"] == "display"
+    assert end["payload"]["play_event_id"] == played["id"]
+    assert end["payload"]["reason"] == "autoplay_blocked"
+    assert end["payload"]["detail"] == "robot display needs a click to enable sound"

@@ -22,7 +22,10 @@ export function playState(events) {
   const related = (kind) => later.find((e) => e.kind === kind && e.payload.play_event_id === played.id);
   const base = { played, text: played.payload.text, group: played.payload.group, duration: played.payload.duration };
   if (later.some((e) => e.kind === "prompt.stopped")) return { ...base, phase: "stopped" };
-  if (related("prompt.speech_end")) return { ...base, phase: "finished" };
+  const ended = related("prompt.speech_end");
+  // The robot display could not play it (e.g. it needs a click to enable sound): say so.
+  if (ended && ended.payload.reason) return { ...base, phase: "not-sent", notPlayed: true, reason: ended.payload.detail || ended.payload.reason };
+  if (ended) return { ...base, phase: "finished" };
   const failed = related("prompt.not_sent");
   if (failed) return { ...base, phase: "not-sent", reason: NOT_SENT[failed.payload.reason] || failed.payload.detail };
   const started = related("prompt.speech_start") || related("prompt.acked");
@@ -54,7 +57,7 @@ export class NowPlaying {
       idle: "",
       sending: "Sending… ",
       playing: "Playing: ",
-      "not-sent": `NOT SENT, ${state.reason}: `,
+      "not-sent": `${state.notPlayed ? "NOT PLAYED" : "NOT SENT"}, ${state.reason}: `,
       stopped: "Stopped: ",
       finished: "Last: ",
     }[state.phase];

@@ -24,7 +24,7 @@ export function describe(event, names) {
     case "prompt.acked": return `Worker acknowledged ${p.prompt_id} after ${p.click_to_ack_ms} ms`;
     case "prompt.not_sent": return `Not sent: ${p.detail || p.reason}`;
     case "prompt.speech_start": return `Speech started ${p.click_to_speech_ms} ms after the click`;
-    case "prompt.speech_end": return `Speech ended (${p.prompt_id})`;
+    case "prompt.speech_end": return p.reason ? `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
