@@ -67,7 +67,10 @@ export class HealthStrip {
         )
       : null;
     this.container.classList.toggle("failing", failing.length > 0);
-    this.container.replaceChildren(el("span", { class: "k", text: `Robot ${message.booth}` }), ...chips, alarm);
+    // replaceChildren would print a null as the text "null".
+    const parts = [el("span", { class: "k", text: `Robot ${message.booth}` }), ...chips];
+    if (alarm) parts.push(alarm);
+    this.container.replaceChildren(...parts);
   }
 
   checkSilence() {
