@@ -81,6 +81,9 @@ class Settings(BaseSettings):
     worker_fir_cutoff_hz: float = Field(default=6.0, gt=0)
     worker_crossfade_seconds: float = Field(default=0.3, ge=0, le=5)
     worker_copy_delay: float = Field(default=4.0, ge=0, le=11.5)
+    # Study face id -> the Furhat's own face name (e.g. {"face-1": "Isabel"}); an id not
+    # listed is sent to the robot unchanged (and reported in the worker's telemetry).
+    worker_furhat_faces: dict[str, str] = Field(default_factory=dict)
 
     # The wizard console's health strip: a check outside these limits shows amber
     # ("degraded") and turns red (the alarm) once it has lasted health_alarm_after_s; a

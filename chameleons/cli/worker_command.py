@@ -28,6 +28,9 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
               help="Robot driver. [virtual]")  # fmt: skip
 @click.option("--robot-url", default=None,
               help="Furhat Realtime API URL. [ws://127.0.0.1:9000/v1/events]")  # fmt: skip
+@click.option("--furhat-face", "furhat_faces", multiple=True, metavar="STUDY_FACE=ROBOT_FACE",
+              help="Map a study face id to the Furhat's face name (repeatable), "
+                   "e.g. face-1=Isabel; over CHAMELEONS_WORKER_FURHAT_FACES.")  # fmt: skip
 @click.option("--livelink-port", type=int, default=None, help="Live Link Face UDP port (0: any).")
 @click.option("--facecapturex-port", type=int, default=None, help="FaceCaptureX TCP port (0: any).")
 @click.option("--behaviour", default="still", show_default=True,
@@ -45,7 +48,8 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 @click.option("--face-rate", type=float, default=None, help="Face parameter rate in Hz. [25]")
 @click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
 def worker(
-    booth: str | None, driver: str | None, robot_url: str | None, livelink_port: int | None,
+    booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
+    livelink_port: int | None,
     facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
     tick_rate: float | None, face_rate: float | None, verbose: bool,
@@ -59,7 +63,8 @@ def worker(
     logging.basicConfig(level=logging.DEBUG if verbose else settings.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
     config = build_config(
-        settings, booth=booth, driver=driver, robot_url=robot_url, livelink_port=livelink_port,
+        settings, booth=booth, driver=driver, robot_url=robot_url, furhat_faces=furhat_faces,
+        livelink_port=livelink_port,
         facecapturex_port=facecapturex_port, behaviour=behaviour, copy_delay=copy_delay,
         natural_path=natural_path, control=control, telemetry=telemetry, tick_rate=tick_rate,
         face_rate=face_rate,
@@ -100,6 +105,8 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         driver=pick("driver", "worker_driver", "virtual"),
         robot_url=pick("robot_url", "worker_robot_url", "ws://127.0.0.1:9000/v1/events"),
         robot_key=_secret(_setting(settings, "worker_robot_key", None)),
+        furhat_faces={**_setting(settings, "worker_furhat_faces", {}),
+                      **parse_face_map(options.get("furhat_faces") or ())},
         data_dir=settings.data_dir,
         command_endpoint=pick("control", "worker_command_endpoint", "tcp://127.0.0.1:5555"),
         telemetry_endpoint=pick("telemetry", "worker_telemetry_endpoint", "tcp://127.0.0.1:5556"),
@@ -113,6 +120,19 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         render=render,
         crossfade_seconds=float(_setting(settings, "worker_crossfade_seconds", 0.3)),
     )  # fmt: skip
+
+
+def parse_face_map(entries: tuple[str, ...] | list[str]) -> dict[str, str]:
+    """``("face-1=Isabel", ...)`` -> ``{"face-1": "Isabel"}`` (a later entry wins)."""
+    faces: dict[str, str] = {}
+    for entry in entries:
+        study_face, sep, robot_face = (part.strip() for part in entry.partition("="))
+        if not (sep and study_face and robot_face):
+            raise click.BadParameter(
+                f"{entry!r} is not STUDY_FACE=ROBOT_FACE", param_hint="--furhat-face"
+            )
+        faces[study_face] = robot_face
+    return faces
 
 
 def _secret(value: Any) -> str | None:

@@ -57,6 +57,7 @@ class WorkerConfig:
     driver: str = "virtual"
     robot_url: str = DEFAULT_URL
     robot_key: str | None = None
+    furhat_faces: Mapping[str, str] = field(default_factory=dict)  # study face id -> Furhat's
     data_dir: Path = Path("data")
     command_endpoint: str = "tcp://127.0.0.1:5555"
     telemetry_endpoint: str = "tcp://127.0.0.1:5556"
@@ -123,7 +124,8 @@ class Worker:
     def _make_driver(self, publish: Publish) -> Any:
         cfg = self.config
         options = DriverOptions(booth=cfg.booth, robot_url=cfg.robot_url, robot_key=cfg.robot_key,
-                                record_path=cfg.data_dir / f"driver-{cfg.booth}.jsonl")  # fmt: skip
+                                record_path=cfg.data_dir / f"driver-{cfg.booth}.jsonl",
+                                furhat_faces=cfg.furhat_faces)  # fmt: skip
         return create_driver(cfg.driver, options, publish)
 
     # --- lifecycle -------------------------------------------------------------------------

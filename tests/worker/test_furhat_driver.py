@@ -2,12 +2,20 @@
 
 from __future__ import annotations
 
+import logging
 import queue
 
 import numpy as np
 import pytest
 
-from chameleons.worker.drivers import SPEECH_END, SPEECH_START, DriverEvent, FurhatDriver
+from chameleons.worker.drivers import (
+    SPEECH_END,
+    SPEECH_START,
+    DriverEvent,
+    DriverOptions,
+    FurhatDriver,
+    create_driver,
+)
 from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES
 from tests.worker.furhat_peer import FurhatPeer
 
@@ -124,3 +132,58 @@ def test_sending_never_blocks_without_a_robot() -> None:
         assert not driver.connected
     finally:
         driver.close()
+
+
+def _face_configs(peer: FurhatPeer, count: int) -> list[object]:
+    peer.wait_for(lambda p: len(p.of_type("request.face.config")) >= count)
+    return [r.message.get("face_id") for r in peer.of_type("request.face.config")]
+
+
+def test_study_face_ids_are_sent_as_the_mapped_robot_faces(peer: FurhatPeer) -> None:
+    events: queue.SimpleQueue[DriverEvent] = queue.SimpleQueue()
+    driver = FurhatDriver(peer.url, face_id="face-1", faces={"face-1": "Isabel",
+                                                             "face-2": "Marty"})  # fmt: skip
+    driver.bind_events(events.put)
+    driver.start()
+    try:
+        _wait_connected(driver, events)
+        driver.set_face("face-2")
+        assert _face_configs(peer, 2) == ["Isabel", "Marty"]
+        stats = driver.stats()
+    finally:
+        driver.close()
+    assert (stats["face_id"], stats["robot_face_id"], stats["unmapped_face"]) == (
+        "face-2", "Marty", None,
+    )  # fmt: skip
+
+
+def test_an_unmapped_face_is_sent_unchanged_warned_once_and_reported(
+    peer: FurhatPeer, caplog: pytest.LogCaptureFixture
+) -> None:
+    events: queue.SimpleQueue[DriverEvent] = queue.SimpleQueue()
+    driver = FurhatDriver(peer.url, faces={"face-1": "Isabel"})
+    driver.bind_events(events.put)
+    driver.start()
+    try:
+        _wait_connected(driver, events)
+        with caplog.at_level(logging.WARNING, logger="chameleons.worker.drivers.furhat"):
+            driver.set_face("face-3")
+            driver.set_face("face-3")
+            sent = _face_configs(peer, 3)
+        unmapped = driver.stats()["unmapped_face"]
+        driver.set_face("face-1")
+        assert _face_configs(peer, 4)[-1] == "Isabel"
+        assert driver.stats()["unmapped_face"] is None
+    finally:
+        driver.close()
+    assert sent == [None, "face-3", "face-3"]  # no face at the handshake: the robot's own
+    assert unmapped == "face-3"
+    warnings = [r for r in caplog.records if "face-3" in r.getMessage()]
+    assert len(warnings) == 1
+
+
+def test_create_driver_passes_the_face_map_to_the_furhat_driver() -> None:
+    options = DriverOptions(furhat_faces={"face-1": "Isabel"})
+    driver = create_driver("furhat", options, lambda *_args: None)
+    assert isinstance(driver, FurhatDriver)
+    assert driver.faces == {"face-1": "Isabel"}

@@ -40,5 +40,27 @@ def test_help_lists_the_documented_options() -> None:
     result = CliRunner().invoke(worker, ["--help"])
     assert result.exit_code == 0
     for option in ("--booth", "--driver", "--robot-url", "--livelink-port",
-                   "--facecapturex-port", "--behaviour", "--copy-delay", "--control"):  # fmt: skip
+                   "--facecapturex-port", "--behaviour", "--copy-delay", "--control",
+                   "--furhat-face"):  # fmt: skip
         assert option in result.output
+
+
+def test_furhat_faces_from_settings_and_options_options_win(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("CHAMELEONS_WORKER_FURHAT_FACES", '{"face-1": "Isabel", "face-2": "Marty"}')
+    settings = Settings()
+    assert build_config(settings, behaviour="still").furhat_faces == {
+        "face-1": "Isabel", "face-2": "Marty",
+    }  # fmt: skip
+    config = build_config(settings, behaviour="still",
+                          furhat_faces=("face-2=Titan", " face-3 = Fedora "))  # fmt: skip
+    assert config.furhat_faces == {"face-1": "Isabel", "face-2": "Titan", "face-3": "Fedora"}
+
+
+def test_a_furhat_face_without_a_robot_face_is_refused() -> None:
+    with pytest.raises(click.BadParameter, match="STUDY_FACE=ROBOT_FACE"):
+        build_config(Settings(), behaviour="still", furhat_faces=("face-1",))
+    result = CliRunner().invoke(worker, ["--furhat-face", "face-1=", "--driver", "null"])
+    assert result.exit_code != 0
+    assert "--furhat-face" in result.output

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from chameleons.worker.drivers.base import (
@@ -26,6 +27,7 @@ class DriverOptions:
     robot_url: str = DEFAULT_URL
     robot_key: str | None = None
     record_path: Path = Path("data/driver-record.jsonl")
+    furhat_faces: Mapping[str, str] = field(default_factory=dict)  # study face id -> robot's
 
 
 def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver:
@@ -33,7 +35,7 @@ def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver
     if name == "virtual":
         return VirtualDriver(options.booth, publish)
     if name == "furhat":
-        return FurhatDriver(options.robot_url, key=options.robot_key)
+        return FurhatDriver(options.robot_url, key=options.robot_key, faces=options.furhat_faces)
     if name == "record":
         return RecordDriver(options.record_path)
     if name == "null":

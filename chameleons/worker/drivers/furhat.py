@@ -5,6 +5,10 @@ the driver's own thread drains them, so a slow or absent robot never blocks a ti
 frames and head poses that pile up are stale: only the newest of each is sent (the rest are
 counted as dropped). The connection is retried with exponential backoff; its state is
 reported as an event (``connecting``, ``connected``, ``disconnected``, ``closed``).
+
+The study's face ids (``face-1``..) mean nothing to a real robot: ``faces`` maps them to the
+robot's own face names. An id it does not list is sent unchanged, warned about once, and
+shown in ``stats()`` (``unmapped_face``) so the wizard sees it in the booth's telemetry.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import json
 import logging
 import threading
 from collections import deque
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -35,11 +40,18 @@ class FurhatDriver(Driver):
 
     def __init__(
         self, url: str = DEFAULT_URL, *, key: str | None = None, face_id: str | None = None,
-        excluded: tuple[str, ...] = DEFAULT_EXCLUDED, backoff_initial: float = 0.25,
-        backoff_max: float = 8.0, auth_timeout: float = 3.0, queue_size: int = 8,
+        faces: Mapping[str, str] | None = None, excluded: tuple[str, ...] = DEFAULT_EXCLUDED,
+        backoff_initial: float = 0.25, backoff_max: float = 8.0, auth_timeout: float = 3.0,
+        queue_size: int = 8,
     ) -> None:  # fmt: skip
         super().__init__()
-        self.url, self.key, self.face_id = url, key, face_id
+        self.url, self.key = url, key
+        self.faces = dict(faces or {})
+        self._warned_faces: set[str] = set()
+        self.unmapped_face: str | None = None
+        self.face_id: str | None = None
+        self.robot_face_id: str | None = None  # what the robot is told: face_id, mapped
+        self._select_face(face_id)
         self.backoff_initial, self.backoff_max, self.auth_timeout = (
             backoff_initial, backoff_max, auth_timeout,
         )  # fmt: skip
@@ -88,11 +100,28 @@ class FurhatDriver(Driver):
         self._queue_control({"type": "request.speak.stop"})
 
     def set_face(self, face_id: str) -> None:
-        self.face_id = face_id
+        self._select_face(face_id)
         self._queue_control(self._face_config())
 
     def stats(self) -> dict[str, Any]:
-        return {**super().stats(), "dropped": self.dropped, "connects": self.connects}
+        return {**super().stats(), "dropped": self.dropped, "connects": self.connects,
+                "face_id": self.face_id, "robot_face_id": self.robot_face_id,
+                "unmapped_face": self.unmapped_face}  # fmt: skip
+
+    def _select_face(self, face_id: str | None) -> None:
+        self.face_id = face_id
+        if not face_id:
+            self.robot_face_id = self.unmapped_face = None
+            return
+        mapped = self.faces.get(face_id)
+        self.robot_face_id = mapped or face_id
+        self.unmapped_face = None if mapped else face_id
+        if not mapped and face_id not in self._warned_faces:
+            self._warned_faces.add(face_id)
+            log.warning(
+                "furhat: no robot face mapped for %r (--furhat-face, "
+                "CHAMELEONS_WORKER_FURHAT_FACES); sending it unchanged", face_id,
+            )  # fmt: skip
 
     def _queue_stream(self, kind: str, data: Any) -> None:
         if len(self._stream) == self._stream.maxlen:
@@ -153,8 +182,8 @@ class FurhatDriver(Driver):
         config: dict[str, Any] = {"type": "request.face.config", "visibility": True,
                                   "microexpressions": False, "blinking": False,
                                   "head_sway": False}  # fmt: skip
-        if self.face_id:
-            config["face_id"] = self.face_id
+        if self.robot_face_id:
+            config["face_id"] = self.robot_face_id
         return config
 
     async def _handshake(self, ws: ClientConnection) -> None:
