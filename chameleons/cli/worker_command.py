@@ -108,6 +108,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         furhat_faces={**_setting(settings, "worker_furhat_faces", {}),
                       **parse_face_map(options.get("furhat_faces") or ())},
         data_dir=settings.data_dir,
+        prompts_dir=settings.prompts_dir,
         command_endpoint=pick("control", "worker_command_endpoint", "tcp://127.0.0.1:5555"),
         telemetry_endpoint=pick("telemetry", "worker_telemetry_endpoint", "tcp://127.0.0.1:5556"),
         capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),

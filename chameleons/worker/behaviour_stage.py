@@ -49,6 +49,7 @@ class BehaviourStageConfig:
     head_lead: float = 0.0  # the renderer's FIR group delay, compensated here
     initial: str = "still"
     initial_params: Mapping[str, Any] = field(default_factory=dict)
+    locations: Any = None  # this machine's data_dir/prompts_dir, for marked clip paths
 
 
 class BehaviourStage:
@@ -63,7 +64,8 @@ class BehaviourStage:
         self.clock = clock
         self.period = 1.0 / self.config.tick_rate
         self.router = BehaviourRouter(
-            build_context(self.config.history_seconds), self.config.crossfade_seconds,
+            build_context(self.config.history_seconds, locations=self.config.locations),
+            self.config.crossfade_seconds,
             initial=self.config.initial, params=self.config.initial_params, start=clock(),
         )  # fmt: skip
         self.errors: Counter[str] = Counter()

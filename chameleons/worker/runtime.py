@@ -59,6 +59,7 @@ class WorkerConfig:
     robot_key: str | None = None
     furhat_faces: Mapping[str, str] = field(default_factory=dict)  # study face id -> Furhat's
     data_dir: Path = Path("data")
+    prompts_dir: Path | None = None  # None: as the server's (chameleons.prompts.locations)
     command_endpoint: str = "tcp://127.0.0.1:5555"
     telemetry_endpoint: str = "tcp://127.0.0.1:5556"
     capture_host: str = "0.0.0.0"
@@ -108,7 +109,7 @@ class Worker:
             tick_rate=config.render.tick_rate, lookahead_ticks=config.lookahead_ticks,
             crossfade_seconds=config.crossfade_seconds, history_seconds=config.history_seconds,
             head_lead=config.head_lead, initial=config.behaviour,
-            initial_params=config.initial_params(),
+            initial_params=config.initial_params(), locations=config,
         ))  # fmt: skip
         self.playback = PlaybackStage(self.context, self.endpoints)
         self.renderer = RendererStage(self.context, self.endpoints, self._make_driver,

@@ -13,7 +13,9 @@ stream of the most recent finished ``copy``/``still`` interaction of another par
 this study, at least ``min_yoked_frames`` long; else the demo clip
 (``<prompts>/_natural/demo-natural.npz``, shipped in the repository's ``prompts/``). The choice is
 made once per interaction and logged (``behaviour.natural_source``), so every later set-up of
-that interaction replays the same recording and the export can say which one it was.
+that interaction replays the same recording and the export can say which one it was. The path
+goes to the worker marked (``prompts:_natural/demo-natural.npz``, ``data:recordings/...``) so
+a worker on a booth PC resolves it against its own install (``chameleons.prompts.locations``).
 """
 
 from __future__ import annotations
@@ -32,7 +34,12 @@ from chameleons.backend.booth import repository
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Recording
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR, recording_file
-from chameleons.backend.wizard.catalogues import REPOSITORY_PROMPTS, prompts_root
+from chameleons.prompts.locations import (
+    REPOSITORY_PROMPTS,
+    marked_path,
+    prompts_root,
+    resolve_marked_path,
+)
 from chameleons.worker.recording import RecordingError, journal_path, recover_recording
 
 log = logging.getLogger(__name__)
@@ -194,7 +201,7 @@ def natural_source(db: Session, state: Any, interaction_id: int) -> dict[str, An
     chosen = repository.chosen_natural_source(db, interaction_id)
     if chosen is not None:
         path = chosen.payload.get("path")
-        if not path or Path(str(path)).is_file():
+        if not path or resolve_marked_path(str(path), state.settings).is_file():
             return dict(chosen.payload)
     located = repository.locate(db, interaction_id)
     if located is None:
@@ -216,10 +223,11 @@ def _choose(db: Session, state: Any, located: repository.Located) -> dict[str, A
         path = recording_file(data_dir, recording.path)
         if path.is_file():
             return {
-                "source": "yoked", "path": str(path.resolve()), "recording_id": recording.id,
+                "source": "yoked", "path": marked_path(path, state.settings),
+                "recording_id": recording.id,
                 "from_interaction_id": recording.interaction_id, "frames": recording.frames,
             }  # fmt: skip
     demo = demo_clip_of(state)
     if demo.is_file():
-        return {"source": "demo", "path": str(demo.resolve())}
+        return {"source": "demo", "path": marked_path(demo, state.settings)}
     return {"source": "none", "reason": f"no yoked recording and no demo clip {demo}"}

@@ -11,24 +11,15 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from chameleons.prompts import Catalogue, CatalogueError, actor_directories, load_catalogue
+from chameleons.prompts import Catalogue, CatalogueError, load_catalogue
+from chameleons.prompts.locations import REPOSITORY_PROMPTS, prompts_root
 
-REPOSITORY_PROMPTS = Path(__file__).resolve().parents[3] / "prompts"
+__all__ = ["REPOSITORY_PROMPTS", "MissingCatalogueError", "catalogue_for", "prompts_root"]
 _LOCK = threading.Lock()
 
 
 class MissingCatalogueError(LookupError):
     """No usable catalogue for an actor; the message says where the console looked."""
-
-
-def prompts_root(settings: Any) -> Path:
-    configured = getattr(settings, "prompts_dir", None)
-    if configured:
-        return Path(configured)
-    data_dir = getattr(settings, "data_dir", None)
-    if data_dir is not None and actor_directories(Path(data_dir) / "prompts"):
-        return Path(data_dir) / "prompts"
-    return REPOSITORY_PROMPTS
 
 
 def catalogue_for(state: Any, actor: str) -> Catalogue:

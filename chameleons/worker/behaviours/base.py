@@ -42,6 +42,9 @@ class BehaviourContext:
     history: FrameHistory
     neutral: F32Array = field(default_factory=neutral_vector)
     history_seconds: float = 12.0  # how far back the history reaches at the nominal input rate
+    # This machine's folders (``data_dir``, ``prompts_dir``) for marked paths such as
+    # ``prompts:_natural/demo-natural.npz``; see chameleons.prompts.locations.
+    locations: Any = None
 
 
 class Behaviour(ABC):

@@ -5,6 +5,8 @@ The loop seam is crossfaded: with period ``P = duration - seam``, the first ``se
 seconds of each pass blend the clip's tail into its head, so output is continuous.
 Parameters: ``path`` (take CSV, Parquet recording or ``.npz``), ``offset`` seconds, ``loop``;
 or, instead of ``path``, ``seed``: a synthetic face from the simulator (demos, tests).
+A ``path`` may be marked ``prompts:...`` or ``data:...`` (from a server on another machine):
+it is resolved against this worker's own prompts folder or data directory.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from chameleons.prompts.locations import resolve_marked_path
 from chameleons.worker.behaviours.base import (
     NO_INPUT,
     VECTOR_SIZE,
@@ -77,7 +80,8 @@ class NaturalBehaviour(Behaviour):
             # Never a silent stand-in: the yoked control must replay a real recording.
             raise BehaviourError("natural needs a 'path' to a take CSV, Parquet recording or "
                                  ".npz clip (or a 'seed' for a synthetic face)")  # fmt: skip
-        return cls(context, load_clip(path), offset=offset, loop=loop, source=path)
+        local = resolve_marked_path(path, context.locations)  # "prompts:..." / "data:..."
+        return cls(context, load_clip(local), offset=offset, loop=loop, source=path)
 
     def start(self, t: float) -> None:
         self._start = t

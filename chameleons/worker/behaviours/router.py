@@ -59,9 +59,12 @@ class Crossfade(Behaviour):
 def build_context(
     history_seconds: float = DEFAULT_HISTORY_SECONDS,
     max_input_rate: float = DEFAULT_MAX_INPUT_RATE,
+    locations: Any = None,
 ) -> BehaviourContext:
     capacity = math.ceil(history_seconds * max_input_rate)
-    return BehaviourContext(FrameHistory(capacity), history_seconds=history_seconds)
+    return BehaviourContext(
+        FrameHistory(capacity), history_seconds=history_seconds, locations=locations
+    )
 
 
 class BehaviourRouter:

@@ -11,7 +11,6 @@ import pytest
 from fastapi import FastAPI
 from sqlalchemy import select
 
-from chameleons.backend.booth.service import DEMO_NATURAL_CLIP
 from chameleons.backend.bridge import Bridge
 from chameleons.backend.models import Interaction, Recording
 from chameleons.worker.runtime import Worker
@@ -94,7 +93,7 @@ def test_an_interaction_started_through_the_api_sets_up_the_robot_and_is_recorde
 
 
 def test_natural_replays_the_yoked_recording_of_an_earlier_participant(
-    app: FastAPI, pi: StaffApi, study_id: int, worker: Worker, bridge: Bridge
+    app: FastAPI, pi: StaffApi, study_id: int, worker: Worker, bridge: Bridge, tmp_path: Path
 ) -> None:
     first, first_phone = new_session(pi, study_id)
     first.switch_condition("still", 1)
@@ -104,6 +103,11 @@ def test_natural_replays_the_yoked_recording_of_an_earlier_participant(
         r for r in recordings_of(app, interaction_id(app, first)) if r.stream == "participant"
     )
 
+    # Like a booth PC: the worker has its own data directory, with the shared recordings
+    # volume at the same relative place.
+    server_recordings = Path(app.state.settings.data_dir) / "recordings"
+    (tmp_path / "worker").mkdir(exist_ok=True)
+    (tmp_path / "worker" / "recordings").symlink_to(server_recordings.resolve())
     second, _ = new_session(pi, study_id)
     second.switch_condition("natural", 1)
     second.start()
@@ -113,7 +117,7 @@ def test_natural_replays_the_yoked_recording_of_an_earlier_participant(
     assert chosen["source"] == "yoked"
     assert chosen["recording_id"] == source.id
     assert chosen["from_interaction_id"] == interaction_id(app, first)
-    path = str((Path(app.state.settings.data_dir) / source.path).resolve())
+    path = f"data:{source.path}"  # the worker resolves it against its own data directory
     assert chosen["path"] == path
     assert bridge.state(BOOTH).behaviour == {"name": "natural", "params": {"path": path}}
     logged = [e for e in timeline(second) if e["kind"] == "behaviour.natural_source"]
@@ -128,12 +132,9 @@ def test_natural_replays_the_demo_clip_before_anyone_was_recorded(
     wizard.start()
     wizard.advance(1, "discussion")
     applied = wait_for_event(wizard, "robot.applied")  # the worker loaded the clip
-    assert applied["payload"]["natural_source"] == {
-        "source": "demo", "path": str(DEMO_NATURAL_CLIP.resolve()),
-    }  # fmt: skip
-    assert bridge.state(BOOTH).behaviour == {
-        "name": "natural", "params": {"path": str(DEMO_NATURAL_CLIP.resolve())},
-    }  # fmt: skip
+    path = "prompts:_natural/demo-natural.npz"  # the worker's own prompts folder
+    assert applied["payload"]["natural_source"] == {"source": "demo", "path": path}
+    assert bridge.state(BOOTH).behaviour == {"name": "natural", "params": {"path": path}}
 
 
 def test_a_switch_sends_only_what_changed_and_the_console_agrees(
