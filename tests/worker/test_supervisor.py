@@ -8,6 +8,8 @@ import asyncio
 import os
 import signal
 import socket
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -96,3 +98,64 @@ def test_a_killed_worker_is_restarted_with_its_state(tmp_path: Path) -> None:
     configs = [r.message for r in robot.of_type("request.face.config")]
     assert configs[-1]["face_id"] == "adult-02"  # the face came back after the restart
     assert all(c["blinking"] is False and c["head_sway"] is False for c in configs)
+
+
+# A server that starts a supervisor, says its worker's pid once the worker said hello, and
+# waits: the test SIGKILLs it.
+SERVER_SCRIPT = """
+import asyncio, sys, time
+from chameleons.backend.bridge import Bridge, WorkerSupervisor
+
+async def main() -> None:
+    async with Bridge("tcp://127.0.0.1:*", "tcp://127.0.0.1:*") as bridge:
+        args = ["--driver", "null", "--livelink-port", "0", "--facecapturex-port", "0"]
+        supervisor = WorkerSupervisor(bridge, "orphan", args)
+        await supervisor.start()
+        deadline = time.monotonic() + float(sys.argv[1])
+        while "orphan" not in bridge.workers() and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)
+        print("worker pid", supervisor.process.pid if supervisor.process else 0, flush=True)
+        await asyncio.Event().wait()
+
+asyncio.run(main())
+"""
+
+
+def _alive(pid: int) -> bool:
+    """Running (a zombie nobody reaped yet counts as gone)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_a_server_killed_hard_leaves_no_worker_behind(tmp_path: Path) -> None:
+    env = {**os.environ, "CHAMELEONS_DATA_DIR": str(tmp_path)}
+    server = subprocess.Popen([sys.executable, "-c", SERVER_SCRIPT, str(START_TIMEOUT)], env=env,
+                              stdout=subprocess.PIPE, text=True)  # fmt: skip
+    worker = 0
+    try:
+        assert server.stdout is not None
+        for line in server.stdout:  # the worker shares the server's stdout
+            if line.startswith("worker pid "):
+                worker = int(line.split()[-1])
+                break
+        assert worker, "the server never reported its worker"
+        assert _alive(worker)
+        assert os.getsid(worker) == worker  # its own session: a terminal's Ctrl-C misses it
+        server.kill()
+        server.wait()
+        deadline = time.monotonic() + 10
+        while _alive(worker):
+            assert time.monotonic() < deadline, f"worker {worker} outlived its killed server"
+            time.sleep(0.02)  # polling the process table, bounded by the deadline
+    finally:
+        server.kill()
+        server.wait()
+        if worker and _alive(worker):
+            os.kill(worker, signal.SIGKILL)
+        if server.stdout is not None:
+            server.stdout.close()

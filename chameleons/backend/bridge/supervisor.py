@@ -6,21 +6,49 @@ being asked to, it is started again after a backoff that doubles up to ``max_bac
 (and resets once a run lasted ``stable_after`` seconds). The bridge sees the new worker
 instance in its hello, announces ``worker_restarted`` and re-sends the booth's behaviour,
 face and recording, so the supervisor itself needs to know nothing about that state.
+
+The worker runs in its own session: a Ctrl-C in the server's terminal reaches only the server,
+which then stops the worker itself (no "worker exited, restarting" during shutdown). On Linux
+the worker also gets SIGTERM when the server dies, even by SIGKILL (``PR_SET_PDEATHSIG``), so
+no orphaned worker keeps the robot and the capture ports. The signal is tied to the thread
+that started the worker: the thread running the event loop, which outlives the supervisor.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import ctypes
 import logging
+import os
+import signal
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from chameleons.backend.bridge.bridge import Bridge
 
 log = logging.getLogger(__name__)
 WORKER_MODULE = "chameleons.cli.worker_command"
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def die_with_parent_hook() -> Callable[[], None] | None:
+    """A ``preexec_fn`` that makes the child get SIGTERM when its parent dies (Linux only).
+
+    libc is looked up here, in the parent: between fork and exec the child should only make
+    the system call, not load libraries."""
+    if not sys.platform.startswith("linux"):
+        return None
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    parent = os.getpid()
+
+    def hook() -> None:
+        prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+        if os.getppid() != parent:  # the parent died before the request took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    return hook
 
 
 class WorkerSupervisor:
@@ -67,7 +95,10 @@ class WorkerSupervisor:
         delay = self.backoff
         while not self._stopping.is_set():
             started = time.monotonic()
-            self.process = await asyncio.create_subprocess_exec(*self.command, env=self.env)
+            hook = die_with_parent_hook()
+            self.process = await asyncio.create_subprocess_exec(
+                *self.command, env=self.env, start_new_session=True, preexec_fn=hook
+            )
             self.starts += 1
             code = await self.process.wait()
             self.exit_codes.append(code)
