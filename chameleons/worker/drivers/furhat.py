@@ -198,9 +198,11 @@ class FurhatDriver(Driver):
                     break
         if reply.get("error") or reply.get("success") is False or reply.get("ok") is False:
             raise ValueError(f"robot refused authentication: {reply}")
-        await ws.send(json.dumps(self._face_config()))
-        self._stream.clear()  # whatever queued while disconnected is stale
+        # Whatever queued while disconnected is stale: the config below carries the current
+        # face. Clear first: a set_face arriving during the send stays queued (not dropped).
+        self._stream.clear()
         self._control.clear()
+        await ws.send(json.dumps(self._face_config()))
         self.connects += 1
         self.set_state("connected")
 
