@@ -8,6 +8,7 @@ import secrets
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -82,18 +83,40 @@ def test_a_server_needs_a_login() -> None:
     assert "--server needs --username and --password" in result.output
 
 
-def _running_in_session(session_id: int) -> dict[int, str]:
-    """Live (not zombie) processes of a session and their command lines (Linux /proc)."""
-    running = {}
+def _live_processes() -> dict[int, tuple[int, str]]:
+    """Live (not zombie) processes: pid -> (parent pid, command line) (Linux /proc)."""
+    processes = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
             command = (stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode()
         except (FileNotFoundError, ProcessLookupError):
             continue
-        if int(fields[3]) == session_id and fields[0] != "Z":  # fields: state, ppid, pgrp, sid
-            running[int(stat.parent.name)] = command
-    return running
+        if fields[0] != "Z":  # fields: state, ppid, ...
+            processes[int(stat.parent.name)] = (int(fields[1]), command)
+    return processes
+
+
+def _family(root: int) -> dict[int, str]:
+    """``root`` and its live descendants (the worker runs in a session of its own, so
+    descent, not the session, says what a command started)."""
+    processes = _live_processes()
+    family = {pid: command for pid, (_, command) in processes.items() if pid == root}
+    grew = True
+    while grew:
+        children = {
+            pid: command
+            for pid, (parent, command) in processes.items()
+            if parent in family and pid not in family
+        }
+        family.update(children)
+        grew = bool(children)
+    return family
+
+
+def _still_alive(pids: dict[int, str]) -> dict[int, str]:
+    processes = _live_processes()
+    return {pid: command for pid, command in pids.items() if pid in processes}
 
 
 @pytest.mark.parametrize("stop", ["ctrl-c", "kill"])
@@ -102,6 +125,7 @@ def test_ctrl_c_or_sigterm_stops_everything_it_started(tmp_path: Path, stop: str
     command = [sys.executable, "-m", "chameleons", "rehearse", "-n", "50", "--script", "silent"]
     process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, text=True,
                                stderr=subprocess.STDOUT, start_new_session=True)  # fmt: skip
+    started: dict[int, str] = {}
     try:
         assert process.stdout is not None
         output = []
@@ -109,18 +133,22 @@ def test_ctrl_c_or_sigterm_stops_everything_it_started(tmp_path: Path, stop: str
             output.append(line)
             if "1/50" in line:
                 break
-        assert len(_running_in_session(process.pid)) >= 3, output  # itself, worker, face
+        started = _family(process.pid)
+        assert len(started) >= 3, output  # itself, worker, face
         if stop == "ctrl-c":
             os.killpg(process.pid, signal.SIGINT)  # a terminal's Ctrl-C reaches the group
         else:
             process.terminate()  # `kill PID`: only the command itself hears it
         assert process.wait(timeout=30) != 0
-        assert _running_in_session(process.pid) == {}
+        deadline = time.monotonic() + 10  # children may take a moment after the parent
+        while _still_alive(started) and time.monotonic() < deadline:
+            time.sleep(0.05)  # polls /proc with a deadline; not a fixed wait
+        assert _still_alive(started) == {}
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
-        for pid in _running_in_session(process.pid):  # what a failed run left behind
-            os.kill(pid, signal.SIGKILL)
+        for pid in _still_alive(started):
+            os.kill(pid, signal.SIGKILL)  # what a failed run left behind
         if process.stdout is not None:
             process.stdout.close()
