@@ -11,7 +11,9 @@ from sqlalchemy.orm import Session
 from chameleons.backend.models import Event, Interaction, Participant
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
-from chameleons.backend.studies.specs import item_key, spec_of
+from chameleons.backend.sessions.flow import load as load_flow
+from chameleons.backend.studies.errors import NotFoundError
+from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.model import Study
 
 PLAYED = "prompt.played"
@@ -51,21 +53,12 @@ class SessionView:
 
 
 def load_session(db: Session, session_id: int) -> SessionView:
-    session = db.get(SessionRow, session_id)
-    if session is None:
-        raise SessionNotFoundError(f"There is no session {session_id}.")
-    study = db.get(StudyRow, session.study_id)
-    participant = db.get(Participant, session.participant_id)
-    if study is None or participant is None:
-        raise SessionNotFoundError(f"Session {session_id} has lost its study or participant.")
-    interactions = list(
-        db.scalars(
-            select(Interaction)
-            .where(Interaction.session_id == session.id)
-            .order_by(Interaction.position)
-        )
-    )
-    return SessionView(session, study, spec_of(study), participant, interactions)
+    """The session as the session flow loads it (without its write lock)."""
+    try:
+        flow = load_flow(db, session_id, lock=False)
+    except NotFoundError as exc:
+        raise SessionNotFoundError(exc.message) from None
+    return SessionView(flow.session, flow.study, flow.spec, flow.participant, flow.interactions)
 
 
 def last_played_variant(db: Session, session_id: int, group: str) -> str | None:
