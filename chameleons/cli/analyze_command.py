@@ -10,33 +10,65 @@ from typing import Any, Literal
 
 import click
 
-from chameleons.experiment.stats import AnalysisError, analyze, render_latex, render_text
-from chameleons.experiment.study import load_default_study
+from chameleons.experiment.model import Study
+from chameleons.experiment.stats import (
+    DEFAULT_RULE,
+    DEFAULT_VIEW,
+    VIEWS,
+    WILCOXON_RULES,
+    AnalysisError,
+    View,
+    WilcoxonRule,
+    analyze,
+    render_latex,
+    render_text,
+)
+from chameleons.experiment.stats.measures import StudyMeasures, study_measures
+from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
+STUDY_CONFIG_NAME = "study_config.json"
 
 
 def analysis_output(
     rows: Iterable[Mapping[str, Any]],
     output_format: str = "text",
     *,
+    study: StudyMeasures | None = None,
+    view: View = DEFAULT_VIEW,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     permutations: int | None = None,
     seed: int = 0,
     alpha: float = 0.05,
     latex_layout: Literal["paper", "wide"] = "paper",
+    row_name: str = "row",
+    first_row: int = 1,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
-    file, the database). Raises ``click.ClickException`` for unusable rows."""
+    file, the database), checked against the study's conditions and scales (default: the
+    built-in study). Raises ``click.ClickException`` for unusable rows."""
+    design = study or study_measures(load_default_study())
     try:
-        analysis = analyze(rows, permutations=permutations, seed=seed, alpha=alpha)
+        analysis = analyze(
+            rows,
+            measures=design.measures,
+            conditions=design.conditions,
+            scales=design.scales,
+            view=view,
+            permutations=permutations,
+            seed=seed,
+            alpha=alpha,
+            wilcoxon_rule=wilcoxon_rule,
+            row_name=row_name,
+            first_row=first_row,
+        )
     except AnalysisError as exc:
-        raise click.ClickException(str(exc)) from exc
-    labels = {c.id: c.label for c in load_default_study().conditions}
+        raise click.ClickException(f"{exc} Nothing was analysed.") from exc
     if output_format == "json":
         return json.dumps(analysis.to_dict(), indent=2)
     if output_format == "latex":
-        return render_latex(analysis, labels, layout=latex_layout)
-    return render_text(analysis, labels)
+        return render_latex(analysis, design.labels, layout=latex_layout)
+    return render_text(analysis, design.labels)
 
 
 def read_scores_csv(path: Path) -> list[dict[str, str]]:
@@ -54,6 +86,21 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     return rows
 
 
+def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | None]:
+    """The study the scores were exported from: ``config`` (a ``study_config.json``), else
+    the one beside the scores file, else the built-in study (with a note saying so)."""
+    path = config or scores.with_name(STUDY_CONFIG_NAME)
+    if config is None and not path.is_file():
+        return load_default_study(), (
+            f"no {STUDY_CONFIG_NAME} beside {scores}: checking the rows against the built-in "
+            "study's conditions and scales (--study-config FILE for another)"
+        )
+    try:
+        return study_from_config(json.loads(path.read_text(encoding="utf-8"))), None
+    except (OSError, ValueError, StudyError) as exc:
+        raise click.ClickException(f"cannot use {path} as the study configuration: {exc}") from exc
+
+
 @click.command("analyze")
 @click.option(
     "--scores",
@@ -62,6 +109,14 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     default=None,
     help="scores.csv: participant, condition, accepted, credibility, likeability, trust. "
     "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
+)
+@click.option(
+    "--study-config",
+    "config_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help=f"With --scores: the study's {STUDY_CONFIG_NAME} (default: the one beside the "
+    "scores file, else the built-in study). Sets the conditions and the measures' scales.",
 )
 @click.option("--study", "study_id", type=int, help="Database mode: study id (default: newest).")
 @click.option("--include-rehearsal", is_flag=True, help="Database mode: count rehearsals too.")
@@ -77,6 +132,22 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     type=click.IntRange(min=1),
     default=None,
     help="Add permutation p-values: exact when feasible, else Monte Carlo with N resamples.",
+)
+@click.option(
+    "--view",
+    type=click.Choice(VIEWS),
+    default=DEFAULT_VIEW,
+    show_default=True,
+    help="as_planned: intention to treat, each interaction counts for its planned condition; "
+    "as_run: per protocol, participants with a deviation from the plan are left out.",
+)
+@click.option(
+    "--wilcoxon-rule",
+    type=click.Choice(WILCOXON_RULES),
+    default=DEFAULT_RULE,
+    show_default=True,
+    help="Which R version's wilcox.test the post-hoc tests follow; they differ only for tied "
+    "differences without zeros (R >= 4.6: exact conditional p).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Monte Carlo seed.")
 @click.option(
@@ -94,33 +165,53 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
 )
 def analyze_command(
     scores_path: Path | None,
+    config_path: Path | None,
     study_id: int | None,
     include_rehearsal: bool,
     output_format: str,
     permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
     seed: int,
     alpha: float,
     latex_layout: Literal["paper", "wide"],
 ) -> None:
-    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests."""
+    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests.
+
+    Excluded participants leave every test; so do, in the as_run view, participants with a
+    deviation from the plan; a participant without a value in every condition leaves that
+    measure. The output says who and why. Impossible values are refused, naming the line.
+    """
     if scores_path is not None:
         rows = read_scores_csv(scores_path)
+        spec, note = study_for_scores(scores_path, config_path)
+        if note:
+            click.echo(f"Note: {note}.", err=True)
+        row_name, first_row = "line", 2  # a CSV file's data start on its second line
     else:
-        rows = database_score_rows(study_id, include_rehearsal)
+        spec, rows = database_score_rows(study_id, include_rehearsal)
+        row_name, first_row = "row", 1
     click.echo(
         analysis_output(
             rows,
             output_format,
+            study=study_measures(spec),
+            view=view,
+            wilcoxon_rule=wilcoxon_rule,
             permutations=permutations,
             seed=seed,
             alpha=alpha,
             latex_layout=latex_layout,
+            row_name=row_name,
+            first_row=first_row,
         )
     )
 
 
-def database_score_rows(study_id: int | None, include_rehearsal: bool) -> list[dict[str, Any]]:
-    """The export's scores rows read from the configured database."""
+def database_score_rows(
+    study_id: int | None, include_rehearsal: bool
+) -> tuple[Study, list[dict[str, Any]]]:
+    """The study and the export's scores rows, read from the configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from chameleons.backend.analysis.service import score_rows_from_database
