@@ -108,4 +108,3 @@ def balance_text(result: Plan) -> str:
     lines.append(balance_summary(report))
     lines += [f"  - {problem}" for problem in report.problems()]
     return "\n".join(lines)
-

@@ -24,7 +24,8 @@ from statistics import NormalDist
 def midranks(values: list[float]) -> list[Fraction]:
     """rank(): each value's rank is (#smaller) + (#equal + 1) / 2."""
     return [
-        Fraction(sum(1 for w in values if w < v)) + Fraction(sum(1 for w in values if w == v) + 1, 2)
+        Fraction(sum(1 for w in values if w < v))
+        + Fraction(sum(1 for w in values if w == v) + 1, 2)
         for v in values
     ]
 
@@ -69,7 +70,7 @@ def r_wilcox_paired(
 
         half = Fraction(n * (n + 1), 4)
         p = at_most(v_stat) if v_stat <= half else 1 - at_most(v_stat - 1)
-        return float(v_stat), float(min(2 * p, 1)), "exact"
+        return float(v_stat), float(min(2 * p, Fraction(1))), "exact"
     ties_term = sum(t**3 - t for t in Counter(ranks).values())
     sigma = (Fraction(n * (n + 1) * (2 * n + 1), 24) - Fraction(ties_term, 48)) ** 0.5
     centred = float(v_stat - Fraction(n * (n + 1), 4))

@@ -76,8 +76,13 @@ REFUSALS = [
     (4, "accepted", "2.5", "'2.5' is not a whole number"),
     (4, "credibility", "7.5", "'7.5' is outside 1..7 (the Credibility score"),
     (4, "likeability", "0", "'0' is outside 1..7"),
-    (4, "condition", "Copy", "'Copy' is not a condition of the study (still, natural, copy); "
-     "did you mean 'copy'? Labels are case-sensitive"),
+    (
+        4,
+        "condition",
+        "Copy",
+        "'Copy' is not a condition of the study (still, natural, copy); "
+        "did you mean 'copy'? Labels are case-sensitive",
+    ),
 ]
 
 
@@ -123,7 +128,7 @@ def test_the_study_config_beside_the_scores_sets_conditions_and_scales(tmp_path:
     (tmp_path / "study_config.json").write_text(json.dumps(five), encoding="utf-8")
     rows[4]["accepted"] = 5  # impossible with 3 suggestions, possible with 5
     write_scores(tmp_path / "scores.csv", rows)
-    code, out, err = run("analyze", "--scores", str(tmp_path / "scores.csv"))
+    code, _out, err = run("analyze", "--scores", str(tmp_path / "scores.csv"))
     assert code == 0, err
     assert "study_config.json" not in err
     code, _, err = run(
@@ -153,15 +158,19 @@ def test_views_and_excluded_participants(tmp_path: Path) -> None:
     assert code == 0
     planned = json.loads(out)
     assert planned["view"] == "as_planned"
-    assert planned["left_out"] == [{"participant": "5", "reason": "excluded by the PI: fell asleep"}]
+    assert planned["left_out"] == [
+        {"participant": "5", "reason": "excluded by the PI: fell asleep"}
+    ]
     assert planned["measures"]["trust"]["friedman"]["n"] == 11
     code, out, _ = run("analyze", "--scores", str(path), "--format", "json", "--view", "as_run")
     assert code == 0
     run_view = json.loads(out)
     assert [o["participant"] for o in run_view["left_out"]] == ["3", "5"]
-    assert "deviation from the plan (line 8 ran copy, planned natural)" in run_view["left_out"][0][
-        "reason"
-    ]
+    assert (
+        "deviation from the plan (line 8 ran copy, planned natural)"
+        in run_view["left_out"][0]["reason"]
+    )
     assert run_view["measures"]["trust"]["friedman"]["n"] == 10
     code, out, _ = run("analyze", "--scores", str(path))
-    assert "2 in the data" not in out and "12 participants in the data; 1 left out" in out
+    assert "2 in the data" not in out
+    assert "12 participants in the data; 1 left out" in out

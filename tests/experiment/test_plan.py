@@ -49,7 +49,8 @@ def test_balance_report_is_exact_for_twelve_and_says_where_it_is_not() -> None:
     # Two rows of three conditions cannot be even in adjacent pairs once every condition
     # must be within 1 at each position: uneven, but the least uneven possible.
     assert not carry.within_one
-    assert carry.status == "minimal" and carry.ok
+    assert carry.status == "minimal"
+    assert carry.ok
     assert carry.verdict() == "minimal possible imbalance"
     json.dumps(partial.to_dict())
 
@@ -63,7 +64,8 @@ def test_balance_says_minimal_possible_where_counts_cannot_be_more_even() -> Non
     assert set(minimal) == {"carry_over", "condition_scenario"}
     assert minimal["carry_over"].max_deviation == pytest.approx(4 / 3)
     assert minimal["carry_over"].lower_bound == pytest.approx(4 / 3, abs=1e-6)
-    assert report.ok and report.problems() == []
+    assert report.ok
+    assert report.problems() == []
     rows = plan(study, 100, 7).rows
     # The same 100 rows with one row's conditions reversed: no longer the minimum.
     first = rows[0]
@@ -81,7 +83,8 @@ def test_every_item_first_and_last_cannot_hold_with_six() -> None:
     study = load_default_study()
     report = plan(study, 6, 7).balance
     blocked = [c for c in report.constraints if c.status == "cannot hold"]
-    assert blocked and all(c.id.startswith("item_at_ends:") for c in blocked)
+    assert blocked
+    assert all(c.id.startswith("item_at_ends:") for c in blocked)
     assert "shown 4 times for its 5 items" in blocked[0].verdict()
     assert not report.ok
     assert any("not every item can be first and last" in p for p in report.problems())
@@ -93,7 +96,8 @@ def test_every_item_first_and_last_cannot_hold_with_six() -> None:
 
 def test_plan_command_words_the_minimum() -> None:
     out = CliRunner().invoke(cli, ["plan", "-n", "100", "--seed", "7"]).stdout
-    assert "carry_over" in out and "UNEVEN" not in out
+    assert "carry_over" in out
+    assert "UNEVEN" not in out
     assert out.count("minimal possible imbalance") == 3  # two tables and the summary
     assert "Every count is as even as possible with 100 participants" in out
 

@@ -21,7 +21,8 @@ def test_half_away_from_zero_from_the_exact_value() -> None:
     # A double's exact value decides: the double nearest 2.675 is below it.
     assert fmt(2.675, 2) == "2.67"
     assert rounded(Decimal("2.5"), 0) == Decimal("3")
-    assert fmt(None, 1) == "undefined" and fmt(None, 1, "--") == "--"
+    assert fmt(None, 1) == "undefined"
+    assert fmt(None, 1, "--") == "--"
 
 
 def test_exact_reads_the_value_as_written_and_recovers_item_means() -> None:
@@ -69,4 +70,5 @@ def test_descriptives_are_exact(values: list[float]) -> None:
         variance = sum((v - mean) ** 2 for v in ordered) / (n - 1)
         assert d.sd == pytest.approx(float(variance) ** 0.5)
     else:
-        assert d.sd is None and d.exact_sd is None
+        assert d.sd is None
+        assert d.exact_sd is None

@@ -59,7 +59,8 @@ def test_unstarted_and_partial_interactions_are_missing_not_zero(
     for row in data["scores"]:
         by_code.setdefault(row["participant"], []).append(row)
     for row in by_code[unstarted.snapshot["participant"]["code"]]:
-        assert row["accepted"] == "" and row["trust"] == ""
+        assert row["accepted"] == ""
+        assert row["trust"] == ""
         assert (row["interaction_status"], row["session_status"]) == ("not_run", "not_started")
         assert row["suggestions_decided"] == "0"
     first, *rest = by_code[partial.snapshot["participant"]["code"]]
@@ -69,7 +70,9 @@ def test_unstarted_and_partial_interactions_are_missing_not_zero(
     for result in complete:
         assert {r["accepted"] for r in by_code[result.participant_code]} == {"3"}
     interactions = [
-        r for r in data["interactions"] if r["participant"] == partial.snapshot["participant"]["code"]
+        r
+        for r in data["interactions"]
+        if r["participant"] == partial.snapshot["participant"]["code"]
     ]
     assert (interactions[0]["accepted"], interactions[0]["suggestions_decided"]) == ("", "1")
 
