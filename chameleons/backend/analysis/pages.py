@@ -18,6 +18,8 @@ from chameleons.backend.analysis.service import (
     ERROR_LABELS,
     StudyAnalysis,
     StudyScores,
+    database_scores,
+    run_analysis,
     study_analysis,
 )
 from chameleons.backend.auth.dependencies import CurrentPI
@@ -30,6 +32,7 @@ from chameleons.experiment.stats import (
     DEFAULT_VIEW,
     VIEW_TITLES,
     VIEWS,
+    AnalysisError,
     View,
     WilcoxonRule,
     fmt_p,
@@ -135,18 +138,25 @@ def analysis_plot(
     view: ViewQuery = DEFAULT_VIEW,
     wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> Response:
-    result = _load(db, study, include_rehearsal, None, view, wilcoxon)
-    scores = result.scores
+    try:
+        scores = database_scores(db, study, include_rehearsal)
+    except StudyNotFoundError as exc:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, str(exc)) from exc
     if measure not in scores.measures:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no measure {measure!r}.")
-    if result.analysis is None or measure not in result.analysis.measures:
-        raise HTTPException(status.HTTP_409_CONFLICT, result.error or "No analysis.")
-    analysis = result.analysis.measures[measure]
+    try:
+        # The same analysis as the page (same view, same participants), without the extras.
+        whole = run_analysis(scores, view=view, wilcoxon_rule=wilcoxon)
+    except AnalysisError as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"The analysis cannot run: {exc}") from exc
+    if measure not in whole.measures:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"There are no {measure} values yet.")
+    analysis = whole.measures[measure]
     test = analysis.friedman
     image = plot_measure(
         list(analysis.values.values()),
         measure,
-        result.analysis.conditions,
+        whole.conditions,
         scores.condition_labels,
         value_range(scores, measure),
         friedman_text(test.chi2, analysis.p_bonferroni, test.kendall_w),
