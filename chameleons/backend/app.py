@@ -26,6 +26,7 @@ from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.display import endpoints as display_endpoints
 from chameleons.backend.display import media as display_media
 from chameleons.backend.display import pages as display_pages
+from chameleons.backend.dropouts import endpoints as dropout_endpoints
 from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
@@ -39,6 +40,7 @@ from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import pages as wizard_pages
+from chameleons.experiment.stats.rounding import fmt, fmt_p
 from chameleons.settings import Settings
 
 FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
@@ -48,6 +50,9 @@ def build_templates() -> Jinja2Templates:
     templates = Jinja2Templates(directory=str(FRONTEND_DIR / "templates"))
     templates.env.globals["csrf_token"] = csrf_token
     templates.env.globals["app_version"] = __version__
+    # One rounding rule for every number a page shows (see experiment.stats.rounding).
+    templates.env.globals["fmt"] = fmt
+    templates.env.globals["fmt_p"] = fmt_p
     return templates
 
 
@@ -113,6 +118,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         analysis_pages.router,
         dashboard_pages.router,
         withdrawal_endpoints.router,
+        dropout_endpoints.router,
         display_pages.router,
         display_endpoints.router,
         display_media.router,

@@ -12,6 +12,7 @@ import click
 from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.design import Plan, PlanError, plan, plan_to_dict
 from chameleons.experiment.model import Study
+from chameleons.experiment.stats.rounding import fmt
 from chameleons.experiment.study import StudyError, load_default_study, load_study
 
 
@@ -101,8 +102,8 @@ def balance_text(result: Plan) -> str:
     for c in report.constraints:
         verdict = c.verdict() if c.ok else c.verdict().replace(c.status, c.status.upper(), 1)
         lines.append(
-            f"  [{c.constraint}] {c.id:<34} ideal {c.ideal:7.2f}  "
-            f"largest deviation {c.max_deviation:5.2f}  {verdict}"
+            f"  [{c.constraint}] {c.id:<34} ideal {fmt(c.ideal, 2):>7}  "
+            f"largest deviation {fmt(c.max_deviation, 2):>5}  {verdict}"
         )
     lines += [f"  note: {note}" for note in result.notes]
     lines.append(balance_summary(report))

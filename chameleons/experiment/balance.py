@@ -25,6 +25,7 @@ from typing import Any, Literal, Protocol
 
 from chameleons.experiment.balance_bounds import carry_over_bound, condition_scenario_bound
 from chameleons.experiment.model import Study
+from chameleons.experiment.stats.rounding import fmt
 
 Status = Literal["exact", "within 1", "minimal", "uneven", "cannot hold"]
 TOLERANCE = 1e-6
@@ -93,7 +94,7 @@ class ConstraintBalance:
         if self.status == "minimal":
             return "minimal possible imbalance"
         if self.status == "uneven" and self.lower_bound is not None:
-            return f"uneven (the minimum possible is {self.lower_bound:.2f})"
+            return f"uneven (the minimum possible is {fmt(self.lower_bound, 2)})"
         if self.status == "cannot hold":
             return f"cannot hold: {self.impossible}"
         return self.status
@@ -132,8 +133,9 @@ class BalanceReport:
         return [
             f"{c.id}: {c.impossible}"
             if c.impossible
-            else f"{c.id}: a count is {c.max_deviation:.2f} away from its ideal {c.ideal:.2f}"
-            + (f" (the minimum possible is {c.lower_bound:.2f})" if c.lower_bound is not None
+            else f"{c.id}: a count is {fmt(c.max_deviation, 2)} away from its ideal "
+            f"{fmt(c.ideal, 2)}"
+            + (f" (the minimum possible is {fmt(c.lower_bound, 2)})" if c.lower_bound is not None
                else "")
             for c in self.constraints
             if not c.ok

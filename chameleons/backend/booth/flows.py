@@ -5,7 +5,8 @@
   sending only what the worker has not acknowledged already, so the console's own set-up
   and this one never fight), and the worker starts recording it;
 - ``condition.switched`` on a running interaction: the robot is set up again;
-- ``interaction.advanced`` to ``done``: the recording stops and its files are indexed as
+- ``interaction.advanced`` to ``done``, or ``session.ended_early`` while it ran: the
+  recording stops and its files are indexed as
   Recording rows (from the worker's answer, plus a scan of the directory that recovers crash
   journals); a ``recording_stopped`` event from the worker (e.g. the recorder closing on a
   clean worker stop) is indexed too;
@@ -43,6 +44,7 @@ from starlette.concurrency import run_in_threadpool
 from chameleons.backend.booth import repository, service
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.sessions.ending import ENDED_EARLY
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
 from chameleons.backend.wizard import robot, worker_link
 from chameleons.backend.wizard.service import Outcome
@@ -148,7 +150,7 @@ class BoothFlow:
             self._enqueue(lane, partial(self._interaction_started, interaction_id))
         elif kind == "condition.switched":
             self._enqueue(lane, partial(self._set_up_robot, interaction_id))
-        elif kind == "interaction.advanced" and step == "done":
+        elif (kind == "interaction.advanced" and step == "done") or kind == ENDED_EARLY:
             self._enqueue(lane, partial(self._interaction_done, interaction_id))
 
     def _on_worker(self, message: Message) -> None:

@@ -1,5 +1,8 @@
 """Data-quality flags for sessions: what a PI must look at before trusting the data.
 
+Besides those below, :mod:`.run_flags` flags sessions never started, ended early, partly
+run interactions, excluded participants and prompts the robot did not voice.
+
 - missing answers: a finished interaction (or a complete session's final questionnaire)
   without an answer to every item of its questionnaires;
 - plan deviations: an interaction run in another condition than planned, or a deviation
@@ -23,6 +26,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.dashboard.run_flags import run_flags
 from chameleons.backend.export.selection import as_utc
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse, Session
 from chameleons.experiment.model import Study as StudySpec
@@ -41,7 +45,7 @@ FINISHED_STEPS = frozenset({"done"})
 
 @dataclass(frozen=True)
 class Flag:
-    kind: str  # missing_answers | deviation | outage | latency
+    kind: str  # missing_answers | deviation | outage | latency | see run_flags
     position: int | None
     text: str
     event_id: int | None = None
@@ -129,6 +133,11 @@ def session_flags(
     _missing_answers(spec, sessions, interactions, answers, result)
     _deviations(interactions, events, result)
     _event_flags(interactions, events, limits or latency_limits(events), result)
+
+    def add(session_id: int, kind: str, position: int | None, text: str, event: int | None) -> None:
+        result[session_id].flags.append(Flag(kind, position, text, event))
+
+    run_flags(db, sessions, interactions, events, spec.suggestions_per_interaction, add)
     return result
 
 

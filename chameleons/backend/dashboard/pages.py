@@ -21,11 +21,17 @@ from chameleons.experiment.study import study_from_config
 
 router = APIRouter(tags=["dashboard"])
 FLAG_LABELS = {
+    "not_started": "not started",
+    "ended_early": "ended early",
+    "partial": "partial interaction",
+    "excluded": "excluded",
     "missing_answers": "missing answers",
     "deviation": "plan deviation",
     "outage": "outage",
+    "not_voiced": "prompt not voiced",
     "latency": "slow wizard/worker",
 }
+BAD_FLAGS = ("deviation", "outage", "ended_early", "excluded", "partial", "not_voiced")
 
 
 def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str, Any]:
@@ -39,6 +45,7 @@ def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str,
         "sessions": session_summaries(db, study, spec),
         "include_rehearsal": include_rehearsal,
         "flag_labels": FLAG_LABELS,
+        "bad_flags": BAD_FLAGS,
     }
 
 
@@ -94,7 +101,14 @@ def session_page(
     spec = study_from_config(study.config)
     detail = session_detail(db, spec, session_id, settings.data_dir)
     context = page_context(
-        request, user, study, "overview", detail=detail, spec=spec, flag_labels=FLAG_LABELS
+        request,
+        user,
+        study,
+        "overview",
+        detail=detail,
+        spec=spec,
+        flag_labels=FLAG_LABELS,
+        bad_flags=BAD_FLAGS,
     )
     return templates.TemplateResponse(request, "pi/session.html", context)
 

@@ -1,7 +1,8 @@
 """Plan progress and the live balance of the counterbalancing.
 
 Balance is computed by the experiment core's ``balance_report`` from what actually ran
-(the counted sessions that have started, with each interaction's condition as run), and
+(the counted sessions that are complete and not excluded, with each interaction's condition
+as run: a dropout's partial row does not count, its replacement's complete one does), and
 beside it from the plan rows of those same sessions, so a deviation caused while running
 (a condition switch) is told apart from one the plan itself has (an incomplete block).
 """
@@ -31,6 +32,10 @@ class Progress:
     rehearsal_participants: int
     completed_sessions: int
     started_sessions: int
+    dropped_out: int = 0  # rows handed on from a participant whose data were kept
+    ended_early: int = 0
+    not_started: int = 0
+    excluded: int = 0
 
 
 @dataclass(frozen=True)
@@ -87,32 +92,48 @@ def plan_progress(db: DbSession, study: Study) -> Progress:
         )
     ).all()
     states_query = (
-        select(Session.state)
+        select(Session.state, Participant.excluded_at)
         .join(Participant, Participant.id == Session.participant_id)
         .where(*session_filter(study.id, False))
     )
-    states = list(db.scalars(states_query))
+    found = list(db.execute(states_query).tuples())
+    states = [state for state, _ in found]
+    excluded = db.scalars(
+        select(Participant.id).where(
+            Participant.study_id == study.id,
+            Participant.is_rehearsal.is_(False),
+            Participant.excluded_at.is_not(None),
+        )
+    ).all()
     return Progress(
         rows=len(rows),
         used=sum(1 for row in rows if row.id in holders),
         free=sum(1 for row in rows if row.id not in holders),
         withdrawn=sum(row.withdrawals for row in rows),
-        replaced=sum(1 for row in rows if row.withdrawals and row.id in holders),
+        replaced=sum(1 for row in rows if (row.withdrawals or row.dropouts) and row.id in holders),
         rehearsal_participants=len(rehearsals),
         completed_sessions=sum(1 for state in states if state == "complete"),
         started_sessions=sum(1 for state in states if state != "pending"),
+        dropped_out=sum(row.dropouts for row in rows),
+        ended_early=sum(1 for state in states if state == "ended"),
+        not_started=sum(1 for state in states if state == "pending"),
+        excluded=len(excluded),
     )
 
 
 def _run_rows(
     db: DbSession, study: Study, include_rehearsal: bool
 ) -> tuple[list[SlotRow], list[SlotRow]]:
-    """(actual, planned) rows of the counted sessions that have started."""
+    """(actual, planned) rows of the counted sessions that are complete (not excluded)."""
     query = (
         select(Session, PlanRow)
         .join(Participant, Participant.id == Session.participant_id)
         .join(PlanRow, PlanRow.id == Session.plan_row_id)
-        .where(*session_filter(study.id, include_rehearsal), Session.started_at.is_not(None))
+        .where(
+            *session_filter(study.id, include_rehearsal),
+            Session.state == "complete",
+            Participant.excluded_at.is_(None),
+        )
         .order_by(Session.id)
     )
     actual, planned = [], []

@@ -40,6 +40,8 @@ class SessionSummary:
     started_at: datetime | None
     duration_s: float | None
     flags: SessionFlags
+    excluded: str | None = None  # the reason, when the PI excluded the participant
+    can_hand_on: bool = False  # the plan row may go to a replacement (data kept)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -53,6 +55,8 @@ class SessionSummary:
             "started_at": self.started_at.isoformat() if self.started_at else None,
             "duration_s": self.duration_s,
             "flags": [flag.__dict__ for flag in self.flags.flags],
+            "excluded": self.excluded,
+            "can_hand_on": self.can_hand_on,
         }
 
 
@@ -84,9 +88,21 @@ def session_summaries(db: DbSession, study: Study, spec: StudySpec) -> list[Sess
             as_utc(session.started_at),
             _duration(session),
             flags[session.id],
+            participant.exclusion_reason if participant.excluded_at is not None else None,
+            _can_hand_on(session, participant),
         )
         for session, participant, row_number in found
     ]
+
+
+def _can_hand_on(session: Session, participant: Participant) -> bool:
+    """The dashboard offers the row to a replacement for a dropout whose row it still holds:
+    never started, ended early, or complete but excluded (the service checks again)."""
+    if participant.plan_row_id is None or participant.is_rehearsal:
+        return False
+    if session.state in ("pending", "ended"):
+        return True
+    return session.state == "complete" and participant.excluded_at is not None
 
 
 @dataclass

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from chameleons.backend.sessions.states import END_REASONS
 from chameleons.experiment.model import Study as StudySpec
 
 ColumnType = Literal["string", "integer", "number", "boolean", "datetime"]
@@ -59,6 +60,23 @@ def _list(name: str, what: str) -> Column:
     return Column(name, "string", f"{what}; item ids joined by '{LIST_SEPARATOR}', first = rank 1.")
 
 
+def _exclusion_columns() -> tuple[Column, Column]:
+    return (
+        Column(
+            "excluded",
+            "boolean",
+            "The PI excluded the participant from the analysis (data kept): every analysis"
+            " view leaves them out and says why.",
+        ),
+        Column(
+            "exclusion_reason",
+            "string",
+            "The PI's reason for the exclusion. POSSIBLY IDENTIFYING (free text).",
+            identifying=True,
+        ),
+    )
+
+
 def _decided(spec: StudySpec) -> Column:
     n = spec.suggestions_per_interaction
     return Column(
@@ -98,15 +116,40 @@ def participants_table(spec: StudySpec) -> TableSpec:
         (
             _participant(),
             Column("plan_row", "integer", "Counterbalancing plan row the participant ran."),
-            Column("status", "string", "Participant status.", "registered, active, complete"),
+            Column(
+                "status",
+                "string",
+                "Participant status.",
+                "registered, active, complete, ended_early",
+            ),
             Column("rehearsal", "boolean", "Marked as a staff rehearsal, not a real participant."),
             _session(),
             Column("booth", "string", "Booth the session ran in."),
-            Column("session_state", "string", "Session state at export time."),
+            Column(
+                "session_state",
+                "string",
+                "Session state at export time (ended: ended early by the wizard).",
+                "pending, running, final_questionnaire, complete, ended",
+            ),
             _time("consent_at", "Time consent was recorded"),
             _time("started_at", "Session start"),
             _time("completed_at", "Session completion"),
             Column("duration_s", "number", "Session duration in seconds (start to completion)."),
+            _time("ended_at", "When the wizard ended the session early; empty otherwise"),
+            Column(
+                "end_reason",
+                "string",
+                "Why the session was ended early; empty for sessions not ended early.",
+                ", ".join(END_REASONS),
+            ),
+            Column(
+                "end_note",
+                "string",
+                "The wizard's note on ending early. POSSIBLY IDENTIFYING (free text).",
+                identifying=True,
+            ),
+            *_exclusion_columns(),
+            _time("excluded_at", "When the PI excluded the participant"),
             Column(
                 "study_config_hash",
                 "string",
@@ -293,6 +336,7 @@ def scores_table(spec: StudySpec) -> TableSpec:
                 " participants.csv).",
                 "complete, in_progress, not_started, ended_early",
             ),
+            *_exclusion_columns(),
         ),
     )
 

@@ -72,6 +72,12 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
             "started_at": iso(session.started_at),
             "completed_at": iso(session.completed_at),
             "duration_s": _seconds(session.started_at, session.completed_at),
+            "ended_at": iso(session.ended_at),
+            "end_reason": session.end_reason,
+            "end_note": session.end_note,
+            "excluded": participant.excluded_at is not None,
+            "exclusion_reason": participant.exclusion_reason,
+            "excluded_at": iso(participant.excluded_at),
             "study_config_hash": study.config_hash,
         }
     yield from last.values()

@@ -95,6 +95,8 @@ def score_rows(
                 "suggestions_decided": record.decisions.decided,
                 "interaction_status": record.status,
                 "session_status": session_status(record.session),
+                "excluded": record.participant.excluded_at is not None,
+                "exclusion_reason": record.participant.exclusion_reason,
             }
         )
         rows.append(row)

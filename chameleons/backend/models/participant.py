@@ -2,23 +2,29 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, UniqueConstraint
+from sqlalchemy import CheckConstraint, ForeignKey, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
 from chameleons.backend.models.base import Base, utcnow
 
-PARTICIPANT_STATUSES = ("registered", "active", "complete")
+PARTICIPANT_STATUSES = ("registered", "active", "complete", "ended_early")
 
 
 class Participant(Base):
-    """A pseudonymous participant (no names). Withdrawal deletes the row and all it owns."""
+    """A pseudonymous participant (no names). Withdrawal deletes the row and all it owns.
+
+    ``excluded_at``/``exclusion_reason``: the PI left the participant out of the analysis
+    without deleting anything. ``plan_row_id`` is None for a rehearsal, and for a dropout
+    whose row was handed to a replacement (their session still names the row)."""
 
     __tablename__ = "participant"
     __table_args__ = (
         UniqueConstraint("study_id", "code"),
         # One participant per plan row at a time; a withdrawn participant's row is freed.
         UniqueConstraint("plan_row_id"),
-        CheckConstraint("status IN ('registered', 'active', 'complete')", name="status"),
+        CheckConstraint(
+            "status IN ('registered', 'active', 'complete', 'ended_early')", name="status"
+        ),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)
@@ -29,3 +35,5 @@ class Participant(Base):
     is_rehearsal: Mapped[bool] = mapped_column(default=False)
     consent_at: Mapped[datetime | None]
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    excluded_at: Mapped[datetime | None]
+    exclusion_reason: Mapped[str | None] = mapped_column(Text)

@@ -13,7 +13,9 @@ class PlanRow(Base):
     """One participant slot of the counterbalancing plan (three planned interactions).
 
     A withdrawn participant's row is freed for a replacement; ``withdrawals`` counts how
-    often that happened so progress can report used / free / withdrawn / replaced.
+    often that happened, ``dropouts`` how often the row was handed on from a participant
+    whose data were kept (ended early, excluded, never started), so progress can report
+    used / free / withdrawn / dropped out / replaced.
     """
 
     __tablename__ = "plan_row"
@@ -24,4 +26,5 @@ class PlanRow(Base):
     row_number: Mapped[int]
     interactions: Mapped[list[Any]]
     withdrawals: Mapped[int] = mapped_column(default=0)
+    dropouts: Mapped[int] = mapped_column(default=0, server_default="0")
     created_at: Mapped[datetime] = mapped_column(default=utcnow)

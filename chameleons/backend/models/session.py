@@ -2,14 +2,18 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import ForeignKey, String
+from sqlalchemy import ForeignKey, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
 from chameleons.backend.models.base import Base, utcnow
 
 
 class Session(Base):
-    """A participant's run through their plan row; its phone link opens only this session."""
+    """A participant's run through their plan row; its phone link opens only this session.
+
+    ``state`` is pending -> running -> final_questionnaire -> complete, or ``ended`` when the
+    wizard ended it early (``end_reason``: participant_withdrew, technical_failure, time,
+    other; ``end_note`` says more). An ended session keeps all its data."""
 
     __tablename__ = "session"
 
@@ -28,3 +32,6 @@ class Session(Base):
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
     started_at: Mapped[datetime | None]
     completed_at: Mapped[datetime | None]
+    ended_at: Mapped[datetime | None]
+    end_reason: Mapped[str | None] = mapped_column(String(32))
+    end_note: Mapped[str | None] = mapped_column(Text)

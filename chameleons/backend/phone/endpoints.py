@@ -32,7 +32,7 @@ ENDED_MESSAGE = "This session has ended. Thank you for taking part!"
 def get_state(token: str, db: DbSession) -> PhoneState:
     with http_errors():
         flow = load_by_token(db, token, lock=False)
-        if flow.session.state == "complete":
+        if flow.session.state in ("complete", "ended"):
             raise GoneError(ENDED_MESSAGE)
         return phone_state(flow)
 
@@ -72,7 +72,7 @@ def _read_state(factory: sessionmaker[Session], hub: LiveHub, token: str) -> tup
 def _log_connection(factory: sessionmaker[Session], hub: LiveHub, token: str, kind: str) -> None:
     with write_session(factory, hub) as db:
         flow = load_by_token(db, token, lock=False)
-        if flow.session.state != "complete":
+        if flow.session.state not in ("complete", "ended"):
             events.record(
                 db,
                 kind,

@@ -45,7 +45,7 @@ def session_page(token: str, request: Request, db: DbSession, templates: Templat
         return _message(
             request, templates, "Link not valid", exc.message, status.HTTP_404_NOT_FOUND
         )
-    if flow.session.state == "complete":
+    if flow.session.state in ("complete", "ended"):
         return _message(request, templates, "Thank you!", ENDED_MESSAGE, status.HTTP_410_GONE)
     return templates.TemplateResponse(
         request,
@@ -94,7 +94,7 @@ def join(
         if len(cleaned) == SHORT_CODE_LENGTH
         else None
     )
-    if session is None or session.state == "complete":
+    if session is None or session.state in ("complete", "ended"):
         throttle.record_failure(key)
         text = "That code does not belong to a running session. Please check it and try again."
         return _join(request, templates, text, status.HTTP_404_NOT_FOUND)

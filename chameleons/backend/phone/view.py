@@ -28,7 +28,7 @@ def phone_state(flow: Flow) -> PhoneState:
 
 def _view(flow: Flow) -> PhoneState:
     session = flow.session
-    if session.state == "complete":
+    if session.state in ("complete", "ended"):
         return {"view": "ended"}
     if session.state == "pending":
         return {"view": "welcome"}

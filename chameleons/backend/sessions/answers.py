@@ -110,7 +110,7 @@ def submit_questionnaire(
 
 
 def _check_open(flow: Flow) -> None:
-    if flow.session.state == "complete":
+    if flow.session.state in ("complete", "ended"):
         raise GoneError("This session has ended. Thank you for taking part!")
 
 

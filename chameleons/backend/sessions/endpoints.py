@@ -8,14 +8,17 @@ unsafe methods need the ``X-CSRF-Token`` header.
     POST /api/sessions/{id}/advance   {position, to, worker_time?}       -> snapshot
     POST /api/sessions/{id}/decide    {position, index, accepted, worker_time?} -> snapshot
     POST /api/sessions/{id}/undo      {position, index}                  -> snapshot
-    POST /api/sessions/{id}/condition {condition, position?, worker_time?} -> snapshot
+    POST /api/sessions/{id}/condition {condition, position?, confirm_deviation?, worker_time?}
+    POST /api/sessions/{id}/end       {reason, note?, worker_time?}      -> snapshot
     POST /api/sessions/{id}/events    {kind, payload?, position?, worker_time?} -> 201 event
     GET  /api/sessions/{id}/events?after=&limit=                         -> [event]
     GET  /api/sessions/{id}/phone-qr.svg                                 -> image/svg+xml
     WS   /ws/sessions/{id}            (see ``live.py``)
 
 Every change answers with the session's full snapshot (see ``snapshot.py``); an illegal
-step answers 409 with a sentence saying why and what is allowed now, bad input 422.
+step answers 409 with a sentence saying why and what is allowed now, bad input 422. A
+switch to a condition the session already ran answers 409 with ``{"message", "confirm":
+"confirm_deviation"}`` until it is repeated with ``confirm_deviation: true``.
 """
 
 from __future__ import annotations
@@ -35,12 +38,13 @@ from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.events.unit_of_work import Hub, WriteDb
 from chameleons.backend.models import Participant
 from chameleons.backend.models import Session as SessionRow
-from chameleons.backend.sessions import negotiation, service
+from chameleons.backend.sessions import ending, negotiation, service
 from chameleons.backend.sessions.flow import Flow, load
 from chameleons.backend.sessions.schemas import (
     AdvanceRequest,
     ConditionRequest,
     DecisionRequest,
+    EndRequest,
     NoteRequest,
     SessionCreate,
     SessionSummary,
@@ -170,7 +174,21 @@ def switch_condition(
 ) -> Snapshot:
     with http_errors():
         flow = load(db, session_id)
-        service.switch_condition(flow, data.condition, data.position, data.worker_time)
+        service.switch_condition(
+            flow, data.condition, data.position, data.worker_time, data.confirm_deviation
+        )
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/end", dependencies=WRITE)
+def end_early(
+    session_id: int, data: EndRequest, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    """End the session early with a reason; its data stay (and count as missing where the
+    interactions did not run)."""
+    with http_errors():
+        flow = load(db, session_id)
+        ending.end_early(flow, data.reason, data.note, data.worker_time)
         return snapshot_of(flow, request, hub)
 
 

@@ -148,6 +148,8 @@ def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
         return [{"action": "wait", "for": "final_questionnaire"}]
     if state == "complete":
         return [{"action": "none"}]
+    if state == "ended":
+        return [{"action": "none", "why": "ended"}]
     current = flow.current
     position = current.position
     step = current.state

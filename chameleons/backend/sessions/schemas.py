@@ -41,6 +41,20 @@ class UndoRequest(BaseModel):
 class ConditionRequest(BaseModel):
     condition: str = Field(max_length=64)
     position: int | None = Field(default=None, ge=1, le=100)
+    confirm_deviation: bool = Field(
+        default=False,
+        description="Go ahead with a switch to a condition this session has already run "
+        "(refused with 409 otherwise); it is logged as a deviation.",
+    )
+    worker_time: float | None = WorkerTime
+
+
+class EndRequest(BaseModel):
+    reason: str = Field(
+        max_length=32,
+        description="participant_withdrew, technical_failure, time or other",
+    )
+    note: str = Field(default="", max_length=1000, description="Required for 'other'")
     worker_time: float | None = WorkerTime
 
 

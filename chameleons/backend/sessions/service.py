@@ -20,7 +20,11 @@ from chameleons.backend.sessions.answers import finish_interaction_if_answered
 from chameleons.backend.sessions.flow import Flow, load
 from chameleons.backend.sessions.states import NEXT_STEP, WIZARD_STEPS
 from chameleons.backend.studies import service as studies
-from chameleons.backend.studies.errors import ConflictError, InvalidInputError
+from chameleons.backend.studies.errors import (
+    ConfirmationNeededError,
+    ConflictError,
+    InvalidInputError,
+)
 
 # No 0/O, 1/I/L, 2/Z, 5/S, 8/B: easy to read aloud and to type on a phone.
 SHORT_CODE_ALPHABET = "ACDEFGHJKMNPQRTUVWXY34679"
@@ -204,15 +208,22 @@ def _enter(flow: Flow, interaction: Interaction, to: str) -> None:
 
 
 def switch_condition(
-    flow: Flow, condition: str, position: int | None = None, worker_time: float | None = None
+    flow: Flow,
+    condition: str,
+    position: int | None = None,
+    worker_time: float | None = None,
+    confirm_deviation: bool = False,
 ) -> Interaction:
-    """Record the condition actually run; a difference from the plan is logged as a deviation."""
+    """Record the condition actually run; a difference from the plan is logged as a deviation.
+
+    A switch to a condition another interaction of this session has already run (the
+    participant would have it twice and miss another) is refused until confirmed."""
     if condition not in flow.spec.condition_ids:
         raise InvalidInputError(
             f"{condition!r} is not a condition of this study; use one of "
             f"{', '.join(flow.spec.condition_ids)}."
         )
-    if flow.session.state in ("final_questionnaire", "complete"):
+    if flow.session.state in ("final_questionnaire", "complete", "ended"):
         raise flow.refuse(f"The interactions are over (the session is {flow.session.state}).")
     interaction = flow.interaction(position) if position is not None else _upcoming(flow)
     if interaction.state == "done":
@@ -220,14 +231,28 @@ def switch_condition(
     before = interaction.condition
     if before == condition:
         return interaction
+    repeated = [
+        i.position
+        for i in flow.interactions
+        if i.state == "done" and i.condition == condition and i is not interaction
+    ]
+    if repeated and not confirm_deviation:
+        raise ConfirmationNeededError(
+            f"Interaction {repeated[0]} already ran {condition}: switching interaction "
+            f"{interaction.position} to {condition} gives this participant {condition} twice "
+            f"and no {before}. Confirm it as a deviation from the plan to go ahead.",
+            "confirm_deviation",
+        )
     interaction.condition = condition
     flow.db.flush()
-    payload = {
+    payload: dict[str, object] = {
         "position": interaction.position,
         "from": before,
         "to": condition,
         "planned": interaction.planned_condition,
     }
+    if repeated:
+        payload.update(repeats_position=repeated[0], confirmed=True)
     flow.log(
         "condition.switched", interaction=interaction, worker_time=worker_time, payload=payload
     )

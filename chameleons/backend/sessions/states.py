@@ -3,7 +3,9 @@
 Per interaction: pending -> discussion -> ranking -> negotiation -> questionnaire -> done.
 The wizard moves an interaction up to ``questionnaire``; the participant's last
 questionnaire answer makes it ``done``. A session is pending -> running ->
-final_questionnaire -> complete; the participant's final answers complete it.
+final_questionnaire -> complete; the participant's final answers complete it. The wizard can
+end a session early from any state but complete: it becomes ``ended`` (with a reason), its
+interactions stay as far as they got, and nothing more happens in it.
 """
 
 from __future__ import annotations
@@ -11,7 +13,13 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
-SESSION_STATES = ("pending", "running", "final_questionnaire", "complete")
+SESSION_STATES = ("pending", "running", "final_questionnaire", "complete", "ended")
+END_REASONS = {
+    "participant_withdrew": "the participant withdrew from the session",
+    "technical_failure": "technical failure",
+    "time": "out of time",
+    "other": "other",
+}
 STEPS = ("pending", "discussion", "ranking", "negotiation", "questionnaire", "done")
 WIZARD_STEPS = ("discussion", "ranking", "negotiation", "questionnaire")
 NEXT_STEP = dict(itertools.pairwise(STEPS))
@@ -38,6 +46,8 @@ def describe(action: Action) -> str:
         if waited == "questionnaire":
             return f"wait for the participant's questionnaire after interaction {position}"
         return "wait for the participant's final questionnaire"
+    if action.get("why") == "ended":
+        return "nothing: the session was ended early"
     return "nothing: the session is complete"
 
 

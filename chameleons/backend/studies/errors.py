@@ -29,6 +29,15 @@ class ConflictError(FlowError):
     status_code = status.HTTP_409_CONFLICT
 
 
+class ConfirmationNeededError(ConflictError):
+    """Allowed only when confirmed (HTTP 409): the detail is ``{"message", "confirm"}``, and
+    repeating the request with ``confirm`` set to true goes ahead."""
+
+    def __init__(self, message: str, confirm: str) -> None:
+        super().__init__(message)
+        self.confirm = confirm
+
+
 class InvalidInputError(FlowError):
     """The request's content is wrong (HTTP 422); nothing was changed."""
 
@@ -46,5 +55,8 @@ def http_errors() -> Iterator[None]:
     """Turn flow errors into HTTP errors (the write transaction then rolls back)."""
     try:
         yield
+    except ConfirmationNeededError as exc:
+        detail = {"message": exc.message, "confirm": exc.confirm}
+        raise HTTPException(exc.status_code, detail) from exc
     except FlowError as exc:
         raise HTTPException(exc.status_code, exc.message) from exc

@@ -114,13 +114,14 @@ def generate_plan(
 
 
 def next_free_row(db: Session, study: StudyRow) -> PlanRow | None:
-    """The row the next participant gets: a withdrawn participant's freed row first (so a
-    replacement keeps the balance), otherwise the lowest unused row."""
+    """The row the next participant gets: a row freed by a withdrawal or handed on from a
+    dropout first (so a replacement keeps the balance), otherwise the lowest unused row."""
     taken = select(Participant.plan_row_id).where(Participant.plan_row_id.is_not(None))
+    freed = (PlanRow.withdrawals + PlanRow.dropouts) > 0
     query = (
         select(PlanRow)
         .where(PlanRow.study_id == study.id, PlanRow.id.not_in(taken))
-        .order_by((PlanRow.withdrawals > 0).desc(), PlanRow.row_number)
+        .order_by(freed.desc(), PlanRow.row_number)
     )
     return db.scalars(query).first()
 
@@ -168,7 +169,9 @@ def register_participant(db: Session, study: StudyRow, rehearsal: bool = False) 
         payload={
             "code": participant.code,
             "row_number": row.row_number if row and not rehearsal else None,
-            "replacement": bool(row and not rehearsal and row.withdrawals > 0),
+            "replacement": bool(
+                row and not rehearsal and (row.withdrawals > 0 or row.dropouts > 0)
+            ),
             "rehearsal": rehearsal,
         },
     )

@@ -61,7 +61,7 @@ def target_of(db: Session, session_id: int) -> Target:
     except repository.SessionNotFoundError as exc:
         raise NotFoundError(str(exc)) from None
     interaction = view.current
-    if interaction is None or view.session.state == "complete":
+    if interaction is None or view.session.state in ("complete", "ended"):
         raise ConflictError("There is no interaction to set the robot up for.")
     return Target(view.session.study_id, session_id, interaction.id, interaction.position,
                   view.session.booth, interaction.condition, interaction.face)  # fmt: skip

@@ -187,8 +187,10 @@ def _running(db: Session, session_id: int) -> repository.SessionView:
         view = repository.load_session(db, session_id)
     except repository.SessionNotFoundError as exc:
         raise NotFoundError(str(exc)) from None
-    if view.session.state == "complete":
-        raise ConflictError(f"Session {session_id} is complete; nothing more is played.")
+    if view.session.state in ("complete", "ended"):
+        raise ConflictError(
+            f"Session {session_id} is {view.session.state}; nothing more is played."
+        )
     return view
 
 

@@ -41,6 +41,7 @@ from chameleons.experiment.stats.scores import (
     ScoreTable,
     View,
     missing_reason,
+    session_reason,
 )
 from chameleons.experiment.stats.wilcoxon import DEFAULT_RULE, WilcoxonRule
 
@@ -231,7 +232,11 @@ def _analyze_measure(
                 if v is None
             ]
             excluded.append(participant)
-            notes.append(f"{participant} left out of {measure}: no value for {', '.join(missing)}")
+            session = session_reason(table.sessions.get(participant, ""))
+            notes.append(
+                f"{participant} left out of {measure}: no value for {', '.join(missing)}"
+                + (f"; {session}" if session else "")
+            )
         else:
             blocks.append([float(v) for v in values if v is not None])
             included[participant] = blocks[-1]

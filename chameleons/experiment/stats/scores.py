@@ -38,6 +38,11 @@ STATUS_TEXT = {
     "not_run": "interaction not run",
     "partial": "interaction only partly run",
 }
+SESSION_TEXT = {
+    "ended_early": "the session was ended early",
+    "not_started": "the session never started",
+    "in_progress": "the session is still running",
+}
 
 
 class AnalysisError(ValueError):
@@ -70,6 +75,7 @@ class ScoreTable:
 
     values: dict[tuple[str, str], dict[str, float | None]] = field(default_factory=dict)
     status: dict[tuple[str, str], str] = field(default_factory=dict)
+    sessions: dict[str, str] = field(default_factory=dict)  # participant -> session status
     participants: list[str] = field(default_factory=list)  # analysed, in natural order
     left_out: list[LeftOut] = field(default_factory=list)  # whole participants, with why
     measures: set[str] = field(default_factory=set)  # measure columns present
@@ -88,6 +94,7 @@ class _Row:
     exclusion_reason: str
     deviation: bool
     status: str
+    session: str
     values: dict[str, float | None]
 
 
@@ -142,6 +149,7 @@ class Reader:
             _text(row.get("exclusion_reason")),
             deviation or (planned is not None and planned != condition),
             _text(row.get("interaction_status")),
+            _text(row.get("session_status")),
             values,
         )
 
@@ -222,10 +230,16 @@ class Reader:
             table.conditions.add(condition)
             if row.status:
                 table.status[key] = row.status
+            if row.session:
+                table.sessions[row.participant] = row.session
 
 
 def missing_reason(status: str) -> str:
     return STATUS_TEXT.get(status, "")
+
+
+def session_reason(status: str) -> str:
+    return SESSION_TEXT.get(status, "")
 
 
 def natural_order(participant: str) -> tuple[int, int | str]:

@@ -115,3 +115,26 @@ def test_balance_as_run_follows_the_plan_until_a_switch(db_session: DbSession) -
     cells = {cell.name: cell for cell in by_id["condition_position"].cells}
     changed = [cell for cell in cells.values() if cell.actual != cell.planned]
     assert len(changed) == 2
+
+
+def test_unstarted_sessions_and_unvoiced_prompts_are_flagged(db_session: DbSession) -> None:
+    data = populate(db_session, 2)
+    add_event(
+        db_session,
+        data.session_ids[0],
+        "prompt.speech_end",
+        {"prompt_id": "intro_nova", "reason": "autoplay_blocked", "detail": "needs a click"},
+        position=1,
+    )
+    add_event(db_session, data.session_ids[1], "prompt.speech_end", {"prompt_id": "x"}, 1)
+    session = db_session.get(Session, data.session_ids[1])
+    assert session is not None
+    session.state = "pending"  # as if registered and never started
+    db_session.flush()
+    flags = _flags(db_session)
+    assert flags == {"P001": ["not_voiced"], "P002": ["not_started"]}
+    study = db_session.scalars(select(Study)).one()
+    from chameleons.experiment.study import study_from_config
+
+    texts = session_flags(db_session, study_from_config(study.config), [session])
+    assert texts[session.id].flags[0].text == "registered; the session was never started"

@@ -95,3 +95,25 @@ def test_pi_withdraws_a_participant_by_typing_the_code(
     expect(page.locator('tr[data-participant="P002"]')).to_have_count(0)
     expect(page.locator('[data-stat="withdrawn"]')).to_have_text("1")
     assert not any(p.exists() for p in study.recording_paths[6:12])
+
+
+def test_pi_excludes_a_participant_and_the_analysis_says_so(
+    live_server: LiveServer, page: Page, study: PopulatedStudy
+) -> None:
+    log_in(page, live_server, "/pi")
+    page.locator('tr[data-participant="P004"]').get_by_role("link", name="Exclude…").click()
+    expect(page.get_by_role("heading", name="Exclude participant P004")).to_be_visible()
+    page.get_by_label("Reason").fill("misunderstood the task")
+    page.get_by_role("button", name="Exclude P004").click()
+    expect(page.get_by_role("status")).to_contain_text("P004 is excluded from the analysis")
+    row = page.locator('tr[data-participant="P004"]')
+    expect(row.locator(".badge.excluded")).to_have_text("excluded")
+    expect(row.locator('[data-flag="excluded"]')).to_be_visible()
+    expect(page.locator('[data-stat="excluded"]')).to_have_text("1")
+    page.goto(live_server.url + "/pi/analysis")
+    expect(page.locator("#left-out")).to_contain_text("P004: excluded by the PI: misunderstood")
+    expect(page.locator("#analysis-summary")).to_contain_text("6 participants in the data")
+    page.locator('tr[data-participant="P004"]').count()  # the analysis has no session rows
+    page.goto(live_server.url + "/pi")
+    page.locator('tr[data-participant="P004"]').get_by_role("button", name="Include again").click()
+    expect(page.get_by_role("status")).to_contain_text("P004 is included in the analysis again")

@@ -1,9 +1,10 @@
 // JSON calls to the server with the CSRF header; failures become readable sentences.
 
 export class ApiError extends Error {
-  constructor(status, message) {
+  constructor(status, message, confirm = null) {
     super(message);
     this.status = status;
+    this.confirm = confirm; // a 409 that goes ahead when repeated with this flag set
   }
 }
 
@@ -27,8 +28,12 @@ export function createApi(sessionId, csrf, onReachable) {
     }
     const data = await response.json().catch(() => ({}));
     if (!response.ok) {
-      const detail = typeof data.detail === "string" ? data.detail : JSON.stringify(data.detail);
-      throw new ApiError(response.status, detail || `The server answered ${response.status}.`);
+      const detail = data.detail;
+      if (detail && typeof detail === "object" && detail.message) {
+        throw new ApiError(response.status, detail.message, detail.confirm || null);
+      }
+      const text = typeof detail === "string" ? detail : JSON.stringify(detail);
+      throw new ApiError(response.status, text || `The server answered ${response.status}.`);
     }
     return data;
   }
@@ -45,7 +50,8 @@ export function createApi(sessionId, csrf, onReachable) {
     decide: (position, index, accepted) =>
       call("POST", `${session}/decide`, { position, index, accepted }),
     undo: (position, index) => call("POST", `${session}/undo`, { position, index }),
-    condition: (position, condition) =>
-      call("POST", `${session}/condition`, { position, condition }),
+    condition: (position, condition, confirmDeviation = false) =>
+      call("POST", `${session}/condition`, { position, condition, confirm_deviation: confirmDeviation }),
+    end: (reason, note) => call("POST", `${session}/end`, { reason, note }),
   };
 }

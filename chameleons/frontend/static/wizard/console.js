@@ -112,6 +112,7 @@ async function apply(next) {
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
+  $("end-open").disabled = ["complete", "ended"].includes(state.session.state);
   board.highlight(state.suggestion_prompts);
   board.markPlayed(playedCounts(state));
   timeline.sync(state.events, itemNames(state));
@@ -157,24 +158,56 @@ function act(what) {
   }
 }
 
-function requestSwitch(interaction, condition) {
-  if (condition === interaction.condition) return;
-  const run = () =>
-    perform("switch condition", () => api.condition(interaction.position, condition), true);
-  if (condition === interaction.planned_condition) {
-    run();
-    return;
-  }
+function confirmDialog(text, then) {
   const dialog = $("confirm-dialog");
-  $("confirm-text").textContent =
-    `Interaction ${interaction.position} is planned as "${interaction.planned_condition}". ` +
-    `Switch it to "${condition}"? This is logged as a deviation from the plan.`;
+  $("confirm-text").textContent = text;
   dialog.returnValue = "";
   dialog.onclose = () => {
-    if (dialog.returnValue === "ok") run();
+    if (dialog.returnValue === "ok") then();
   };
   dialog.showModal();
   $("confirm-ok").focus();
+}
+
+function requestSwitch(interaction, condition) {
+  if (condition === interaction.condition) return;
+  const position = interaction.position;
+  const switchTo = (confirmed) =>
+    perform("switch condition", async () => {
+      try {
+        await api.condition(position, condition, confirmed);
+      } catch (error) {
+        // A condition this session already ran: the server asks for a confirmation.
+        if (error.confirm !== "confirm_deviation" || confirmed) throw error;
+        confirmDialog(error.message, () => switchTo(true));
+        return;
+      }
+      await applyRobot();
+    });
+  if (condition === interaction.planned_condition) {
+    switchTo(false);
+    return;
+  }
+  confirmDialog(
+    `Interaction ${position} is planned as "${interaction.planned_condition}". ` +
+      `Switch it to "${condition}"? This is logged as a deviation from the plan.`,
+    () => switchTo(false),
+  );
+}
+
+function openEndDialog() {
+  if (!state || ["complete", "ended"].includes(state.session.state)) return;
+  const dialog = $("end-dialog");
+  $("end-note").value = "";
+  dialog.returnValue = "";
+  dialog.onclose = () => {
+    if (dialog.returnValue !== "end") return;
+    const reason = $("end-reason").value;
+    const note = $("end-note").value.trim();
+    perform("end the session", () => api.end(reason, note));
+  };
+  dialog.showModal();
+  $("end-reason").focus();
 }
 
 bindKeys({
@@ -204,6 +237,7 @@ bindKeys({
 });
 
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
+$("end-open").addEventListener("click", openEndDialog);
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 

@@ -65,6 +65,7 @@ export function primaryAction(state, api) {
   }
   if (action.action === "decide") return { label: `Decide suggestion ${action.index}: A accept / D decline`, run: null };
   if (action.action === "wait") return { label: WAITING[action.for] || "Waiting…", run: null };
+  if (action.why === "ended") return { label: "Session ended early", run: null };
   return { label: "Session complete", run: null };
 }
 

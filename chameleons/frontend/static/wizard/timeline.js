@@ -18,7 +18,7 @@ export function describe(event, names) {
     case "suggestion.proposed": return `Suggestion ${p.index} proposed: ${item(p.item)} from ${p.from_rank} to ${p.to_rank} (${p.kind})`;
     case "suggestion.decided": return `Suggestion ${p.index} ${p.accepted ? "ACCEPTED" : "DECLINED"}: ${item(p.item)}`;
     case "suggestion.undone": return `Suggestion ${p.index}: decision undone (was ${p.was_accepted ? "accepted" : "declined"})`;
-    case "condition.switched": return `Condition of interaction ${p.position}: ${p.from} → ${p.to} (planned ${p.planned})`;
+    case "condition.switched": return `Condition of interaction ${p.position}: ${p.from} → ${p.to} (planned ${p.planned})${p.confirmed ? `, confirmed although interaction ${p.repeats_position} already ran ${p.to}` : ""}`;
     case "plan.deviation": return `DEVIATION from plan: interaction ${p.position} runs ${p.to}, planned ${p.planned}`;
     case "prompt.played": return `▶ ${p.text}`;
     case "prompt.acked": return `Worker acknowledged ${p.prompt_id} after ${p.click_to_ack_ms} ms`;
@@ -32,6 +32,10 @@ export function describe(event, names) {
     case "phone.disconnected": return "Phone disconnected";
     case "session.final_questionnaire": return "Final questionnaire started";
     case "session.completed": return "Session complete";
+    case "session.ended_early": return `SESSION ENDED EARLY: ${p.reason_text || p.reason}${p.note ? ` (${p.note})` : ""}${p.position ? `, during interaction ${p.position} (${p.step})` : ""}`;
+    case "participant.excluded": return `PI excluded the participant from the analysis: ${p.reason}`;
+    case "participant.included": return "PI included the participant in the analysis again";
+    case "plan_row.handed_on": return `PI gave plan row ${p.row_number} to a replacement participant`;
     default: return `${event.kind} ${JSON.stringify(p)}`;
   }
 }
