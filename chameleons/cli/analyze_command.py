@@ -10,10 +10,21 @@ from typing import Any, Literal
 
 import click
 
-from chameleons.experiment.stats import AnalysisError, analyze, render_latex, render_text
-from chameleons.experiment.study import load_default_study
+from chameleons.experiment.model import Study
+from chameleons.experiment.stats import (
+    AnalysisError,
+    analyze,
+    condition_labels,
+    condition_order,
+    measure_labels,
+    measure_ranges,
+    render_latex,
+    render_text,
+)
+from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
+STUDY_CONFIG_NAME = "study_config.json"  # written next to scores.csv by the export
 
 
 def analysis_output(
@@ -24,19 +35,40 @@ def analysis_output(
     seed: int = 0,
     alpha: float = 0.05,
     latex_layout: Literal["paper", "wide"] = "paper",
+    study: Study | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
-    file, the database). Raises ``click.ClickException`` for unusable rows."""
+    file, the database). ``study`` gives the measures, the condition labels and order and
+    the value ranges (default: the paper's study). Raises ``click.ClickException`` for
+    unusable rows."""
+    spec = study or load_default_study()
     try:
-        analysis = analyze(rows, permutations=permutations, seed=seed, alpha=alpha)
+        analysis = analyze(
+            rows, measures=spec.measures, condition_order=condition_order(spec),
+            permutations=permutations, seed=seed, alpha=alpha,
+        )  # fmt: skip
     except AnalysisError as exc:
         raise click.ClickException(str(exc)) from exc
-    labels = {c.id: c.label for c in load_default_study().conditions}
+    labels = condition_labels(spec)
+    options = {"measure_labels": measure_labels(spec), "measure_ranges": measure_ranges(spec)}
     if output_format == "json":
         return json.dumps(analysis.to_dict(), indent=2)
     if output_format == "latex":
-        return render_latex(analysis, labels, layout=latex_layout)
-    return render_text(analysis, labels)
+        return render_latex(analysis, labels, layout=latex_layout, **options)
+    return render_text(analysis, labels, **options)
+
+
+def study_beside(path: Path) -> Study | None:
+    """The study an exported ``scores.csv`` was collected under (``study_config.json`` beside
+    it), or None when there is none."""
+    config_path = path.with_name(STUDY_CONFIG_NAME)
+    if not config_path.is_file():
+        return None
+    try:
+        return study_from_config(json.loads(config_path.read_text(encoding="utf-8")))
+    except (OSError, ValueError) as exc:  # StudyError is a ValueError
+        problems = exc.problems if isinstance(exc, StudyError) else [str(exc)]
+        raise click.ClickException(f"{config_path}: {'; '.join(problems)}") from exc
 
 
 def read_scores_csv(path: Path) -> list[dict[str, str]]:
@@ -60,7 +92,8 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     "scores_path",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="scores.csv: participant, condition, accepted, credibility, likeability, trust. "
+    help="scores.csv: participant, condition, accepted, credibility, likeability, trust; "
+    "the export's study_config.json beside it gives the study's measures and labels. "
     "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
 )
 @click.option("--study", "study_id", type=int, help="Database mode: study id (default: newest).")
@@ -103,10 +136,12 @@ def analyze_command(
     latex_layout: Literal["paper", "wide"],
 ) -> None:
     """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests."""
+    study: Study | None
     if scores_path is not None:
-        rows = read_scores_csv(scores_path)
+        rows: list[dict[str, Any]] = list(read_scores_csv(scores_path))
+        study = study_beside(scores_path)
     else:
-        rows = database_score_rows(study_id, include_rehearsal)
+        rows, study = database_score_rows(study_id, include_rehearsal)
     click.echo(
         analysis_output(
             rows,
@@ -115,12 +150,15 @@ def analyze_command(
             seed=seed,
             alpha=alpha,
             latex_layout=latex_layout,
+            study=study,
         )
     )
 
 
-def database_score_rows(study_id: int | None, include_rehearsal: bool) -> list[dict[str, Any]]:
-    """The export's scores rows read from the configured database."""
+def database_score_rows(
+    study_id: int | None, include_rehearsal: bool
+) -> tuple[list[dict[str, Any]], Study]:
+    """The export's scores rows read from the configured database, and their study."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from chameleons.backend.analysis.service import score_rows_from_database

@@ -194,7 +194,7 @@ def test_the_random_fallback_is_uniform_over_the_allowed_moves(ranking, declined
     movable = [m for m in all_moves(ranking) if m[2] < m[1]]
     allowed = [m for m in movable if m[0] not in declined] or movable
     draws = 12_000
-    counts = Counter()
+    counts: Counter[tuple[str, int, int]] = Counter()
     for seed in range(draws):
         s = next_suggestion(ranking, expert, declined, random.Random(seed))
         assert s.kind == "random"

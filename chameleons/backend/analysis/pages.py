@@ -101,7 +101,9 @@ def analysis_plot(
     if measure not in scores.measures:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no measure {measure!r}.")
     # Only the omnibus test for the subtitle: post-hoc tests are not needed for a plot.
-    conditions = order_conditions({str(row["condition"]) for row in scores.rows})
+    conditions = order_conditions(
+        {str(row["condition"]) for row in scores.rows}, scores.condition_order
+    )
     test = friedman(paired_values(scores.rows, measure, conditions))
     image = plot_measure(
         scores.rows,

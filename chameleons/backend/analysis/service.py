@@ -22,7 +22,11 @@ from chameleons.experiment.stats import (
     AnalysisError,
     Descriptive,
     analyze,
+    condition_labels,
+    condition_order,
     error_score_table,
+    measure_labels,
+    measure_ranges,
     render_latex,
     render_text,
 )
@@ -43,11 +47,21 @@ class StudyScores:
 
     @property
     def condition_labels(self) -> dict[str, str]:
-        return {condition.id: condition.label for condition in self.spec.conditions}
+        return condition_labels(self.spec)
+
+    @property
+    def condition_order(self) -> list[str]:
+        return condition_order(self.spec)
 
     @property
     def measures(self) -> tuple[str, ...]:
         return self.spec.measures
+
+    def render_options(self) -> dict[str, Any]:
+        return {
+            "measure_labels": measure_labels(self.spec),
+            "measure_ranges": measure_ranges(self.spec),
+        }
 
 
 @dataclass
@@ -61,13 +75,17 @@ class StudyAnalysis:
     def latex(self) -> str:
         if self.analysis is None:
             return ""
-        return render_latex(self.analysis, self.scores.condition_labels)
+        return render_latex(
+            self.analysis, self.scores.condition_labels, **self.scores.render_options()
+        )
 
     @property
     def text(self) -> str:
         if self.analysis is None:
             return self.error or ""
-        return render_text(self.analysis, self.scores.condition_labels)
+        return render_text(
+            self.analysis, self.scores.condition_labels, **self.scores.render_options()
+        )
 
 
 def database_scores(
@@ -79,7 +97,13 @@ def database_scores(
 
 
 def run_analysis(scores: StudyScores, permutations: int | None = None, seed: int = 0) -> Analysis:
-    return analyze(scores.rows, measures=scores.measures, permutations=permutations, seed=seed)
+    return analyze(
+        scores.rows,
+        measures=scores.measures,
+        condition_order=scores.condition_order,
+        permutations=permutations,
+        seed=seed,
+    )
 
 
 def error_scores(
@@ -111,13 +135,15 @@ def study_analysis(
 
 def score_rows_from_database(
     database_url: str, study_id: int | None = None, include_rehearsal: bool = False
-) -> list[dict[str, Any]]:
-    """The scores table straight from a database (``chameleons analyze`` without a file)."""
+) -> tuple[list[dict[str, Any]], StudySpec]:
+    """The scores table straight from a database (``chameleons analyze`` without a file),
+    with the study it was collected under."""
     from chameleons.backend.db import build_engine, build_sessionmaker
 
     engine = build_engine(database_url)
     try:
         with build_sessionmaker(engine)() as db:
-            return database_scores(db, study_id, include_rehearsal).rows
+            scores = database_scores(db, study_id, include_rehearsal)
+            return scores.rows, scores.spec
     finally:
         engine.dispose()

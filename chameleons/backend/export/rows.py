@@ -84,6 +84,7 @@ def interaction_rows(
     interactions = counted_interactions(db, study.id, include_rehearsal)
     accepted = accepted_counts(db, [i.id for i, _ in interactions])
     actors = {actor.id: actor for actor in spec.actors}
+    behaviours = {condition.id: condition.behaviour for condition in spec.conditions}
     for interaction, code in interactions:
         actor = actors.get(interaction.actor)
         yield {
@@ -108,6 +109,9 @@ def interaction_rows(
             "started_at": iso(interaction.started_at),
             "ended_at": iso(interaction.ended_at),
             "duration_s": _seconds(interaction.started_at, interaction.ended_at),
+            "behaviour": behaviours.get(interaction.condition),
+            "natural_source": interaction.natural_source,
+            "natural_recording": interaction.natural_recording,
         }
 
 
@@ -138,6 +142,7 @@ def suggestion_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Ite
             "proposed_at": iso(suggestion.proposed_at),
             "decided_at": iso(suggestion.decided_at),
             "decision_s": _seconds(suggestion.proposed_at, suggestion.decided_at),
+            "direction": "up" if suggestion.to_rank < suggestion.from_rank else "down",
         }
 
 

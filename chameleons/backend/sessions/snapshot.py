@@ -45,6 +45,7 @@ def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[
             "connections": phone_connections,
         },
         "conditions": list(flow.spec.condition_ids),
+        "suggestions_per_interaction": flow.spec.suggestions_per_interaction,
         "condition_details": [_condition(c) for c in flow.spec.conditions],
         "interactions": [_interaction(flow, interaction) for interaction in flow.interactions],
         "final_questionnaire": _progress(flow, FINAL_POSITION),

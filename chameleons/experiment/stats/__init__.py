@@ -31,7 +31,14 @@ from chameleons.experiment.stats.friedman_test import (
     friedman,
     permutation_p,
 )
-from chameleons.experiment.stats.render import render_latex, render_text
+from chameleons.experiment.stats.render import (
+    condition_labels,
+    condition_order,
+    measure_labels,
+    measure_ranges,
+    render_latex,
+    render_text,
+)
 
 __all__ = [
     "DEFAULT_MEASURES",
@@ -46,9 +53,13 @@ __all__ = [
     "analyze",
     "average_ranks",
     "bonferroni",
+    "condition_labels",
+    "condition_order",
     "describe",
     "error_score_table",
     "friedman",
+    "measure_labels",
+    "measure_ranges",
     "order_conditions",
     "permutation_p",
     "render_latex",

@@ -97,7 +97,7 @@ def test_an_interaction_started_through_the_api_sets_up_the_robot_and_is_recorde
 
 def natural_interaction(app: FastAPI, wizard: WizardBot) -> Interaction:
     with app.state.sessionmaker() as db:
-        found = db.get(Interaction, interaction_id(app, wizard))
+        found: Interaction | None = db.get(Interaction, interaction_id(app, wizard))
         assert found is not None
         return found
 
