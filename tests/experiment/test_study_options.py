@@ -24,7 +24,8 @@ def line_of(path: Path, text: str, after: str = "") -> int:
     """The 1-based line of the first line starting with ``text`` (after ``after``)."""
     lines = path.read_text("utf-8").splitlines()
     start = next(n for n, line in enumerate(lines) if after in line) if after else 0
-    return next(n for n, line in enumerate(lines[start:], start + 1) if line.strip().startswith(text))
+    found = (n for n, line in enumerate(lines[start:], start + 1) if line.strip().startswith(text))
+    return next(found)
 
 
 def test_conditions_run_a_behaviour_with_checked_parameters(tmp_path: Path) -> None:

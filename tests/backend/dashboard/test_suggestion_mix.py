@@ -55,7 +55,8 @@ def test_a_condition_with_more_random_suggestions_is_flagged(db_session: DbSessi
     db_session.flush()
     confounded = suggestion_mix(db_session, study, data.spec)
     assert confounded.confounded
-    assert confounded.p is not None and confounded.p < 1e-6
+    assert confounded.p is not None
+    assert confounded.p < 1e-6
     # The same share of random suggestions everywhere: no flag (chi2 = 0, p = 1).
     for _condition, suggestion in _suggestions(db_session):
         suggestion.kind = "random" if suggestion.index == 3 else "optimal"

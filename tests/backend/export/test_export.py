@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import csv
-from collections import Counter
 import io
 import json
 import zipfile
+from collections import Counter
 from datetime import datetime, timedelta
 from pathlib import Path
 
@@ -254,5 +254,6 @@ def test_what_natural_replayed_and_which_way_suggestions_moved_are_exported(
     directions = Counter(r["direction"] for r in suggestions)
     assert directions == {"down": 1, "up": len(suggestions) - 1}
     codebook = (tmp_path / "codebook.csv").read_text("utf-8")
-    assert "natural_source" in codebook and "clip, yoked, synthetic" in codebook
+    assert "natural_source" in codebook
+    assert "clip, yoked, synthetic" in codebook
     assert data.study_id
