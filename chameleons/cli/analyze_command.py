@@ -12,63 +12,66 @@ import click
 
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats import (
+    DEFAULT_RULE,
+    DEFAULT_VIEW,
+    VIEWS,
+    WILCOXON_RULES,
     AnalysisError,
+    View,
+    WilcoxonRule,
     analyze,
-    condition_labels,
-    condition_order,
-    measure_labels,
-    measure_ranges,
     render_latex,
     render_text,
 )
+from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
-STUDY_CONFIG_NAME = "study_config.json"  # written next to scores.csv by the export
+STUDY_CONFIG_NAME = "study_config.json"
 
 
 def analysis_output(
     rows: Iterable[Mapping[str, Any]],
     output_format: str = "text",
     *,
+    study: StudyMeasures | None = None,
+    view: View = DEFAULT_VIEW,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     permutations: int | None = None,
     seed: int = 0,
     alpha: float = 0.05,
     latex_layout: Literal["paper", "wide"] = "paper",
-    study: Study | None = None,
+    row_name: str = "row",
+    first_row: int = 1,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
-    file, the database). ``study`` gives the measures, the condition labels and order and
-    the value ranges (default: the paper's study). Raises ``click.ClickException`` for
-    unusable rows."""
-    spec = study or load_default_study()
+    file, the database), checked against the study's conditions and scales (default: the
+    built-in study). Raises ``click.ClickException`` for unusable rows."""
+    design = study or study_measures(load_default_study())
     try:
         analysis = analyze(
-            rows, measures=spec.measures, condition_order=condition_order(spec),
-            permutations=permutations, seed=seed, alpha=alpha,
-        )  # fmt: skip
+            rows,
+            measures=design.measures,
+            condition_order=design.order,
+            conditions=design.conditions,
+            scales=design.scales,
+            view=view,
+            permutations=permutations,
+            seed=seed,
+            alpha=alpha,
+            wilcoxon_rule=wilcoxon_rule,
+            row_name=row_name,
+            first_row=first_row,
+        )
     except AnalysisError as exc:
-        raise click.ClickException(str(exc)) from exc
-    labels = condition_labels(spec)
-    options = {"measure_labels": measure_labels(spec), "measure_ranges": measure_ranges(spec)}
+        raise click.ClickException(f"{exc} Nothing was analysed.") from exc
     if output_format == "json":
         return json.dumps(analysis.to_dict(), indent=2)
+    titles, ranges = design.titles, design.ranges
     if output_format == "latex":
-        return render_latex(analysis, labels, layout=latex_layout, **options)
-    return render_text(analysis, labels, **options)
-
-
-def study_beside(path: Path) -> Study | None:
-    """The study an exported ``scores.csv`` was collected under (``study_config.json`` beside
-    it), or None when there is none."""
-    config_path = path.with_name(STUDY_CONFIG_NAME)
-    if not config_path.is_file():
-        return None
-    try:
-        return study_from_config(json.loads(config_path.read_text(encoding="utf-8")))
-    except (OSError, ValueError) as exc:  # StudyError is a ValueError
-        problems = exc.problems if isinstance(exc, StudyError) else [str(exc)]
-        raise click.ClickException(f"{config_path}: {'; '.join(problems)}") from exc
+        return render_latex(analysis, design.labels, layout=latex_layout,
+                            measure_labels=titles, measure_ranges=ranges)  # fmt: skip
+    return render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
 
 
 def read_scores_csv(path: Path) -> list[dict[str, str]]:
@@ -86,6 +89,21 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     return rows
 
 
+def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | None]:
+    """The study the scores were exported from: ``config`` (a ``study_config.json``), else
+    the one beside the scores file, else the built-in study (with a note saying so)."""
+    path = config or scores.with_name(STUDY_CONFIG_NAME)
+    if config is None and not path.is_file():
+        return load_default_study(), (
+            f"no {STUDY_CONFIG_NAME} beside {scores}: checking the rows against the built-in "
+            "study's conditions and scales (--study-config FILE for another)"
+        )
+    try:
+        return study_from_config(json.loads(path.read_text(encoding="utf-8"))), None
+    except (OSError, ValueError, StudyError) as exc:
+        raise click.ClickException(f"cannot use {path} as the study configuration: {exc}") from exc
+
+
 @click.command("analyze")
 @click.option(
     "--scores",
@@ -95,6 +113,14 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     help="scores.csv: participant, condition, accepted, credibility, likeability, trust; "
     "the export's study_config.json beside it gives the study's measures and labels. "
     "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
+)
+@click.option(
+    "--study-config",
+    "config_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help=f"With --scores: the study's {STUDY_CONFIG_NAME} (default: the one beside the "
+    "scores file, else the built-in study). Sets the conditions and the measures' scales.",
 )
 @click.option("--study", "study_id", type=int, help="Database mode: study id (default: newest).")
 @click.option("--include-rehearsal", is_flag=True, help="Database mode: count rehearsals too.")
@@ -110,6 +136,22 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     type=click.IntRange(min=1),
     default=None,
     help="Add permutation p-values: exact when feasible, else Monte Carlo with N resamples.",
+)
+@click.option(
+    "--view",
+    type=click.Choice(VIEWS),
+    default=DEFAULT_VIEW,
+    show_default=True,
+    help="as_planned: intention to treat, each interaction counts for its planned condition; "
+    "as_run: per protocol, participants with a deviation from the plan are left out.",
+)
+@click.option(
+    "--wilcoxon-rule",
+    type=click.Choice(WILCOXON_RULES),
+    default=DEFAULT_RULE,
+    show_default=True,
+    help="Which R version's wilcox.test the post-hoc tests follow; they differ only for tied "
+    "differences without zeros (R >= 4.6: exact conditional p).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Monte Carlo seed.")
 @click.option(
@@ -127,38 +169,53 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
 )
 def analyze_command(
     scores_path: Path | None,
+    config_path: Path | None,
     study_id: int | None,
     include_rehearsal: bool,
     output_format: str,
     permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
     seed: int,
     alpha: float,
     latex_layout: Literal["paper", "wide"],
 ) -> None:
-    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests."""
-    study: Study | None
+    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests.
+
+    Excluded participants leave every test; so do, in the as_run view, participants with a
+    deviation from the plan; a participant without a value in every condition leaves that
+    measure. The output says who and why. Impossible values are refused, naming the line.
+    """
     if scores_path is not None:
-        rows: list[dict[str, Any]] = list(read_scores_csv(scores_path))
-        study = study_beside(scores_path)
+        rows = read_scores_csv(scores_path)
+        spec, note = study_for_scores(scores_path, config_path)
+        if note:
+            click.echo(f"Note: {note}.", err=True)
+        row_name, first_row = "line", 2  # a CSV file's data start on its second line
     else:
-        rows, study = database_score_rows(study_id, include_rehearsal)
+        spec, rows = database_score_rows(study_id, include_rehearsal)
+        row_name, first_row = "row", 1
     click.echo(
         analysis_output(
             rows,
             output_format,
+            study=study_measures(spec),
+            view=view,
+            wilcoxon_rule=wilcoxon_rule,
             permutations=permutations,
             seed=seed,
             alpha=alpha,
             latex_layout=latex_layout,
-            study=study,
+            row_name=row_name,
+            first_row=first_row,
         )
     )
 
 
 def database_score_rows(
     study_id: int | None, include_rehearsal: bool
-) -> tuple[list[dict[str, Any]], Study]:
-    """The export's scores rows read from the configured database, and their study."""
+) -> tuple[Study, list[dict[str, Any]]]:
+    """The study and the export's scores rows, read from the configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from chameleons.backend.analysis.service import score_rows_from_database

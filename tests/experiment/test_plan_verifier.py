@@ -234,8 +234,12 @@ def test_two_to_six_conditions_plan_balanced(tmp_path: Path, k: int) -> None:
     result = plan(study, balance_period(study), 1)
     conditions = list(study.condition_ids)
     assert result.notes == []
-    assert all(c.exact or (c.id.startswith(("item_first_last", "carry_over")) and c.ok)
-               for c in result.balance.constraints), result.balance.problems()  # fmt: skip
+    # Every count exact, except where whole numbers cannot be (item first/last: within 1)
+    # and "every item first and last once", which a short period cannot show yet.
+    within = ("item_first_last", "carry_over")
+    assert all(c.exact or (c.id.startswith(within) and c.ok)
+               for c in result.balance.constraints if not c.id.startswith("item_at_ends")
+               ), result.balance.problems()  # fmt: skip
     for row in result.rows:
         assert sorted(i.condition for i in row.interactions) == sorted(conditions)
     verify_williams(result.rows, conditions)

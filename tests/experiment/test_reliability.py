@@ -68,10 +68,12 @@ def test_agrees_with_hoyts_anova_formula(cases: list[list[int]]) -> None:
     if data.sum(axis=1).var() == 0:
         assert result.alpha is None
         return
-    assert result.alpha == pytest.approx(hoyt_alpha(data), abs=1e-9)
-    assert result.ci_low is not None
-    assert result.ci_high is not None
-    assert result.ci_low <= result.alpha <= result.ci_high
+    alpha, low, high = result.alpha, result.ci_low, result.ci_high
+    assert alpha == pytest.approx(hoyt_alpha(data), abs=1e-9)
+    assert alpha is not None
+    assert low is not None
+    assert high is not None
+    assert low <= alpha <= high
 
 
 def test_feldt_interval_is_cocrons_formula() -> None:
@@ -82,6 +84,8 @@ def test_feldt_interval_is_cocrons_formula() -> None:
     low, high = feldt_interval(0.83, 100, 20)
     assert low == pytest.approx(1 - 0.17 * f.ppf(0.975, 99, 99 * 19))
     assert high == pytest.approx(1 - 0.17 * f.ppf(0.025, 99, 99 * 19))
+    assert low is not None
+    assert high is not None
     assert low < 0.83 < high
 
 

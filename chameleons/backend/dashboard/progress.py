@@ -68,6 +68,8 @@ class BalanceTable:
     max_deviation: float
     ok: bool
     differs_from_plan: bool
+    status: str
+    verdict: str
     cells: list[BalanceCell] = field(default_factory=list)
 
 
@@ -179,6 +181,8 @@ def live_balance(
                 constraint.max_deviation,
                 constraint.ok,
                 any(cell.planned != cell.actual for cell in cells),
+                constraint.status,
+                constraint.verdict(),
                 cells,
             )
         )

@@ -47,7 +47,7 @@ def alpha_from_covariance(covariance: np.ndarray) -> float | None:
     total = float(matrix.sum())
     if k < 2 or total <= 0 or not math.isfinite(total):
         return None
-    return k / (k - 1) * (1.0 - float(np.trace(matrix)) / total)
+    return float(k / (k - 1) * (1.0 - float(np.trace(matrix)) / total))
 
 
 def feldt_interval(

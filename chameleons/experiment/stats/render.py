@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Literal
 
-from chameleons.experiment.model import Study
-from chameleons.experiment.stats.analysis import PAPER_CONDITION_ORDER, Analysis, MeasureAnalysis
-from chameleons.experiment.stats.descriptive import Descriptive
+from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
+from chameleons.experiment.stats.descriptive import Descriptive, PairwiseTest
+from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
 
 MEASURE_LABELS = {
     "accepted": "Accepted robot suggestions",
@@ -18,31 +18,6 @@ MEASURE_LABELS = {
 MEASURE_RANGES = {"accepted": "0-3", "credibility": "1-7", "likeability": "1-7", "trust": "1-7"}
 CONDITION_LABELS = {"natural": "Natural movement", "copy": "Copy", "still": "Still"}
 UNDEFINED = "undefined"
-
-
-def condition_labels(study: Study) -> dict[str, str]:
-    return {condition.id: condition.label for condition in study.conditions}
-
-
-def measure_labels(study: Study) -> dict[str, str]:
-    titles = {q.id: q.title for q in study.questionnaires_for("interaction") if q.scored}
-    return {**MEASURE_LABELS, **titles}
-
-
-def measure_ranges(study: Study) -> dict[str, str]:
-    """The value range of each measure of ``study`` (accepted: 0..suggestions)."""
-    ranges = {"accepted": f"0-{study.suggestions_per_interaction}"}
-    for questionnaire in study.questionnaires_for("interaction"):
-        if questionnaire.scored:
-            ranges[questionnaire.id] = f"1-{questionnaire.points}"
-    return ranges
-
-
-def condition_order(study: Study) -> list[str]:
-    """The order tables list conditions in: the paper's Table I order for the paper's three
-    conditions, otherwise the study's own order."""
-    ids = list(study.condition_ids)
-    return list(PAPER_CONDITION_ORDER) if sorted(ids) == sorted(PAPER_CONDITION_ORDER) else ids
 
 
 def render_text(
@@ -59,10 +34,10 @@ def render_text(
     header = f"{'measure (median, mean ± SD)':<34}" + "".join(
         f"{labels.get(c, c):<22}" for c in conditions
     )
-    lines = [header, "-" * len(header)]
+    lines = [f"Analysed {analysis.view_title}.", analysis.summary(), "", header, "-" * len(header)]
     for measure, result in analysis.measures.items():
         name = f"{names.get(measure, measure)} ({ranges.get(measure, '')})"
-        cells = "".join(f"{_cell(result.conditions[c], '±'):<22}" for c in conditions)
+        cells = "".join(f"{result.conditions[c].cell():<22}" for c in conditions)
         lines.append(f"{name.replace(' ()', ''):<34}{cells}")
     lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
     lines += [f"  {m:<12} {_friedman_text(r)}" for m, r in analysis.measures.items()]
@@ -71,12 +46,9 @@ def render_text(
         if not result.posthoc:
             lines.append(f"  {measure:<12} {result.posthoc_note}")
         for test in result.posthoc:
-            lines.append(
-                f"  {measure:<12} {test.a} vs {test.b}: W = {_num(test.statistic, 1)}, "
-                f"p = {_p(test.p)}, Bonferroni p = {_p(test.p_bonferroni)}, n = {test.n}"
-                + (f" ({test.note})" if test.note else "")
-            )
+            lines.append(f"  {measure:<12} {posthoc_text(test)}")
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
+    notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
     return "\n".join(lines)
 
@@ -99,7 +71,8 @@ def render_latex(
         body = _paper_body(analysis, labels, names)
     else:
         body = _wide_body(analysis, labels, names)
-    comments = [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
+    comments = [f"% Analysed {analysis.view_title}. {analysis.summary()}"]
+    comments += [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
     scales = sorted({ranges[m] for m in analysis.measures if m != "accepted" and m in ranges})
     return "\n".join(
         [
@@ -130,8 +103,9 @@ def _paper_body(
         lines.append(rf"    \multirow{{{k}}}*{{{_tex(names.get(measure, measure))}}}")
         for condition in analysis.conditions:
             d = result.conditions[condition]
+            median = fmt(d.exact_median, 1, "--")
             lines.append(
-                rf"    & {_tex(labels.get(condition, condition))} & {_num(d.median, 1, '--')} & "
+                rf"    & {_tex(labels.get(condition, condition))} & {median} & "
                 rf"{_mean_sd_tex(d)} \\"
             )
         lines.append(r"    \hline")
@@ -148,12 +122,23 @@ def _wide_body(
     lines.append(r"    \hline")
     for measure, result in analysis.measures.items():
         cells = " & ".join(
-            f"{_num(result.conditions[c].median, 1, '--')}, {_mean_sd_tex(result.conditions[c])}"
-            for c in analysis.conditions
+            f"{fmt(d.exact_median, 1, '--')}, {_mean_sd_tex(d)}"
+            for d in (result.conditions[c] for c in analysis.conditions)
         )
         lines.append(rf"    {_tex(names.get(measure, measure))} & {cells} \\")
     lines += [r"    \hline", r"    \end{tabular}"]
     return lines
+
+
+def posthoc_text(test: PairwiseTest) -> str:
+    """One post-hoc test in words (the text report and the analysis page)."""
+    if test.p is None:
+        return f"{test.a} vs {test.b}: undefined ({test.note}), n = {test.n}"
+    return (
+        f"{test.a} vs {test.b}: V = {fmt(test.v, 1)}, W = {fmt(test.statistic, 1)}, "
+        f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(test.p_bonferroni)}, n = {test.n}"
+        f" ({test.method}{'; ' + test.note if test.note else ''})"
+    )
 
 
 def _friedman_text(result: MeasureAnalysis) -> str:
@@ -161,8 +146,8 @@ def _friedman_text(result: MeasureAnalysis) -> str:
     if test.chi2 is None:
         return f"chi2 {UNDEFINED} (n = {test.n}; every participant's values tied or no data)"
     text = (
-        f"chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}, Bonferroni p = "
-        f"{_p(result.p_bonferroni)}, Kendall's W = {_num(test.kendall_w, 3)}, n = {test.n}"
+        f"chi2({test.df}) = {fmt(test.chi2, 2)}, p = {fmt_p(test.p)}, Bonferroni p = "
+        f"{fmt_p(result.p_bonferroni)}, Kendall's W = {fmt(test.kendall_w, 3)}, n = {test.n}"
     )
     if result.permutation is not None:
         perm = result.permutation
@@ -172,32 +157,16 @@ def _friedman_text(result: MeasureAnalysis) -> str:
             else f"Monte Carlo, {perm.resamples} resamples, seed {perm.seed}"
         )
         text += (
-            f"; permutation p ({how}) = {_p(perm.p)}, Bonferroni "
-            f"{_p(result.permutation_p_bonferroni)}"
+            f"; permutation p ({how}) = {fmt_p(perm.p)}, Bonferroni "
+            f"{fmt_p(result.permutation_p_bonferroni)}"
         )
     return text
 
 
-def _cell(d: Descriptive, plus_minus: str) -> str:
-    if d.n == 0:
-        return "no data"
-    return f"{_num(d.median, 1)}, {_num(d.mean, 1)} {plus_minus} {_num(d.sd, 1)}"
-
-
 def _mean_sd_tex(d: Descriptive) -> str:
-    if d.mean is None:
+    if d.exact_mean is None:
         return "--"
-    return rf"${d.mean:.1f}\pm{_num(d.sd, 1, '--')}$"
-
-
-def _num(value: float | None, digits: int, missing: str = UNDEFINED) -> str:
-    return missing if value is None else f"{value:.{digits}f}"
-
-
-def _p(value: float | None) -> str:
-    if value is None:
-        return UNDEFINED
-    return "< 0.0001" if value < 0.0001 else f"{value:.4f}"
+    return rf"${fmt(d.exact_mean, 1)}\pm{fmt(d.exact_sd, 1, '--')}$"
 
 
 def _tex(text: str) -> str:
