@@ -88,6 +88,7 @@ def actor_rows(phrasing: dict[str, Any], items: dict[str, list[Item]]) -> list[R
     rows += _variants("rank_instruction", "rank_instruction", phrasing["rank_instruction"])
     rows += _item_rows(all_items, phrasing["move_up"], "move_up", "suggestion")
     rows += _item_rows(all_items, phrasing["make_first"], "make_first", "suggestion")
+    rows += _item_rows(all_items, phrasing["move_down"], "move_down", "suggestion")
     rows += _pair_rows(items, phrasing["above"])
     for stage in ("acknowledgement", "transition"):
         for group, variants in phrasing[stage].items():

@@ -113,8 +113,12 @@ def settings(database_url: str, tmp_path: Path) -> Settings:
 
 
 @pytest.fixture
-def app(settings: Settings) -> FastAPI:
-    return create_app(settings)
+def app(settings: Settings) -> Iterator[FastAPI]:
+    application = create_app(settings)
+    yield application
+    # A test that never ran the app's lifespan (no TestClient context) would leave the
+    # engine's pooled connections to the garbage collector: a ResourceWarning in a later test.
+    application.state.engine.dispose()
 
 
 @pytest.fixture

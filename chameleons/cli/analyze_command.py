@@ -52,6 +52,7 @@ def analysis_output(
         analysis = analyze(
             rows,
             measures=design.measures,
+            condition_order=design.order,
             conditions=design.conditions,
             scales=design.scales,
             view=view,
@@ -66,9 +67,11 @@ def analysis_output(
         raise click.ClickException(f"{exc} Nothing was analysed.") from exc
     if output_format == "json":
         return json.dumps(analysis.to_dict(), indent=2)
+    titles, ranges = design.titles, design.ranges
     if output_format == "latex":
-        return render_latex(analysis, design.labels, layout=latex_layout)
-    return render_text(analysis, design.labels)
+        return render_latex(analysis, design.labels, layout=latex_layout,
+                            measure_labels=titles, measure_ranges=ranges)  # fmt: skip
+    return render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
 
 
 def read_scores_csv(path: Path) -> list[dict[str, str]]:
@@ -107,7 +110,8 @@ def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | No
     "scores_path",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="scores.csv: participant, condition, accepted, credibility, likeability, trust. "
+    help="scores.csv: participant, condition, accepted, credibility, likeability, trust; "
+    "the export's study_config.json beside it gives the study's measures and labels. "
     "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
 )
 @click.option(

@@ -25,6 +25,7 @@ from typing import Any, Literal, Protocol
 
 from chameleons.experiment.balance_bounds import carry_over_bound, condition_scenario_bound
 from chameleons.experiment.model import Study
+from chameleons.experiment.personas import compatible
 from chameleons.experiment.stats.rounding import fmt
 
 Status = Literal["exact", "within 1", "minimal", "uneven", "cannot hold"]
@@ -44,6 +45,8 @@ class _Interaction(Protocol):
     def item_set(self) -> str: ...
     @property
     def item_order(self) -> Sequence[str]: ...
+    @property
+    def robot_name(self) -> str: ...
 
 
 class _Row(Protocol):
@@ -155,6 +158,8 @@ def balance_report(study: Study, rows: Iterable[_Row]) -> BalanceReport:
     slots = [i for s in sessions for i in s]
     conditions, actors = study.condition_ids, [a.id for a in study.actors]
     faces, scenarios = [f.id for f in study.faces], [s.id for s in study.scenarios]
+    if study.personas.faces == "per_actor":  # only the faces the actors brought take part
+        faces = [f for f in faces if any(i.face == f for i in slots)] or faces[: len(actors)]
     entries = [
         _table(
             "condition_position",
@@ -231,6 +236,7 @@ def balance_report(study: Study, rows: Iterable[_Row]) -> BalanceReport:
         _repeats("face_repeated", 7, "sessions using a face twice", sessions, "face"),
     ]
     entries += _first_last(study, slots)
+    entries += _personas(study, slots)
     entries += [
         _table("condition_scenario", 0, "each condition equally often with each scenario "
                "(safeguard; exact per balance period)",
@@ -268,6 +274,38 @@ def _with_bound(study: Study, n: int, entry: ConstraintBalance) -> ConstraintBal
     if bound is None or entry.within_one:
         return entry
     return replace(entry, lower_bound=bound(study, n))
+
+
+def _personas(study: Study, slots: list[_Interaction]) -> list[ConstraintBalance]:
+    """The persona setting kept: one name (face) per actor when fixed per actor; no face or
+    name of another gender than its voice when genders are matched."""
+    entries = []
+    for what, fixed in (("robot_name", study.personas.names), ("face", study.personas.faces)):
+        if fixed == "per_actor":
+            used: dict[str, set[str]] = {}
+            for i in slots:
+                used.setdefault(i.actor, set()).add(str(getattr(i, what)))
+            extra = sum(len(values) - 1 for values in used.values())
+            taken = Counter(v for values in used.values() for v in values)
+            shared = sum(count - 1 for count in taken.values())
+            entries.append(ConstraintBalance(
+                f"{what}_per_actor", 0, f"one {what.replace('_', ' ')} per actor, none shared "
+                "(personas)", {"extra": extra, "shared": shared}, 0.0,
+            ))  # fmt: skip
+    if study.personas.match_gender:
+        voices = {a.id: a.gender for a in study.actors}
+        face_gender = {f.id: f.gender for f in study.faces}
+        faces = sum(not compatible(voices.get(i.actor, ""), face_gender.get(i.face, ""))
+                    for i in slots)  # fmt: skip
+        names = sum(
+            not compatible(voices.get(i.actor, ""), study.name_genders.get(i.robot_name, ""))
+            for i in slots
+        )
+        entries.append(ConstraintBalance(
+            "gender_mismatch", 0, "interactions whose face or name does not fit the voice's "
+            "gender (personas.match_gender)", {"faces": faces, "names": names}, 0.0,
+        ))  # fmt: skip
+    return entries
 
 
 def _table(

@@ -7,7 +7,9 @@ the actor, scenario and face choices constrain each other only through the condi
 - actors: distinct within a session; actor uses and condition x actor pairs even;
 - scenarios: distinct within a session, task types alternating (when the study asks for
   it); scenario uses and condition x scenario pairs even;
-- faces: distinct within a session; face uses and condition x face pairs even.
+- faces: distinct within a session; face uses and condition x face pairs even; with
+  ``personas.match_gender`` only faces whose gender fits the position's voice; with
+  ``personas.faces: per_actor`` no search at all: each actor brings its own face.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from fractions import Fraction
 
 from chameleons.experiment.balanced_search import Option, SearchResult, Tally, find_block
 from chameleons.experiment.model import Study
+from chameleons.experiment.personas import compatible
 from chameleons.experiment.williams import williams_sequences
 
 
@@ -46,12 +49,8 @@ class Block:
 def balance_period(study: Study) -> int:
     """Rows after which every balance count can be exact (a multiple of each denominator)."""
     k = study.interactions_per_session
-    return math.lcm(
-        len(williams_sequences(k)),
-        len(study.actors),
-        len(study.faces),
-        len(study.scenarios),
-    )
+    faces = len(study.faces) if study.personas.faces == "independent" else 1
+    return math.lcm(len(williams_sequences(k)), len(study.actors), faces, len(study.scenarios))
 
 
 def scenario_sequences(study: Study) -> list[tuple[int, ...]]:
@@ -72,7 +71,11 @@ def scenario_sequences(study: Study) -> list[tuple[int, ...]]:
     return valid
 
 
-def build_block(study: Study, rng: random.Random) -> Block:
+def build_block(
+    study: Study, rng: random.Random, face_of_actor: dict[int, int] | None = None
+) -> Block:
+    """One block of rows; ``face_of_actor`` (actor index -> face index) when faces are
+    tied to actors (``personas.faces: per_actor``)."""
     rows = balance_period(study)
     k = study.interactions_per_session
     relabel = list(range(k))
@@ -81,14 +84,18 @@ def build_block(study: Study, rng: random.Random) -> Block:
     conditions_found = _search_conditions(sequences, k, rows, rng)
     conditions = [sequences[value[0]] for value in conditions_found.values]
     scenario_options = scenario_sequences(study)
-    actors = _search_assignment(
-        conditions, len(study.actors), _all_orders(len(study.actors), k), rng
-    )
-    faces = _search_assignment(conditions, len(study.faces), _all_orders(len(study.faces), k), rng)
+    actor_orders = _all_orders(len(study.actors), k)
+    actors = _search_assignment(conditions, len(study.actors), [actor_orders] * rows, rng)
+    if face_of_actor is not None:
+        faces = SearchResult([tuple(face_of_actor[a] for a in row) for row in actors.values],
+                             "strict")  # fmt: skip
+    else:
+        face_orders = [_face_orders(study, row) for row in actors.values]
+        faces = _search_assignment(conditions, len(study.faces), face_orders, rng)
     # With alternating tasks, condition x scenario cannot also be even on every prefix
     # (the middle position always gets the session's minority task): exact per block only.
     scenarios = _search_assignment(
-        conditions, len(study.scenarios), scenario_options, rng, pairs_on_the_way=False
+        conditions, len(study.scenarios), [scenario_options] * rows, rng, pairs_on_the_way=False
     )
     block_rows = [
         BlockRow(conditions[r], actors.values[r], scenarios.values[r], faces.values[r])
@@ -131,16 +138,31 @@ def _all_orders(n: int, k: int) -> list[tuple[int, ...]]:
     return list(itertools.permutations(range(n), k))
 
 
+def _face_orders(study: Study, actors: tuple[int, ...]) -> list[tuple[int, ...]]:
+    """Distinct faces for a row whose voices are ``actors``; with ``match_gender`` only
+    faces whose gender fits each position's voice."""
+    orders = _all_orders(len(study.faces), len(actors))
+    if not study.personas.match_gender:
+        return orders
+    voices = [study.actors[a].gender for a in actors]
+    faces = [f.gender for f in study.faces]
+    return [
+        order
+        for order in orders
+        if all(compatible(v, faces[f]) for v, f in zip(voices, order, strict=True))
+    ]
+
+
 def _search_assignment(
     conditions: list[tuple[int, ...]],
     n: int,
-    orders: list[tuple[int, ...]],
+    orders_per_row: list[list[tuple[int, ...]]],
     rng: random.Random,
     *,
     pairs_on_the_way: bool = True,
 ) -> SearchResult:
-    """Give each position of each row one of ``n`` things (``orders``: the allowed tuples
-    for a row, distinct things) so that uses and condition x thing pairs are even."""
+    """Give each position of each row one of ``n`` things (``orders_per_row``: per row the
+    allowed tuples, distinct things) so that uses and condition x thing pairs are even."""
     k = len(conditions[0])
     tallies = [
         Tally("uses", Fraction(k, n), list(range(n))),
@@ -159,6 +181,6 @@ def _search_assignment(
             )
             for order in orders
         ]
-        for row in conditions
+        for row, orders in zip(conditions, orders_per_row, strict=True)
     ]
     return find_block(options_per_row, tallies, rng)

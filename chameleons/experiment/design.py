@@ -10,7 +10,9 @@ How a plan is made (all randomness from ``seed``; see docs/science.md):
 - Item orders: each scenario's k-th showing takes its first and last item from a cycle of
   random permutations (one per ``len(items)`` showings; first and last never the same
   item), so every item is first and last equally often (within 1); the middle is shuffled.
-- Robot names: a random sample of distinct names per row.
+- Personas (``personas``): robot names fixed per actor (drawn once per seed; the paper) or
+  drawn per row; faces counterbalanced on their own (the paper) or fixed per actor; with
+  ``match_gender`` a face or name with a gender only goes with a voice of that gender.
 
 Rows are handed out with :func:`next_free_row`; a withdrawn participant's row becomes free
 again and goes to the next (replacement) participant, which keeps the balance.
@@ -25,6 +27,7 @@ from dataclasses import asdict, dataclass
 from functools import lru_cache
 from typing import Any
 
+from chameleons.experiment import personas
 from chameleons.experiment.balance import BalanceReport, ConstraintBalance, balance_report
 from chameleons.experiment.blocks import Block, PlanError, balance_period, build_block
 from chameleons.experiment.model import Scenario, Study
@@ -145,7 +148,36 @@ def assign_row(taken_rows: Collection[int], *, replacing: int | None = None) -> 
 
 @lru_cache(maxsize=128)
 def _block(study: Study, seed: int, index: int) -> Block:
-    return build_block(study, random.Random(f"{seed}/block/{index}"))
+    face_of_actor = None
+    if study.personas.faces == "per_actor":
+        faces = actor_faces(study, seed)
+        index_of = {face.id: number for number, face in enumerate(study.faces)}
+        face_of_actor = {a: index_of[faces[actor.id]] for a, actor in enumerate(study.actors)}
+    return build_block(study, random.Random(f"{seed}/block/{index}"), face_of_actor)
+
+
+def actor_faces(study: Study, seed: int) -> dict[str, str]:
+    """Actor id -> face id, for ``personas.faces: per_actor`` (one draw per seed)."""
+    return personas.per_actor(
+        study, seed, "faces", [f.id for f in study.faces], lambda f: study.face(f).gender
+    )
+
+
+def actor_names(study: Study, seed: int) -> dict[str, str]:
+    """Actor id -> robot name, for ``personas.names: per_actor`` (one draw per seed)."""
+    return personas.per_actor(
+        study, seed, "names", study.robot_names, lambda n: study.name_genders.get(n, "")
+    )
+
+
+def _names(study: Study, seed: int, number: int, actors: list[str]) -> list[str]:
+    if study.personas.names == "per_actor":
+        fixed = actor_names(study, seed)
+        return [fixed[actor] for actor in actors]
+    rng = random.Random(f"{seed}/names/{number}")
+    return personas.per_session(
+        study, rng, actors, study.robot_names, lambda n: study.name_genders.get(n, "")
+    )
 
 
 def _rows(study: Study, seed: int, blocks: list[Block]) -> list[PlanRow]:
@@ -153,9 +185,7 @@ def _rows(study: Study, seed: int, blocks: list[Block]) -> list[PlanRow]:
     orders = _ItemOrders(seed)
     rows = []
     for number, row in enumerate((r for block in blocks for r in block.rows), start=1):
-        names = random.Random(f"{seed}/names/{number}").sample(
-            study.robot_names, len(row.conditions)
-        )
+        names = _names(study, seed, number, [study.actors[a].id for a in row.actors])
         interactions = [
             PlannedInteraction(
                 position=position,

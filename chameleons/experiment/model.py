@@ -10,6 +10,9 @@ from typing import Any, Literal
 
 ItemType = Literal["differential", "agreement", "text"]
 Phase = Literal["interaction", "final"]
+SuggestionRule = Literal["best_move", "up_only"]
+NamePairing = Literal["per_actor", "per_interaction"]
+FacePairing = Literal["independent", "per_actor"]
 
 
 @dataclass(frozen=True)
@@ -74,9 +77,14 @@ class Scenario:
 
 @dataclass(frozen=True)
 class Condition:
+    """A condition runs ``behaviour`` (a registered behaviour of the worker) with ``params``
+    (checked against the behaviour's declared parameters, defaults filled in)."""
+
     id: str
     label: str
     description: str
+    behaviour: str
+    params: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -99,9 +107,30 @@ class Actor:
 
 @dataclass(frozen=True)
 class Face:
+    """A robot face; ``gender`` (when given) is what the face looks like, for the optional
+    face/voice gender match; ``age`` describes it for the methods section."""
+
     id: str
     label: str
+    gender: str = ""
+    age: str = ""
     properties: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
+
+
+@dataclass(frozen=True)
+class Personas:
+    """How voices (actors), robot names and faces combine into the robot personalities.
+
+    ``names``: ``per_actor`` gives every actor one name for the whole study (drawn once
+    with the plan seed; the paper: "each actor was given a randomized name"),
+    ``per_interaction`` draws names afresh for every session. ``faces``: ``independent``
+    counterbalances faces on their own (the paper), ``per_actor`` ties one face to each
+    actor for the whole study. ``match_gender``: a face (and a name) with a gender is only
+    combined with a voice of the same gender."""
+
+    names: NamePairing = "per_actor"
+    faces: FacePairing = "independent"
+    match_gender: bool = False
 
 
 @dataclass(frozen=True)
@@ -155,13 +184,18 @@ class Study:
     tasks: tuple[Task, ...]
     item_sets: ItemSetRule
     suggestions_per_interaction: int
+    suggestion_rule: SuggestionRule
     alternate_tasks: bool
     actors: tuple[Actor, ...]
     faces: tuple[Face, ...]
     robot_names: tuple[str, ...]
+    personas: Personas
     questionnaires: tuple[Questionnaire, ...]
     config: dict[str, Any] = field(hash=False, compare=False, repr=False)
     content_hash: str = field(compare=True)
+    # robot name -> gender, for names the study gives one (match_gender keeps them apart)
+    name_genders: dict[str, str] = field(default_factory=dict, hash=False, compare=False)
+    warnings: tuple[str, ...] = field(default=(), hash=False, compare=False)
 
     @property
     def condition_ids(self) -> tuple[str, ...]:
@@ -183,6 +217,18 @@ class Study:
             if condition.id == condition_id:
                 return condition
         raise KeyError(f"no condition {condition_id!r}")
+
+    def actor(self, actor_id: str) -> Actor:
+        for actor in self.actors:
+            if actor.id == actor_id:
+                return actor
+        raise KeyError(f"no actor {actor_id!r}")
+
+    def face(self, face_id: str) -> Face:
+        for face in self.faces:
+            if face.id == face_id:
+                return face
+        raise KeyError(f"no face {face_id!r}")
 
     def questionnaire(self, questionnaire_id: str) -> Questionnaire:
         for questionnaire in self.questionnaires:

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Mapping
 from typing import Any, cast
 
 from chameleons.experiment.model import (
     Actor,
     Condition,
     Face,
+    FacePairing,
     Item,
     ItemSetRule,
     ItemType,
+    NamePairing,
+    Personas,
     Phase,
     Questionnaire,
     QuestionnaireItem,
@@ -19,25 +23,70 @@ from chameleons.experiment.model import (
     Voice,
 )
 from chameleons.experiment.reader import SNAKE, Reader, join
+from chameleons.worker.behaviours.params import check_params
 
 ITEM_TYPES = ("differential", "agreement", "text")
 PHASES = ("interaction", "final")
+GENDERS = ("female", "male", "other")
+MIN_CONDITIONS, MAX_CONDITIONS = 2, 6
+NAME_PAIRINGS = ("per_actor", "per_interaction")
+FACE_PAIRINGS = ("independent", "per_actor")
+# Declared parameters per behaviour name (see chameleons.worker.behaviours.params); None
+# for a behaviour this machine does not have (a stored snapshot keeps its params as stored).
+Behaviours = Mapping[str, Mapping[str, Any] | None]
 
 
-def read_conditions(reader: Reader, node: object) -> tuple[Condition, ...]:
+def read_conditions(
+    reader: Reader, node: object, behaviours: Behaviours, *, snapshot: bool = False
+) -> tuple[Condition, ...]:
+    """Conditions with their behaviour and its parameters, checked against what the
+    behaviour declares (defaults filled in). A condition without ``behaviour`` runs the
+    behaviour of its own name (a study written before conditions named behaviours)."""
     conditions = []
     for cid, body, place in reader.keyed(node, "conditions", SNAKE):
-        reader.check_keys(body, place, ["label"], ["description"])
+        reader.check_keys(body, place, ["label"], ["description", "behaviour", "params"])
+        behaviour, params = _behaviour(reader, body, cid, place, behaviours, snapshot)
         conditions.append(
             Condition(
                 cid,
                 reader.text(body, "label", place),
                 _optional(reader, body, "description", place),
+                behaviour,
+                params,
             )
         )
-    if len(conditions) < 2:
-        reader.problem("conditions", "needs at least 2 conditions")
+    if not MIN_CONDITIONS <= len(conditions) <= MAX_CONDITIONS:
+        reader.problem(
+            "conditions",
+            f"needs {MIN_CONDITIONS} to {MAX_CONDITIONS} conditions, got {len(conditions)}",
+        )
     return tuple(conditions)
+
+
+def _behaviour(
+    reader: Reader, body: dict[str, Any], cid: str, place: str, behaviours: Behaviours,
+    snapshot: bool,
+) -> tuple[str, dict[str, Any]]:  # fmt: skip
+    name = body.get("behaviour", cid)
+    params_place = join(place, "params")
+    given = reader.mapping(body.get("params") or {}, params_place)
+    known = ", ".join(sorted(behaviours))
+    if not isinstance(name, str) or name not in behaviours:
+        if snapshot and isinstance(name, str):  # a plug-in this machine lacks: as stored
+            return name, given
+        where = join(place, "behaviour")
+        if "behaviour" not in body:
+            reader.problem(where, f"is missing (a condition runs one of: {known})")
+        else:
+            reader.problem(where, f"unknown behaviour {name!r} (available: {known})")
+        return str(name), given
+    declared = behaviours[name]
+    if declared is None:
+        return name, given
+    values, problems = check_params(declared, given)
+    for key, message in problems:
+        reader.problem(join(params_place, key), message)
+    return name, values
 
 
 def read_tasks(reader: Reader, node: object) -> tuple[Task, ...]:
@@ -152,21 +201,70 @@ def read_actors(reader: Reader, node: object) -> tuple[Actor, ...]:
 def read_faces(reader: Reader, node: object) -> tuple[Face, ...]:
     faces = []
     for fid, body, place in reader.keyed(node, "faces"):
-        reader.check_keys(body, place, ["label"], ["properties"])
-        faces.append(Face(fid, reader.text(body, "label", place), _properties(reader, body, place)))
+        reader.check_keys(body, place, ["label"], ["gender", "age", "properties"])
+        faces.append(
+            Face(
+                fid,
+                reader.text(body, "label", place),
+                _gender(reader, body, place),
+                _optional(reader, body, "age", place),
+                _properties(reader, body, place),
+            )
+        )
     return tuple(faces)
 
 
-def read_robot_names(reader: Reader, node: object) -> tuple[str, ...]:
-    names = []
-    for index, name in enumerate(reader.sequence(node, "robot_names")):
+def _gender(reader: Reader, body: dict[str, Any], place: str) -> str:
+    gender = _optional(reader, body, "gender", place)
+    if gender and gender not in GENDERS:
+        reader.problem(join(place, "gender"), f"must be one of {list(GENDERS)}, got {gender!r}")
+    return gender
+
+
+def read_robot_names(reader: Reader, node: object) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The names, and the gender of those given one (``{name: Iris, gender: female}``)."""
+    names: list[str] = []
+    genders: dict[str, str] = {}
+    for index, entry in enumerate(reader.sequence(node, "robot_names")):
+        place = join("robot_names", index)
+        name, gender = entry, ""
+        if isinstance(entry, Mapping):
+            body = reader.mapping(entry, place)
+            reader.check_keys(body, place, ["name"], ["gender"])
+            name, gender = body.get("name"), _gender(reader, body, place)
         if not isinstance(name, str) or not name.strip():
-            reader.problem(join("robot_names", index), "must be a non-empty name")
+            reader.problem(place, "must be a non-empty name")
         elif name.strip() in names:
-            reader.problem(join("robot_names", index), f"name {name!r} listed twice")
+            reader.problem(place, f"name {name!r} listed twice")
         else:
             names.append(name.strip())
-    return tuple(names)
+            if gender:
+                genders[name.strip()] = gender
+    return tuple(names), genders
+
+
+# A snapshot stored before personas were a setting: names were drawn per session, faces
+# counterbalanced on their own, genders not matched.
+LEGACY_PERSONAS = Personas("per_interaction", "independent", False)
+
+
+def read_personas(reader: Reader, node: object, *, snapshot: bool = False) -> Personas:
+    path = "personas"
+    if snapshot and node is None:
+        return LEGACY_PERSONAS
+    body = reader.mapping({} if node is None else node, path)
+    reader.check_keys(body, path, [], ["names", "faces", "match_gender"])
+    names = body.get("names", "per_actor")
+    if names not in NAME_PAIRINGS:
+        reader.problem(join(path, "names"), f"must be one of {list(NAME_PAIRINGS)}, got {names!r}")
+    faces = body.get("faces", "independent")
+    if faces not in FACE_PAIRINGS:
+        reader.problem(join(path, "faces"), f"must be one of {list(FACE_PAIRINGS)}, got {faces!r}")
+    return Personas(
+        names=cast(NamePairing, names if names in NAME_PAIRINGS else "per_actor"),
+        faces=cast(FacePairing, faces if faces in FACE_PAIRINGS else "independent"),
+        match_gender=reader.boolean(body, "match_gender", path, default=False),
+    )
 
 
 def read_questionnaires(reader: Reader, node: object) -> tuple[Questionnaire, ...]:

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Mapping
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from chameleons.experiment import sections
+from chameleons.experiment import personas, sections
+from chameleons.experiment.lines import line_index, line_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.reader import SLUG, Reader
 
@@ -36,20 +38,35 @@ TOP_LEVEL_REQUIRED = ["id", "name", "conditions", "tasks", "item_sets", "actors"
 TOP_LEVEL_OPTIONAL = [
     "description",
     "suggestions_per_interaction",
+    "suggestion_rule",
     "design",
     "robot_names",
+    "personas",
     "questionnaires",
 ]
+SUGGESTION_RULES = ("best_move", "up_only")
+# A snapshot stored before the rule was a setting was collected under the up-only rule.
+LEGACY_SUGGESTION_RULE = "up_only"
 
 
 class StudyError(ValueError):
-    """A study file or snapshot is unusable; ``problems`` lists every problem with its place."""
+    """A study file or snapshot is unusable; ``problems`` lists every problem with its place
+    (``place: message``), ``located`` the same as ``file:line: place: message`` where the
+    line is known."""
 
-    def __init__(self, problems: list[str], source: str = "study") -> None:
+    def __init__(
+        self, problems: list[str], source: str = "study", lines: dict[str, int] | None = None
+    ) -> None:
         self.problems = list(problems)
         self.source = source
-        listed = "\n".join(f"  - {p}" for p in self.problems)
+        self.located = [_locate(p, source, lines or {}) for p in self.problems]
+        listed = "\n".join(f"  - {p}" for p in self.located)
         super().__init__(f"{source} has {len(self.problems)} problem(s):\n{listed}")
+
+
+def _locate(problem: str, source: str, lines: dict[str, int]) -> str:
+    line = line_of(problem, lines)
+    return problem if line is None else f"{source}:{line}: {problem}"
 
 
 def default_study_path() -> Path:
@@ -60,19 +77,35 @@ def load_default_study() -> Study:
     return load_study(default_study_path())
 
 
-def load_study(path: Path | str) -> Study:
+def load_study(path: Path | str, behaviours: sections.Behaviours | None = None) -> Study:
+    """A study from its YAML file. ``behaviours`` (name -> declared parameters) defaults to
+    the worker's behaviour registry, built-ins and installed plug-ins."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise StudyError([f"cannot read the file: {exc.strerror or exc}"], str(path)) from exc
     document, duplicates = _parse_yaml(text, str(path))
-    return _build(document, str(path), duplicates)
+    lines = line_index(text)
+    try:
+        return _build(document, str(path), duplicates, _registry(behaviours))
+    except StudyError as exc:
+        raise StudyError(exc.problems, exc.source, lines) from None
 
 
 def study_from_config(config: dict[str, Any]) -> Study:
-    """Rebuild a study from its stored snapshot (``Study.config``)."""
-    return _build(config, "study config", [])
+    """Rebuild a study from its stored snapshot (``Study.config``). A snapshot keeps the
+    parameters it was stored with, even for a behaviour this machine does not have; one
+    stored before a setting existed gets what the software did then."""
+    return _build(config, "study config", [], _registry(None), snapshot=True)
+
+
+def _registry(behaviours: sections.Behaviours | None) -> sections.Behaviours:
+    if behaviours is not None:
+        return behaviours
+    from chameleons.worker.behaviours.registry import behaviour_parameters
+
+    return behaviour_parameters()
 
 
 def canonical_json(config: dict[str, Any]) -> str:
@@ -115,7 +148,14 @@ def _parse_yaml(text: str, source: str) -> tuple[Any, list[str]]:
     return document, loader.duplicates
 
 
-def _build(document: object, source: str, duplicates: list[str]) -> Study:
+def _build(
+    document: object,
+    source: str,
+    duplicates: list[str],
+    behaviours: sections.Behaviours,
+    *,
+    snapshot: bool = False,
+) -> Study:
     reader = Reader()
     reader.problems.extend(duplicates)
     top = reader.mapping(document, "")
@@ -125,28 +165,46 @@ def _build(document: object, source: str, duplicates: list[str]) -> Study:
     design = reader.mapping(top.get("design", {}), "design")
     reader.check_keys(design, "design", [], ["alternate_tasks"])
     tasks = sections.read_tasks(reader, top.get("tasks", {}))
+    names, name_genders = sections.read_robot_names(reader, top.get("robot_names", []))
     parts: dict[str, Any] = {
         "id": reader.identifier(top.get("id", ""), "id", SLUG),
         "name": reader.text(top, "name", ""),
         "description": reader.text(top, "description", "", default="", allow_empty=True),
-        "conditions": sections.read_conditions(reader, top.get("conditions", {})),
+        "conditions": sections.read_conditions(
+            reader, top.get("conditions", {}), behaviours, snapshot=snapshot
+        ),
         "tasks": tasks,
         "item_sets": sections.read_item_sets(reader, top.get("item_sets", {}), tasks),
         "suggestions_per_interaction": reader.integer(
             top, "suggestions_per_interaction", "", default=3, minimum=0, maximum=20
         ),
+        "suggestion_rule": _suggestion_rule(reader, top, snapshot),
         "alternate_tasks": reader.boolean(design, "alternate_tasks", "design", default=True),
         "actors": sections.read_actors(reader, top.get("actors", {})),
         "faces": sections.read_faces(reader, top.get("faces", {})),
-        "robot_names": sections.read_robot_names(reader, top.get("robot_names", [])),
+        "robot_names": names,
+        "personas": sections.read_personas(reader, top.get("personas"), snapshot=snapshot),
         "questionnaires": sections.read_questionnaires(reader, top.get("questionnaires", {})),
     }
     _check_design_fits(reader, parts)
+    if not reader.problems:
+        personas.check_fits(reader, parts, name_genders)
     if reader.problems:
         raise StudyError(reader.problems, source)
-    config = _config_of(parts)
+    config = _config_of(parts, name_genders)
     digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
-    return Study(**parts, config=config, content_hash=digest)
+    return Study(**parts, config=config, content_hash=digest, name_genders=name_genders)
+
+
+def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> str:
+    default = LEGACY_SUGGESTION_RULE if snapshot else SUGGESTION_RULES[0]
+    rule = top.get("suggestion_rule", default)
+    if rule not in SUGGESTION_RULES:
+        reader.problem(
+            "suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}"
+        )
+        return default
+    return str(rule)
 
 
 def _check_design_fits(reader: Reader, parts: dict[str, Any]) -> None:
@@ -172,9 +230,13 @@ def _check_design_fits(reader: Reader, parts: dict[str, Any]) -> None:
         reader.problem("design.alternate_tasks", "needs at least 2 tasks (or set it to false)")
 
 
-def _config_of(parts: dict[str, Any]) -> dict[str, Any]:
+def _config_of(parts: dict[str, Any], name_genders: dict[str, str]) -> dict[str, Any]:
     """The canonical snapshot: plain JSON types, keyed collections as lists with ``id``."""
     rule = parts["item_sets"]
+    names: list[Any] = [
+        {"name": name, "gender": name_genders[name]} if name in name_genders else name
+        for name in parts["robot_names"]
+    ]
     return {
         "id": parts["id"],
         "name": parts["name"],
@@ -193,10 +255,12 @@ def _config_of(parts: dict[str, Any]) -> dict[str, Any]:
             "sets": list(rule.sets),
         },
         "suggestions_per_interaction": parts["suggestions_per_interaction"],
+        "suggestion_rule": parts["suggestion_rule"],
         "design": {"alternate_tasks": parts["alternate_tasks"]},
         "actors": [asdict(a) for a in parts["actors"]],
         "faces": [asdict(f) for f in parts["faces"]],
-        "robot_names": list(parts["robot_names"]),
+        "robot_names": names,
+        "personas": asdict(parts["personas"]),
         "questionnaires": [_questionnaire_config(q) for q in parts["questionnaires"]],
     }
 

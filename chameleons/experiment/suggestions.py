@@ -2,25 +2,31 @@
 
 Ranks are 1-based positions in the participant's ranking of the interaction's items
 (five in the default study); the *expert order* is the same items sorted by expert rank.
-Every suggestion moves one item *up* (``to_rank < from_rank``).
+A suggestion moves one item to another rank; the items in between shift by one.
 
-The rule, given the current ranking, the expert order and the items the participant has
-already declined in this interaction:
+The paper: the robot "would request to change the order of three items such that it would
+better conform to a pre-determined optimal order ... If the order already was at its
+optimal configuration or only objects that the participant has declined are in an
+suboptimal position, the agent would randomly choose an item to move to a position above
+its current position." Two rules for the *optimal* suggestion are offered (the study's
+``suggestion_rule``); the random fallback is the same for both:
 
-1. **Optimal.** Go through the items that were not declined, most important (by expert
-   rank) first. For an item sitting below its expert position, look at every move up to
-   a rank from its expert position to its current rank - 1 and take the one giving the
-   smallest error score (ties: the target nearest its expert position). The first item
-   for which that move strictly lowers the error score is proposed, as ``optimal``.
-   With nothing declined this is simply: *the most important item below its expert
-   position moves up to its expert position*, which always lowers the error by at least
-   2 (every more important item is then already in place, and the item it displaces from
-   its expert position moves towards its own).
-2. **Random** (the fallback of study.md), when no such move exists: the ranking is in
-   expert order, or only moving declined items up would help. A random item
-   not at rank 1 moves to a random rank above its current one; items not declined are
-   preferred, so a declined item is proposed again only when every other item is at
-   rank 1 or declined. Such a move may well make the ranking worse; ``kind`` records it.
+1. **best_move** (the default; the paper's wording). Of every move of an item the
+   participant has not declined, to any other rank, *up or down*, take the one giving the
+   smallest error score. If it is strictly smaller than now, it is proposed as
+   ``optimal``. Ties: the most important item (by expert rank) first, then the target
+   nearest that item's expert position, then the shorter move.
+2. **up_only** (what this software did before the rule was a setting). Go through the items
+   not declined, most important first; for one sitting below its expert position, take
+   the move up (to a rank from its expert position to one above its current rank) with
+   the smallest error (ties: nearest its expert position); the first such move that
+   strictly lowers the error is proposed. With nothing declined: *the most important item
+   below its expert position moves up to it*.
+3. **Random**, when the rule finds no move that lowers the error: the ranking is in expert
+   order, or only declined items could improve it. One of all moves *up* (an item not at
+   rank 1 to any higher rank) is drawn uniformly; moves of items not declined are
+   preferred, so a declined item is proposed again only when no other item can move up.
+   Such a move may make the ranking worse; ``kind`` records it.
 
 The error score is the standard one: the sum over items of |participant rank - expert
 rank|. For a partial ranking (a subset of the items) both ranks are taken among the
@@ -35,14 +41,20 @@ from dataclasses import dataclass
 from typing import Literal
 
 SuggestionKind = Literal["optimal", "random"]
+Rule = Literal["best_move", "up_only"]
+RULES: tuple[Rule, ...] = ("best_move", "up_only")
 
 
 @dataclass(frozen=True)
 class Suggestion:
     item: str
     from_rank: int  # 1-based, current rank of ``item``
-    to_rank: int  # 1-based, always above: to_rank < from_rank
+    to_rank: int  # 1-based, the proposed rank (never ``from_rank``)
     kind: SuggestionKind
+
+    @property
+    def direction(self) -> Literal["up", "down"]:
+        return "up" if self.to_rank < self.from_rank else "down"
 
 
 def next_suggestion(
@@ -50,6 +62,7 @@ def next_suggestion(
     expert_order: Sequence[str],
     declined: Collection[str],
     rng: random.Random,
+    rule: Rule = "best_move",
 ) -> Suggestion:
     """The robot's next suggestion (see the module docstring for the exact rule)."""
     _check_same_items(ranking, expert_order)
@@ -58,11 +71,14 @@ def next_suggestion(
     unknown = set(declined) - set(ranking)
     if unknown:
         raise ValueError(f"declined items are not in the ranking: {sorted(unknown)}")
-    return _optimal(ranking, expert_order, declined) or _random(ranking, declined, rng)
+    if rule not in RULES:
+        raise ValueError(f"unknown suggestion rule {rule!r} (known: {', '.join(RULES)})")
+    finder = _best_move if rule == "best_move" else _most_important_up
+    return finder(ranking, expert_order, declined) or random_suggestion(ranking, declined, rng)
 
 
 def apply_suggestion(ranking: Sequence[str], suggestion: Suggestion) -> list[str]:
-    """The ranking after an accepted suggestion: the item moves, the ones between shift down."""
+    """The ranking after an accepted suggestion: the item moves, the ones between shift."""
     result = list(ranking)
     if not 1 <= suggestion.to_rank <= len(result) or not 1 <= suggestion.from_rank <= len(result):
         raise ValueError(f"ranks out of range for {len(result)} items: {suggestion}")
@@ -95,7 +111,46 @@ def error_score(ranking: Sequence[str], expert_ranks: Mapping[str, int] | Sequen
     return sum(abs(rank - expert_position[item]) for rank, item in enumerate(ranking, start=1))
 
 
-def _optimal(
+def random_moves(ranking: Sequence[str], declined: Collection[str]) -> list[tuple[str, int, int]]:
+    """The moves the random fallback draws from, uniformly: (item, from, to) for every move
+    up of an item not declined; only when there is none, every move up of any item."""
+    every = [
+        (item, from_rank, to_rank)
+        for from_rank, item in enumerate(ranking, start=1)
+        for to_rank in range(1, from_rank)
+    ]
+    preferred = [move for move in every if move[0] not in declined]
+    return preferred or every
+
+
+def random_suggestion(
+    ranking: Sequence[str], declined: Collection[str], rng: random.Random
+) -> Suggestion:
+    item, from_rank, to_rank = rng.choice(random_moves(ranking, declined))
+    return Suggestion(item, from_rank, to_rank, "random")
+
+
+def _best_move(
+    ranking: Sequence[str], expert_order: Sequence[str], declined: Collection[str]
+) -> Suggestion | None:
+    current = error_score(ranking, expert_order)
+    best: tuple[int, int, int, int] | None = None
+    chosen: Suggestion | None = None
+    for from_rank, item in enumerate(ranking, start=1):
+        if item in declined:
+            continue
+        goal = expert_order.index(item) + 1
+        for to_rank in range(1, len(ranking) + 1):
+            if to_rank == from_rank:
+                continue
+            error = _error_after(ranking, expert_order, item, from_rank, to_rank)
+            key = (error, goal, abs(to_rank - goal), abs(to_rank - from_rank))
+            if best is None or key < best:
+                best, chosen = key, Suggestion(item, from_rank, to_rank, "optimal")
+    return chosen if best is not None and best[0] < current else None
+
+
+def _most_important_up(
     ranking: Sequence[str], expert_order: Sequence[str], declined: Collection[str]
 ) -> Suggestion | None:
     current = error_score(ranking, expert_order)
@@ -118,14 +173,6 @@ def _error_after(
 ) -> int:
     moved = apply_suggestion(ranking, Suggestion(item, from_rank, to_rank, "optimal"))
     return error_score(moved, expert_order)
-
-
-def _random(ranking: Sequence[str], declined: Collection[str], rng: random.Random) -> Suggestion:
-    movable = list(ranking[1:])
-    preferred = [item for item in movable if item not in declined]
-    item = rng.choice(preferred or movable)
-    from_rank = ranking.index(item) + 1
-    return Suggestion(item, from_rank, rng.randint(1, from_rank - 1), "random")
 
 
 def _check_same_items(ranking: Sequence[str], expert_order: Sequence[str]) -> None:

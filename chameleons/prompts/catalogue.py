@@ -61,20 +61,31 @@ class Catalogue:
         return tuple(p for p in self.prompts if p.task == task and p.item == item)
 
     def suggestion_prompts(
-        self, task: str, item: str, to_rank: int, other_item: str | None = None
+        self,
+        task: str,
+        item: str,
+        to_rank: int,
+        other_item: str | None = None,
+        *,
+        down: bool = False,
+        last_rank: int = 0,
     ) -> list[PromptGroup]:
         """Groups that phrase "move ``item`` to ``to_rank``", best first.
 
-        ``other_item`` is the item now at ``to_rank`` (the one ``item`` goes above). Order:
-        "put item above other_item", then "make item first" (only when ``to_rank`` is 1),
-        then the generic "move item up". Empty when the catalogue has none of them.
+        ``other_item`` is the item now at ``to_rank`` (the one ``item`` goes above, or below
+        when the move is ``down``). Up: "put item above other_item", then "make item first"
+        (only when ``to_rank`` is 1), then the generic "move item up". Down: "put item below
+        other_item", "make item last" (only when ``to_rank`` is ``last_rank``), "move item
+        down". Empty when the catalogue has none of them.
         """
         wanted: list[tuple[SuggestionKind, str | None]] = []
         if other_item is not None:
-            wanted.append((SuggestionKind.ABOVE, other_item))
-        if to_rank == 1:
+            wanted.append((SuggestionKind.BELOW if down else SuggestionKind.ABOVE, other_item))
+        if down and to_rank == last_rank:
+            wanted.append((SuggestionKind.MAKE_LAST, None))
+        if not down and to_rank == 1:
             wanted.append((SuggestionKind.MAKE_FIRST, None))
-        wanted.append((SuggestionKind.MOVE_UP, None))
+        wanted.append((SuggestionKind.MOVE_DOWN if down else SuggestionKind.MOVE_UP, None))
         candidates = [
             g
             for g in self.groups(Stage.SUGGESTION)

@@ -44,11 +44,21 @@ class SuggestionKind(StrEnum):
 
     ABOVE = "above"  # "put X above Y": Y is the item now at the target rank
     MAKE_FIRST = "make_first"  # "put X at the top": target rank 1
-    MOVE_UP = "move_up"  # "move X up": fits any move, the fallback
+    MOVE_UP = "move_up"  # "move X up": fits any move up, the fallback
+    BELOW = "below"  # "put X below Y": a move down; Y is the item now at the target rank
+    MAKE_LAST = "make_last"  # "put X at the bottom": target the last rank
+    MOVE_DOWN = "move_down"  # "move X down": fits any move down, the fallback
+
+    @property
+    def down(self) -> bool:
+        return self in (SuggestionKind.BELOW, SuggestionKind.MAKE_LAST, SuggestionKind.MOVE_DOWN)
 
 
-# A suggestion group whose name ends like this is a make-first prompt (README: conventions).
+# Group name endings that say how a suggestion prompt phrases its move (README: conventions).
 MAKE_FIRST_SUFFIXES = ("_first", "_top")
+MAKE_LAST_SUFFIXES = ("_last", "_bottom")
+MOVE_DOWN_SUFFIXES = ("_down",)
+BELOW_MARKER = "_below_"  # with other_item: "put X below other_item"
 
 
 def estimate_duration(text: str) -> float:
@@ -90,9 +100,14 @@ class Prompt:
         if self.stage is not Stage.SUGGESTION:
             return None
         if self.other_item is not None:
-            return SuggestionKind.ABOVE
-        if self.group.endswith(MAKE_FIRST_SUFFIXES):
-            return SuggestionKind.MAKE_FIRST
+            return SuggestionKind.BELOW if BELOW_MARKER in self.group else SuggestionKind.ABOVE
+        for suffixes, kind in (
+            (MAKE_FIRST_SUFFIXES, SuggestionKind.MAKE_FIRST),
+            (MAKE_LAST_SUFFIXES, SuggestionKind.MAKE_LAST),
+            (MOVE_DOWN_SUFFIXES, SuggestionKind.MOVE_DOWN),
+        ):
+            if self.group.endswith(suffixes):
+                return kind
         return SuggestionKind.MOVE_UP
 
 

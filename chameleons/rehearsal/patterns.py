@@ -2,9 +2,9 @@
 
 A pattern turns a participant's hidden attitude into what they do on the phone: how they
 rank, whether they accept the robot's suggestions, and their questionnaire answers. The
-interaction's condition reaches the participant only through the rehearsal's script (the
-phone never shows it); patterns with an effect use it as the "true" effect a study would
-hope to find, so a PI can see the analysis pick it up.
+behaviour the robot runs in the interaction's condition reaches the participant only
+through the rehearsal's script (the phone never shows it); patterns with an effect use it
+as the "true" effect a study would hope to find, so a PI can see the analysis pick it up.
 
 Attitudes live on a 0..1 scale (0 the unfavourable end, 1 the favourable one) and become
 scale points per questionnaire; a reverse-keyed item is answered from its other end, as a
@@ -44,8 +44,8 @@ def not_keyed(_questionnaire: str, _item: str) -> bool:
 
 @dataclass(frozen=True)
 class Pattern:
-    """A way of answering. ``accept`` and ``shift`` are per condition (missing: the
-    participant's own acceptance and no shift)."""
+    """A way of answering. ``accept`` and ``shift`` are per behaviour the robot runs
+    (missing: the participant's own acceptance and no shift)."""
 
     name: str
     description: str
@@ -95,10 +95,10 @@ class Persona:
         attitude = min(0.85, max(0.25, rng.gauss(0.6, 0.1)))
         return cls(pattern, rng, attitude, rng.uniform(0.3, 0.7))
 
-    def accepts(self, condition: str) -> bool:
+    def accepts(self, behaviour: str) -> bool:
         if self.pattern.uniform:
             return self.rng.random() < 0.5
-        return self.rng.random() < self.pattern.accept.get(condition, self.acceptance)
+        return self.rng.random() < self.pattern.accept.get(behaviour, self.acceptance)
 
     def rank(self, items: Sequence[str], expert_rank: Mapping[str, int]) -> list[str]:
         """Items roughly in expert order (people know some of it), shuffled otherwise."""
@@ -109,16 +109,16 @@ class Persona:
         return sorted(items, key=lambda item: expert_rank[item] + self.rng.gauss(0.0, 2.0))
 
     def answers(
-        self, questionnaire: Json, condition: str | None, keying: Keying = not_keyed
+        self, questionnaire: Json, behaviour: str | None, keying: Keying = not_keyed
     ) -> Json:
         """Answers to one questionnaire page as the phone shows it (``points``, items with
-        ``id`` and ``type``); ``condition`` None for the final questionnaire."""
+        ``id`` and ``type``); ``behaviour`` (the robot's) None for the final questionnaire."""
         points = int(questionnaire["points"])
-        level = self.attitude + (self.pattern.shift.get(condition, 0.0) if condition else 0.0)
+        level = self.attitude + (self.pattern.shift.get(behaviour, 0.0) if behaviour else 0.0)
         answers: Json = {}
         for item in questionnaire["items"]:
             if item["type"] == "text":
-                answers[item["id"]] = self.rng.choice(FINAL_ANSWERS if condition is None
+                answers[item["id"]] = self.rng.choice(FINAL_ANSWERS if behaviour is None
                                                       else TEXT_ANSWERS)  # fmt: skip
                 continue
             value = self._point(level, points)

@@ -150,7 +150,7 @@ class PhoneParticipant:
         items = [str(item["id"]) for item in state["items"]]
         self.bot.submit_ranking(position, self.persona.rank(items, expert_rank))
 
-    def answer(self, position: int, condition: str | None) -> int:
+    def answer(self, position: int, behaviour: str | None) -> int:
         """Answer every questionnaire page of ``position``; returns the number of pages."""
         state = self.socket.wait_for(
             lambda s: s["view"] == "questionnaire" and s["position"] == position,
@@ -160,7 +160,7 @@ class PhoneParticipant:
         pages = 0
         while state["view"] == "questionnaire" and state["position"] == position:
             questionnaire = state["questionnaire"]
-            answers = self.persona.answers(questionnaire, condition, self.keying)
+            answers = self.persona.answers(questionnaire, behaviour, self.keying)
             receipt = self.bot.submit_questionnaire(position, questionnaire["id"], answers)
             pages += 1
             state = receipt["state"]
@@ -181,15 +181,23 @@ def run_interaction(
     participant.rank(position, expert)
     bot.advance(position, "negotiation")
     condition = str(bot.interaction(position)["condition"])
-    decisions = _negotiate(wizard, participant, position, condition)
+    behaviour = behaviour_of(bot.snapshot, condition)
+    decisions = _negotiate(wizard, participant, position, behaviour)
     tally.accepted.setdefault(condition, []).append(sum(decisions))
     bot.advance(position, "questionnaire")
     wizard.play(wizard.stage(position, "closing"))
-    participant.answer(position, condition)
+    participant.answer(position, behaviour)
+
+
+def behaviour_of(snapshot: Json, condition: str) -> str:
+    """The behaviour a condition runs (a pattern's effect is the behaviour's, so "copy 1 s"
+    and "copy 4 s" both get the copying robot's effect)."""
+    details = snapshot.get("condition_details") or []
+    return next((str(c["behaviour"]) for c in details if c["id"] == condition), condition)
 
 
 def _negotiate(
-    wizard: ConsoleWizard, participant: PhoneParticipant, position: int, condition: str
+    wizard: ConsoleWizard, participant: PhoneParticipant, position: int, behaviour: str
 ) -> list[bool]:
     """Each suggestion: the robot phrases it, the participant answers, the wizard records."""
     decisions: list[bool] = []
@@ -199,7 +207,7 @@ def _negotiate(
         if not pending:
             return decisions
         wizard.suggest(position)
-        accepted = participant.persona.accepts(condition)
+        accepted = participant.persona.accepts(behaviour)
         wizard.bot.decide(position, pending[0]["index"], accepted)
         wizard.acknowledge(position)
         decisions.append(accepted)

@@ -64,7 +64,7 @@ def test_one_interaction_per_position(db_session: Session) -> None:
 
 @pytest.mark.parametrize(
     ("index", "kind", "from_rank", "to_rank"),
-    [(4, "optimal", 3, 1), (1, "clever", 3, 1), (1, "optimal", 2, 4)],
+    [(0, "optimal", 3, 1), (1, "clever", 3, 1), (1, "optimal", 2, 2), (1, "optimal", 2, 0)],
 )
 def test_suggestion_checks(
     db_session: Session, index: int, kind: str, from_rank: int, to_rank: int
@@ -79,6 +79,22 @@ def test_suggestion_checks(
     )  # fmt: skip
     with pytest.raises(IntegrityError):
         db_session.flush()
+
+
+def test_a_suggestion_may_move_down_and_a_study_may_make_more_than_three(
+    db_session: Session,
+) -> None:
+    _, session = _study_with_session(db_session)
+    interaction = _interaction(session.id, 1)
+    db_session.add(interaction)
+    db_session.flush()
+    db_session.add_all(
+        Suggestion(interaction_id=interaction.id, index=index, item="water",
+                   from_rank=2, to_rank=4, kind="optimal")
+        for index in (1, 5)
+    )  # fmt: skip
+    db_session.flush()
+    assert db_session.scalar(select(func.count()).select_from(Suggestion)) == 2
 
 
 def test_deleting_a_participant_removes_their_session_rows(db_session: Session) -> None:

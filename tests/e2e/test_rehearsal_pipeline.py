@@ -47,6 +47,7 @@ class Slot:
     task: str
     item_set: str
     item_order: list[str]
+    robot_name: str
 
 
 @dataclass(frozen=True)
@@ -107,9 +108,9 @@ def _run_balance(tables: dict[str, Table], spec: Study) -> BalanceReport:
     sessions: dict[str, list[Slot]] = {}
     for row in sorted(tables["interactions"], key=lambda r: (r["participant"], int(r["position"]))):
         order = row["presented_order"].split(LIST_SEPARATOR)
-        sessions.setdefault(row["participant"], []).append(
-            Slot(row["condition"], row["actor"], row["face"], row["task"], row["item_set"], order)
-        )
+        slot = Slot(row["condition"], row["actor"], row["face"], row["task"], row["item_set"],
+                    order, row["robot_name"])  # fmt: skip
+        sessions.setdefault(row["participant"], []).append(slot)
     return balance_report(spec, [Row(slots) for slots in sessions.values()])
 
 

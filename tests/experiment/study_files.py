@@ -17,6 +17,17 @@ def default_document() -> dict[str, Any]:
         return copy.deepcopy(yaml.safe_load(handle))
 
 
+def study_yaml(document: dict[str, Any]) -> str:
+    return yaml.safe_dump(document, sort_keys=False, allow_unicode=True)
+
+
+def with_natural(**params: Any) -> str:
+    """The default study's YAML with other ``natural`` parameters (e.g. source=yoked)."""
+    document = default_document()
+    document["conditions"]["natural"]["params"] = params
+    return study_yaml(document)
+
+
 def write_study(directory: Path, document: dict[str, Any], name: str = "study.yaml") -> Path:
     path = directory / name
     path.write_text(yaml.safe_dump(document, sort_keys=False, allow_unicode=True), "utf-8")
@@ -26,5 +37,9 @@ def write_study(directory: Path, document: dict[str, Any], name: str = "study.ya
 def four_condition_document() -> dict[str, Any]:
     """The default study with a fourth condition (sessions then use all 4 actors and faces)."""
     document = default_document()
-    document["conditions"]["exaggerated"] = {"label": "Exaggerated copy"}
+    document["conditions"]["copy_fast"] = {
+        "label": "Copy 1 s",
+        "behaviour": "copy",
+        "params": {"delay": 1.0},
+    }
     return document

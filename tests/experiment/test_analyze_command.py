@@ -174,3 +174,41 @@ def test_views_and_excluded_participants(tmp_path: Path) -> None:
     code, out, _ = run("analyze", "--scores", str(path))
     assert "2 in the data" not in out
     assert "12 participants in the data; 1 left out" in out
+
+
+def test_an_exported_study_config_beside_the_scores_gives_labels_ranges_and_order(
+    tmp_path: Path,
+) -> None:
+    """A four-condition study with two suggestions: its own condition order and labels, and
+    the accepted range 0-2, come from the export's study_config.json."""
+    from chameleons.experiment.study import load_study
+    from tests.experiment.study_files import four_condition_document, write_study
+
+    document = four_condition_document()
+    document["suggestions_per_interaction"] = 2
+    study = load_study(write_study(tmp_path, document))
+    (tmp_path / "study_config.json").write_text(json.dumps(study.config), "utf-8")
+    rows = [
+        {"participant": f"P{p:03d}", "condition": c, "position": n + 1,
+         "accepted": (p + n) % 3, "credibility": 3 + (p * n) % 4, "likeability": 4,
+         "trust": 2 + (p + 2 * n) % 5}
+        for p in range(1, 9)
+        for n, c in enumerate(study.condition_ids)
+    ]  # fmt: skip
+    scores = write_scores(tmp_path / "scores.csv", rows)
+    code, out, _ = run("analyze", "--scores", str(scores))
+    assert code == 0, out
+    labels = [c.label for c in study.conditions]
+    header = next(line for line in out.splitlines() if all(x in line for x in labels))
+    assert [header.index(label) for label in labels] == sorted(header.index(x) for x in labels)
+    assert "Accepted robot suggestions (0-2)" in out
+    assert "chi2(3)" in out  # k - 1 degrees of freedom
+    assert "Bonferroni over 6 pairs" in out or "p x 6 pairs" in out
+    code, latex, _ = run("analyze", "--scores", str(scores), "--format", "latex")
+    assert r"\multirow{4}*{Trust}" in latex
+    assert "suggestions (0-2)" in latex
+    # A broken config beside the scores is a clear error, not a traceback.
+    (tmp_path / "study_config.json").write_text('{"id": "x"}', "utf-8")
+    code, out, err = run("analyze", "--scores", str(scores))
+    assert code != 0
+    assert "study_config.json" in (out + err)

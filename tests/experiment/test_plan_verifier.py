@@ -13,13 +13,19 @@ from typing import Any
 
 import pytest
 
-from chameleons.experiment.design import PlanRow, plan
+from chameleons.experiment.design import PlanRow, balance_period, plan
 from chameleons.experiment.study import load_default_study, load_study
-from tests.experiment.study_files import four_condition_document, write_study
+from tests.experiment.study_files import default_document, four_condition_document, write_study
 
 CONDITIONS = ["still", "natural", "copy"]
 ACTORS = {"m1": "male", "m2": "male", "f1": "female", "f2": "female"}
 FACES = ["face-1", "face-2", "face-3", "face-4"]
+# The default study's personas: what each demo face looks like and each name's gender.
+FACE_GENDERS = {"face-1": "female", "face-2": "male", "face-3": "female", "face-4": "male"}
+NAME_GENDERS = {
+    "Nova": "female", "Iris": "female", "Luna": "female", "Vera": "female",
+    "Milo": "male", "Theo": "male", "Oskar": "male", "Kai": "male",
+}  # fmt: skip
 LUNAR = [
     "oxygen", "water", "stellar_map", "food_concentrate", "fm_transceiver", "nylon_rope",
     "first_aid_kit", "parachute_silk", "life_raft", "signal_flares", "pistols",
@@ -93,6 +99,20 @@ def verify(rows: list[PlanRow], exact: bool) -> None:
         assert_balanced(lasts, list(items), len(shown) / 5, exact=False)
         if len(shown) >= 5:
             assert all(firsts[item] >= 1 and lasts[item] >= 1 for item in items)
+    verify_personas(rows)
+
+
+def verify_personas(rows: list[PlanRow]) -> None:
+    """The default study's personas: one name per voice for the whole plan, distinct between
+    voices; faces and names of the voice's gender only (match_gender)."""
+    slots = [i for row in rows for i in row.interactions]
+    names: dict[str, set[str]] = {}
+    for i in slots:
+        names.setdefault(i.actor, set()).add(i.robot_name)
+        assert FACE_GENDERS[i.face] == ACTORS[i.actor], (i.actor, i.face)
+        assert NAME_GENDERS[i.robot_name] == ACTORS[i.actor], (i.actor, i.robot_name)
+    assert all(len(used) == 1 for used in names.values()), names
+    assert len({name for used in names.values() for name in used}) == len(names)
 
 
 def verify_williams(rows: list[PlanRow], conditions: list[str]) -> None:
@@ -136,6 +156,46 @@ def test_extending_a_plan_keeps_its_rows(first: int, more: int) -> None:
     assert plan(study, first + more, 3).rows[:first] == plan(study, first, 3).rows
 
 
+def test_names_per_interaction_are_drawn_per_session_and_still_match_the_voice(
+    tmp_path: Path,
+) -> None:
+    document = default_document()
+    document["personas"]["names"] = "per_interaction"
+    rows = plan(load_study(write_study(tmp_path, document)), 24, 3).rows
+    by_actor: dict[str, set[str]] = {}
+    for row in rows:
+        assert len({i.robot_name for i in row.interactions}) == 3
+        for i in row.interactions:
+            assert NAME_GENDERS[i.robot_name] == ACTORS[i.actor]
+            by_actor.setdefault(i.actor, set()).add(i.robot_name)
+    assert all(len(names) > 1 for names in by_actor.values()), by_actor
+
+
+def test_faces_tied_to_actors_give_every_voice_its_own_face(tmp_path: Path) -> None:
+    document = default_document()
+    document["personas"]["faces"] = "per_actor"
+    rows = plan(load_study(write_study(tmp_path, document)), 12, 4).rows
+    faces: dict[str, set[str]] = {}
+    for i in (i for row in rows for i in row.interactions):
+        faces.setdefault(i.actor, set()).add(i.face)
+        assert FACE_GENDERS[i.face] == ACTORS[i.actor]
+    assert all(len(used) == 1 for used in faces.values()), faces
+    assert len({face for used in faces.values() for face in used}) == 4
+    # Faces follow the actors, so they are used as evenly as the actors are.
+    used = Counter(i.face for row in rows for i in row.interactions)
+    assert set(used.values()) == {9}
+
+
+def test_without_gender_match_faces_and_voices_combine_freely(tmp_path: Path) -> None:
+    """The paper's "faces counterbalanced separately" on its own: over a plan every face
+    appears with voices of both genders."""
+    document = default_document()
+    document["personas"]["match_gender"] = False
+    rows = plan(load_study(write_study(tmp_path, document)), 24, 2).rows
+    pairs = {(i.face, ACTORS[i.actor]) for row in rows for i in row.interactions}
+    assert pairs == {(face, gender) for face in FACES for gender in ("male", "female")}
+
+
 def test_four_conditions_get_a_generalised_williams_design(tmp_path: Path) -> None:
     study = load_study(write_study(tmp_path, four_condition_document()))
     conditions = list(study.condition_ids)
@@ -147,3 +207,39 @@ def test_four_conditions_get_a_generalised_williams_design(tmp_path: Path) -> No
     with_actor = Counter((i.condition, i.actor) for row in rows for i in row.interactions)
     assert set(with_actor.values()) == {4}
     assert len(with_actor) == 16
+
+
+@pytest.mark.parametrize("k", [2, 3, 4, 5, 6])
+def test_two_to_six_conditions_plan_balanced(tmp_path: Path, k: int) -> None:
+    """Any number of conditions the loader allows plans one balance period on which every
+    count of the balance report is exact, with a Williams design for the orders."""
+    document = default_document()
+    document["conditions"] = {
+        f"c{n}": {"label": f"C{n}", "behaviour": "copy", "params": {"delay": float(n)}}
+        for n in range(k)
+    }
+    people = max(4, k)
+    gender = ["female", "male"]
+    document["actors"] = {
+        f"a{n}": {"name": f"A{n}", "gender": gender[n % 2], "voice": {"espeak": "en"}}
+        for n in range(people)
+    }
+    document["faces"] = {
+        f"face-{n}": {"label": f"F{n}", "gender": gender[n % 2]} for n in range(people)
+    }
+    document["robot_names"] = [{"name": f"N{n}", "gender": gender[n % 2]} for n in range(2 * k)]
+    if k > 4:  # five or six distinct scenarios per session
+        document["item_sets"] = {"first_rank": 1, "last_rank": 15, "sets": ["a", "b", "c"]}
+    study = load_study(write_study(tmp_path, document))
+    result = plan(study, balance_period(study), 1)
+    conditions = list(study.condition_ids)
+    assert result.notes == []
+    # Every count exact, except where whole numbers cannot be (item first/last: within 1)
+    # and "every item first and last once", which a short period cannot show yet.
+    within = ("item_first_last", "carry_over")
+    assert all(c.exact or (c.id.startswith(within) and c.ok)
+               for c in result.balance.constraints if not c.id.startswith("item_at_ends")
+               ), result.balance.problems()  # fmt: skip
+    for row in result.rows:
+        assert sorted(i.condition for i in row.interactions) == sorted(conditions)
+    verify_williams(result.rows, conditions)

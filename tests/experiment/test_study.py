@@ -177,11 +177,17 @@ def test_unreadable_and_invalid_files(tmp_path: Path) -> None:
     assert problems_of(empty) == ["(top level): must be a mapping, got nothing"]
 
 
-def test_study_error_message_lists_problems(tmp_path: Path) -> None:
+def test_study_error_message_lists_problems_with_file_and_line(tmp_path: Path) -> None:
     document = default_document()
     document["name"] = ""
-    with pytest.raises(StudyError, match=r"1 problem\(s\):\n  - name: must be a non-empty text"):
-        load_study(write_study(tmp_path, document))
+    path = write_study(tmp_path, document)
+    line = next(n for n, text in enumerate(path.read_text("utf-8").splitlines(), 1)
+                if text.startswith("name:"))  # fmt: skip
+    with pytest.raises(StudyError) as caught:
+        load_study(path)
+    assert str(caught.value).startswith(f"{path} has 1 problem(s):\n  - {path}:{line}: name: ")
+    assert caught.value.problems == ["name: must be a non-empty text, got text ''"]
+    assert caught.value.located == [f"{path}:{line}: name: must be a non-empty text, got text ''"]
 
 
 def test_hash_is_stable_and_tracks_content(tmp_path: Path) -> None:
@@ -233,4 +239,7 @@ def test_broken_snapshot_reports_places() -> None:
 def test_a_lab_can_write_a_four_condition_study(tmp_path: Path) -> None:
     study = load_study(write_study(tmp_path, four_condition_document()))
     assert study.interactions_per_session == 4
-    assert study.condition_ids[-1] == "exaggerated"
+    assert study.condition_ids[-1] == "copy_fast"
+    assert (study.condition("copy_fast").behaviour, study.condition("copy_fast").params) == (
+        "copy", {"delay": 1.0},
+    )  # fmt: skip

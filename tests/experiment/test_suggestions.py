@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import random
+from collections import Counter
 from itertools import permutations
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from scipy.stats import chisquare
 
 from chameleons.experiment.suggestions import (
     Suggestion,
@@ -28,63 +30,112 @@ def situations(draw: st.DrawFn) -> tuple[list[str], list[str], set[str], int]:
     return list(ranking), list(expert), declined, draw(st.integers(0, 2**32))
 
 
-def improving_moves(ranking: list[str], expert: list[str], declined: set[str]) -> list[str]:
-    """Brute force: items not declined that some move up to at most their expert position
-    would bring closer to the expert order."""
+def moved(ranking: list[str], item: str, to_rank: int) -> list[str]:
+    """Written out here rather than taken from the policy: the item moves, the rest keep
+    their order."""
+    rest = [other for other in ranking if other != item]
+    rest.insert(to_rank - 1, item)
+    return rest
+
+
+def all_moves(ranking: list[str]) -> list[tuple[str, int, int]]:
+    return [
+        (item, ranking.index(item) + 1, to_rank)
+        for item in ranking
+        for to_rank in range(1, len(ranking) + 1)
+        if to_rank != ranking.index(item) + 1
+    ]
+
+
+def best_error(ranking: list[str], expert: list[str], declined: set[str]) -> int | None:
+    """Brute force: the lowest error any move of an item not declined reaches, up or down."""
+    errors = [
+        error_score(moved(ranking, item, to), expert)
+        for item, _, to in all_moves(ranking)
+        if item not in declined
+    ]
+    return min(errors, default=None)
+
+
+def improving_moves_up(ranking: list[str], expert: list[str], declined: set[str]) -> list[str]:
+    """Brute force for up_only: items not declined that some move up to at most their
+    expert position would bring closer to the expert order."""
     now = error_score(ranking, expert)
-    found = []
-    for from_rank, item in enumerate(ranking, start=1):
-        goal = expert.index(item) + 1
-        for to_rank in range(goal, from_rank):
-            moved = ranking[: from_rank - 1] + ranking[from_rank:]
-            moved.insert(to_rank - 1, item)
-            if item not in declined and error_score(moved, expert) < now:
-                found.append(item)
-    return found
+    return [
+        item
+        for item, from_rank, to in all_moves(ranking)
+        if item not in declined
+        and expert.index(item) + 1 <= to < from_rank
+        and error_score(moved(ranking, item, to), expert) < now
+    ]
 
 
-@given(situations())
-def test_every_suggestion_moves_an_item_up_and_applies_to_a_permutation(situation) -> None:
+RULES = st.sampled_from(["best_move", "up_only"])
+
+
+@given(situations(), RULES)
+def test_every_suggestion_is_a_real_move_that_applies_to_a_permutation(situation, rule) -> None:
     ranking, expert, declined, seed = situation
-    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed))
-    assert 1 <= suggestion.to_rank < suggestion.from_rank <= len(ranking)
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
+    assert 1 <= suggestion.to_rank <= len(ranking)
+    assert suggestion.to_rank != suggestion.from_rank
     assert ranking[suggestion.from_rank - 1] == suggestion.item
     after = apply_suggestion(ranking, suggestion)
-    assert sorted(after) == sorted(ranking)
-    assert after[suggestion.to_rank - 1] == suggestion.item
+    assert after == moved(ranking, suggestion.item, suggestion.to_rank)
+    if rule == "up_only" or suggestion.kind == "random":
+        assert suggestion.direction == "up"
 
 
-@given(situations())
-def test_optimal_suggestions_reduce_the_error(situation) -> None:
+@given(situations(), RULES)
+def test_optimal_never_worsens_the_error_and_never_moves_a_declined_item(situation, rule):
     ranking, expert, declined, seed = situation
-    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed))
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
     if suggestion.kind == "optimal":
-        assert error_score(apply_suggestion(ranking, suggestion), expert) < error_score(
-            ranking, expert
-        )
+        after = error_score(apply_suggestion(ranking, suggestion), expert)
+        assert after < error_score(ranking, expert)
         assert suggestion.item not in declined
 
 
 @given(situations())
-def test_random_only_when_no_item_that_was_not_declined_can_be_improved(situation) -> None:
+def test_best_move_takes_the_move_that_most_reduces_the_error_in_either_direction(situation):
     ranking, expert, declined, seed = situation
-    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed))
-    assert (suggestion.kind == "random") == (not improving_moves(ranking, expert, declined))
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), "best_move")
+    best = best_error(ranking, expert, declined)
+    if suggestion.kind == "optimal":
+        assert error_score(apply_suggestion(ranking, suggestion), expert) == best
 
 
 @given(situations())
-def test_declined_items_are_not_proposed_while_another_choice_exists(situation) -> None:
+def test_best_move_falls_back_only_when_no_move_improves_the_ranking(situation) -> None:
     ranking, expert, declined, seed = situation
-    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed))
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), "best_move")
+    best = best_error(ranking, expert, declined)
+    improvable = best is not None and best < error_score(ranking, expert)
+    assert (suggestion.kind == "random") == (not improvable)
+
+
+@given(situations())
+def test_up_only_falls_back_only_when_no_move_up_improves_the_ranking(situation) -> None:
+    ranking, expert, declined, seed = situation
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), "up_only")
+    assert (suggestion.kind == "random") == (not improving_moves_up(ranking, expert, declined))
+
+
+@given(situations(), RULES)
+def test_declined_items_are_not_proposed_while_another_choice_exists(situation, rule) -> None:
+    ranking, expert, declined, seed = situation
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
     other_choice = any(item not in declined for item in ranking[1:])
     if other_choice:
         assert suggestion.item not in declined
 
 
 @given(situations())
-def test_without_declines_the_most_important_misplaced_item_goes_to_its_place(situation):
+def test_up_only_without_declines_moves_the_most_important_misplaced_item_to_its_place(
+    situation,
+) -> None:
     ranking, expert, _, seed = situation
-    suggestion = next_suggestion(ranking, expert, set(), random.Random(seed))
+    suggestion = next_suggestion(ranking, expert, set(), random.Random(seed), "up_only")
     below = [item for item in expert if ranking.index(item) > expert.index(item)]
     if below:
         assert suggestion == Suggestion(
@@ -95,31 +146,62 @@ def test_without_declines_the_most_important_misplaced_item_goes_to_its_place(si
         assert suggestion.kind == "random"
 
 
-@given(situations())
-def test_the_policy_is_a_pure_function_of_its_inputs_and_seed(situation) -> None:
+@given(situations(), RULES)
+def test_the_policy_is_a_pure_function_of_its_inputs_and_seed(situation, rule) -> None:
     ranking, expert, declined, seed = situation
-    first = next_suggestion(ranking, expert, declined, random.Random(seed))
-    assert next_suggestion(ranking, expert, declined, random.Random(seed)) == first
+    first = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
+    assert next_suggestion(ranking, expert, declined, random.Random(seed), rule) == first
+
+
+def test_best_move_proposes_a_move_down_when_that_helps_most() -> None:
+    # b sits first but belongs third; moving it down to 3 puts everything in order (error
+    # 4 -> 0), which no move up achieves (moving a or c up leaves the error at 2 or 4).
+    expert = ["a", "c", "b"]
+    suggestion = next_suggestion(["b", "a", "c"], expert, set(), random.Random(1))
+    assert suggestion == Suggestion("b", 1, 3, "optimal")
+    assert suggestion.direction == "down"
+    # up_only finds the best it can going up: a to rank 1 (error 4 -> 2).
+    up = next_suggestion(["b", "a", "c"], expert, set(), random.Random(1), "up_only")
+    assert up == Suggestion("a", 2, 1, "optimal")
 
 
 def test_worked_example_with_a_declined_item() -> None:
     expert = ["a", "b", "c"]
-    # a is declined; moving b up to rank 2 or 1 leaves the error at 4: no optimal move.
-    suggestion = next_suggestion(["c", "a", "b"], expert, {"a"}, random.Random(1))
+    # a is declined; under up_only moving b up leaves the error at 4: no optimal move up.
+    suggestion = next_suggestion(["c", "a", "b"], expert, {"a"}, random.Random(1), "up_only")
     assert suggestion.kind == "random"
-    assert suggestion.item in {"b"}  # the only non-declined item below rank 1
-    assert next_suggestion(["c", "a", "b"], expert, set(), random.Random(1)) == Suggestion(
-        "a", 2, 1, "optimal"
+    assert suggestion.item == "b"  # the only non-declined item that can move up
+    # best_move can still improve it: c (not declined) down to rank 3 gives error 2.
+    best = next_suggestion(["c", "a", "b"], expert, {"a"}, random.Random(1))
+    assert best == Suggestion("c", 1, 3, "optimal")
+    assert next_suggestion(["c", "a", "b"], expert, set(), random.Random(1), "up_only") == (
+        Suggestion("a", 2, 1, "optimal")
     )
 
 
-def test_every_random_move_is_reachable() -> None:
-    seen = {
-        (s.item, s.to_rank)
-        for seed in range(300)
-        for s in [next_suggestion(["a", "b", "c"], ["a", "b", "c"], set(), random.Random(seed))]
-    }
-    assert seen == {("b", 1), ("c", 1), ("c", 2)}
+@pytest.mark.parametrize(
+    ("ranking", "declined"),
+    [
+        (["a", "b", "c", "d"], set()),  # in expert order: every move up is allowed
+        (["a", "b", "c", "d"], {"d"}),  # a declined item is avoided while others can move
+        (["a", "b", "c", "d"], {"b", "c", "d"}),  # only declined items can move: all of them
+    ],
+)
+def test_the_random_fallback_is_uniform_over_the_allowed_moves(ranking, declined) -> None:
+    """Every allowed move up (counted here, independently of the policy) is drawn equally
+    often: a chi-squared goodness-of-fit test over 12 000 seeded draws."""
+    expert = ["a", "b", "c", "d"]
+    movable = [m for m in all_moves(ranking) if m[2] < m[1]]
+    allowed = [m for m in movable if m[0] not in declined] or movable
+    draws = 12_000
+    counts: Counter[tuple[str, int, int]] = Counter()
+    for seed in range(draws):
+        s = next_suggestion(ranking, expert, declined, random.Random(seed))
+        assert s.kind == "random"
+        counts[(s.item, s.from_rank, s.to_rank)] += 1
+    assert set(counts) == set(allowed)
+    observed = [counts[m] for m in allowed]
+    assert chisquare(observed).pvalue > 0.001, observed
 
 
 def test_error_score_full_partial_and_maximum() -> None:

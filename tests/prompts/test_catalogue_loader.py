@@ -32,6 +32,11 @@ GOOD_ROWS = [
     "Water above oxygen?,lunar,water,oxygen,,,",
     "desert_water_move_up,suggestion,,Move the water up?,desert,water,,,,",
 ]
+DOWN_ROWS = [
+    "lunar_oxygen_move_down,suggestion,,Move the oxygen down?,lunar,oxygen,,,,",
+    "lunar_oxygen_make_last,suggestion,,Oxygen last?,lunar,oxygen,,,,",
+    "lunar_oxygen_below_water,suggestion,,Oxygen below the water?,lunar,oxygen,water,,,",
+]
 
 
 def write_actor(root: Path, lines: list[str], actor: str = "m1", header: str = HEADER) -> Path:
@@ -75,12 +80,31 @@ def test_suggestion_prompts_in_preference_order(tmp_path: Path) -> None:
         "lunar_water_make_first",
         "lunar_water_move_up",
     ]
-    assert [g.suggestion_kind for g in to_first] == list(SuggestionKind)
+    assert [g.suggestion_kind for g in to_first] == list(SuggestionKind)[:3]
     # Not to the top, and a pair without its own prompt: only the generic one fits.
     assert [g.name for g in catalogue.suggestion_prompts("lunar", "water", 2, "stellar_map")] == [
         "lunar_water_move_up"
     ]
     assert catalogue.suggestion_prompts("lunar", "oxygen", 1) == []
+
+
+def test_suggestion_prompts_for_a_move_down_in_preference_order(tmp_path: Path) -> None:
+    catalogue = load_catalogue(write_actor(tmp_path, GOOD_ROWS + DOWN_ROWS))
+    assert catalogue.suggestion_prompts("lunar", "oxygen", 1) == []  # no move up for oxygen
+
+    to_last = catalogue.suggestion_prompts("lunar", "oxygen", 3, "water", down=True, last_rank=3)
+    assert [g.name for g in to_last] == [
+        "lunar_oxygen_below_water",
+        "lunar_oxygen_make_last",
+        "lunar_oxygen_move_down",
+    ]
+    assert [g.suggestion_kind for g in to_last] == list(SuggestionKind)[3:]
+    assert all(g.suggestion_kind is not None and g.suggestion_kind.down for g in to_last)
+    # Not to the bottom, and no pair prompt: only the generic move down; never a move up.
+    middle = catalogue.suggestion_prompts("lunar", "oxygen", 2, "stellar_map", down=True,
+                                          last_rank=3)  # fmt: skip
+    assert [g.name for g in middle] == ["lunar_oxygen_move_down"]
+    assert catalogue.suggestion_prompts("lunar", "water", 3, down=True, last_rank=3) == []
 
 
 def test_pick_variant_never_repeats_the_last_one(tmp_path: Path) -> None:

@@ -44,7 +44,9 @@ def catalogues() -> dict[str, Catalogue]:
 def test_all_four_actors_load_within_the_prompt_budget(catalogues: dict[str, Catalogue]) -> None:
     assert sorted(catalogues) == list(ACTORS)
     for catalogue in catalogues.values():
-        assert 150 <= len(catalogue) <= 250, (catalogue.actor, len(catalogue))
+        # The paper recorded 232 per actor; the demo adds "move down" phrasings for the
+        # best-move rule's downward suggestions.
+        assert 150 <= len(catalogue) <= 300, (catalogue.actor, len(catalogue))
 
 
 def test_actor_profiles_give_gender_personality_and_voice(
@@ -69,6 +71,8 @@ def test_every_item_has_description_question_and_suggestions(
             assert {Stage.ITEM_DESCRIPTION, Stage.ITEM_QUESTION} <= stages, (task, item)
             kinds = [g.suggestion_kind for g in catalogue.suggestion_prompts(task, item, 1)]
             assert kinds == [SuggestionKind.MAKE_FIRST, SuggestionKind.MOVE_UP], (task, item)
+            down = catalogue.suggestion_prompts(task, item, 5, down=True, last_rank=5)
+            assert [g.suggestion_kind for g in down] == [SuggestionKind.MOVE_DOWN], (task, item)
 
 
 @pytest.mark.parametrize("actor", ACTORS)

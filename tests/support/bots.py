@@ -53,8 +53,14 @@ def staff_api(
     return StaffApi(http).login(username, PASSWORD)
 
 
-def study_with_plan(pi: StaffApi, participants: int = 12, seed: int = 7) -> int:
-    """The default study, created by the PI with a plan; returns its id."""
-    study = pi.post("/api/studies", {"plan_seed": seed})
+def study_with_plan(
+    pi: StaffApi, participants: int = 12, seed: int = 7, yaml: str | None = None
+) -> int:
+    """The default study (or the study file ``yaml``), created by the PI with a plan;
+    returns its id."""
+    body: dict[str, object] = {"plan_seed": seed}
+    if yaml is not None:
+        body["yaml"] = yaml
+    study = pi.post("/api/studies", body)
     pi.post(f"/api/studies/{study['id']}/plan", {"participants": participants})
     return int(study["id"])

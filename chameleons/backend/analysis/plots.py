@@ -47,7 +47,9 @@ def plot_measure(
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(4.6, 3.8), dpi=110, layout="constrained")
+    # Wider for more conditions, so up to six labels stay readable side by side.
+    width = 4.6 + 0.8 * max(0, len(conditions) - 3)
+    figure = Figure(figsize=(width, 3.8), dpi=110, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
     positions = list(range(1, len(conditions) + 1))

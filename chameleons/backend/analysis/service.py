@@ -55,8 +55,13 @@ class StudyScores:
         return self.design.labels
 
     @property
+    def condition_order(self) -> list[str]:
+        return self.design.order
+
+    @property
     def measures(self) -> tuple[str, ...]:
         return self.spec.measures
+
 
     @property
     def participant_count(self) -> int:
@@ -74,13 +79,21 @@ class StudyAnalysis:
     def latex(self) -> str:
         if self.analysis is None:
             return ""
-        return render_latex(self.analysis, self.scores.condition_labels)
+        design = self.scores.design
+        return render_latex(
+            self.analysis, design.labels, measure_labels=design.titles,
+            measure_ranges=design.ranges,
+        )  # fmt: skip
 
     @property
     def text(self) -> str:
         if self.analysis is None:
             return self.error or ""
-        return render_text(self.analysis, self.scores.condition_labels)
+        design = self.scores.design
+        return render_text(
+            self.analysis, design.labels, measure_labels=design.titles,
+            measure_ranges=design.ranges,
+        )  # fmt: skip
 
 
 def database_scores(
@@ -102,6 +115,7 @@ def run_analysis(
     return analyze(
         scores.rows,
         measures=design.measures,
+        condition_order=scores.condition_order,
         conditions=design.conditions,
         scales=design.scales,
         view=view,

@@ -3,19 +3,19 @@ session, the recording index, the yoked-control candidates and the chosen natura
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from dataclasses import dataclass
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from chameleons.backend.models import Event, Interaction, Recording
+from chameleons.backend.models import Event, Interaction, Participant, Recording, Study
 from chameleons.backend.models import Session as SessionRow
 
 RUNNING_STEPS = frozenset({"discussion", "ranking", "negotiation", "questionnaire"})
 NATURAL_SOURCE = "behaviour.natural_source"
 RECORDING_STARTED = "recording.started"
-YOKED_CONDITIONS = ("copy", "still")
+YokedCandidate = tuple[Recording, str, int, str]  # recording, participant code, position, condition
 
 
 @dataclass(frozen=True)
@@ -28,6 +28,12 @@ class Located:
     @property
     def running(self) -> bool:
         return self.session.state == "running" and self.interaction.state in RUNNING_STEPS
+
+    def study(self, db: Session) -> Study:
+        study = db.get(Study, self.session.study_id)
+        if study is None:
+            raise LookupError(f"session {self.session.id} has lost its study")
+        return study
 
 
 def locate(db: Session, interaction_id: int) -> Located | None:
@@ -75,20 +81,25 @@ def recordings_of(db: Session, interaction_id: int) -> list[Recording]:
 
 
 def yoked_candidates(
-    db: Session, interaction: Interaction, session: SessionRow, min_frames: int
-) -> Iterator[Recording]:
-    """Participant streams of other participants' finished ``copy``/``still`` interactions of
-    this study that ended before ``interaction`` started, the most recent first. Rehearsal
-    recordings (staff faces) only yoke rehearsals."""
+    db: Session,
+    interaction: Interaction,
+    session: SessionRow,
+    min_frames: int,
+    conditions: Collection[str],
+) -> Iterator[YokedCandidate]:
+    """Participant streams of other participants' finished interactions of this study in
+    ``conditions`` that ended before ``interaction`` started, the most recent first, with
+    whose they are. Rehearsal recordings (staff faces) only yoke rehearsals."""
     query = (
-        select(Recording)
+        select(Recording, Participant.code, Interaction.position, Interaction.condition)
         .join(Interaction, Interaction.id == Recording.interaction_id)
         .join(SessionRow, SessionRow.id == Interaction.session_id)
+        .join(Participant, Participant.id == SessionRow.participant_id)
         .where(
             Recording.stream == "participant",
             Recording.frames >= min_frames,
             Interaction.state == "done",
-            Interaction.condition.in_(YOKED_CONDITIONS),
+            Interaction.condition.in_(list(conditions)),
             SessionRow.study_id == session.study_id,
             SessionRow.participant_id != session.participant_id,
         )
@@ -98,7 +109,7 @@ def yoked_candidates(
         query = query.where(SessionRow.is_rehearsal.is_(False))
     if interaction.started_at is not None:
         query = query.where(Interaction.ended_at <= interaction.started_at)
-    yield from db.scalars(query)
+    yield from db.execute(query).tuples()
 
 
 def chosen_natural_source(db: Session, interaction_id: int) -> Event | None:

@@ -1,21 +1,11 @@
-"""What the booth flow decides, without the bridge: where an interaction's recordings go, how
-the worker's files become Recording rows, and which clip ``natural`` replays.
+"""What the booth flow decides, without the bridge: where an interaction's recordings go and
+how the worker's files become Recording rows (the behaviour it runs: ``behaviour.py``).
 
 Recordings are written by the worker to ``<data dir>/recordings/study-<id>/session-<id>/``
 (absolute on the wire). The embedded worker shares the server's disk; a remote worker must
 see the same directory under the same path — production mounts one shared volume at the
 data directory of both (the ``recordings`` volume in docker-compose.yml). A file the server
 cannot see is still indexed, from the worker's own frame count, with size 0.
-
-``natural`` replays, in this order: a clip the lab configured
-(``app.state.behaviour_params["natural"]["path"]``); the yoked control — the participant
-stream of the most recent finished ``copy``/``still`` interaction of another participant of
-this study, at least ``min_yoked_frames`` long; else the demo clip
-(``<prompts>/_natural/demo-natural.npz``, shipped in the repository's ``prompts/``). The choice is
-made once per interaction and logged (``behaviour.natural_source``), so every later set-up of
-that interaction replays the same recording and the export can say which one it was. The path
-goes to the worker marked (``prompts:_natural/demo-natural.npz``, ``data:recordings/...``) so
-a worker on a booth PC resolves it against its own install (``chameleons.prompts.locations``).
 """
 
 from __future__ import annotations
@@ -31,20 +21,11 @@ import pyarrow.parquet as pq
 from sqlalchemy.orm import Session
 
 from chameleons.backend.booth import repository
-from chameleons.backend.events import repository as events
 from chameleons.backend.models import Recording
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR, recording_file
-from chameleons.prompts.locations import (
-    REPOSITORY_PROMPTS,
-    marked_path,
-    prompts_root,
-    resolve_marked_path,
-)
 from chameleons.worker.recording import RecordingError, journal_path, recover_recording
 
 log = logging.getLogger(__name__)
-DEMO_CLIP_NAME = Path("_natural") / "demo-natural.npz"  # made by scripts/make_demo_natural_clip.py
-DEMO_NATURAL_CLIP = REPOSITORY_PROMPTS / DEMO_CLIP_NAME
 STREAMS = ("participant", "agent")
 PARQUET = ".parquet"
 
@@ -53,8 +34,6 @@ PARQUET = ".parquet"
 class BoothConfig:
     """Knobs of the booth flow (``app.state.booth_config`` overrides the defaults)."""
 
-    min_yoked_frames: int = 1800  # 30 s at the phone's 60 fps
-    demo_clip: Path | None = None  # None: <prompts>/_natural/demo-natural.npz
     record: bool = True  # start/stop the worker's recording with each interaction
 
 
@@ -65,16 +44,6 @@ def config_of(state: Any) -> BoothConfig:
 
 def data_dir_of(state: Any) -> Path:
     return Path(state.settings.data_dir)
-
-
-def demo_clip_of(state: Any) -> Path:
-    """The configured demo clip, else the one in the prompts folder in use, else the one
-    shipped in the repository."""
-    configured = config_of(state).demo_clip
-    if configured is not None:
-        return configured
-    in_use = prompts_root(state.settings) / DEMO_CLIP_NAME
-    return in_use if in_use.is_file() else DEMO_NATURAL_CLIP
 
 
 # --- recordings --------------------------------------------------------------------------------
@@ -176,58 +145,3 @@ def describe(rows: list[Recording]) -> list[dict[str, Any]]:
          "size_bytes": r.size_bytes}
         for r in rows
     ]  # fmt: skip
-
-
-# --- behaviour parameters ----------------------------------------------------------------------
-def behaviour_params(
-    db: Session, state: Any, interaction_id: int, condition: str
-) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
-    """The ``set_behaviour`` parameters for ``condition`` in this interaction, and (for
-    ``natural``) the source it replays, to log with the set-up."""
-    configured = (getattr(state, "behaviour_params", None) or {}).get(condition)
-    if condition != "natural":
-        return (dict(configured) if configured else None), None
-    params = dict(configured or {})
-    if isinstance(params.get("path"), str) and params["path"]:
-        return params, {"source": "configured", "path": params["path"]}
-    source = natural_source(db, state, interaction_id)
-    if source.get("path"):
-        params["path"] = source["path"]
-    return params or None, source
-
-
-def natural_source(db: Session, state: Any, interaction_id: int) -> dict[str, Any]:
-    """The clip ``natural`` replays in this interaction: chosen once, then the same."""
-    chosen = repository.chosen_natural_source(db, interaction_id)
-    if chosen is not None:
-        path = chosen.payload.get("path")
-        if not path or resolve_marked_path(str(path), state.settings).is_file():
-            return dict(chosen.payload)
-    located = repository.locate(db, interaction_id)
-    if located is None:
-        return {"source": "none", "reason": f"there is no interaction {interaction_id}"}
-    source = _choose(db, state, located)
-    events.record(
-        db, repository.NATURAL_SOURCE, source="server", study_id=located.session.study_id,
-        session_id=located.session.id, interaction_id=interaction_id, payload=source,
-    )  # fmt: skip
-    return source
-
-
-def _choose(db: Session, state: Any, located: repository.Located) -> dict[str, Any]:
-    config, data_dir = config_of(state), data_dir_of(state)
-    candidates = repository.yoked_candidates(
-        db, located.interaction, located.session, config.min_yoked_frames
-    )
-    for recording in candidates:
-        path = recording_file(data_dir, recording.path)
-        if path.is_file():
-            return {
-                "source": "yoked", "path": marked_path(path, state.settings),
-                "recording_id": recording.id,
-                "from_interaction_id": recording.interaction_id, "frames": recording.frames,
-            }  # fmt: skip
-    demo = demo_clip_of(state)
-    if demo.is_file():
-        return {"source": "demo", "path": marked_path(demo, state.settings)}
-    return {"source": "none", "reason": f"no yoked recording and no demo clip {demo}"}

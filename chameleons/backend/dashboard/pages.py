@@ -12,6 +12,7 @@ from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.dashboard.context import page_context, study_or_404
 from chameleons.backend.dashboard.progress import live_balance, plan_progress
 from chameleons.backend.dashboard.sessions import session_detail, session_summaries
+from chameleons.backend.dashboard.suggestion_mix import suggestion_mix
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
@@ -43,6 +44,7 @@ def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str,
         "balance_summary": balance_summary(report),
         "balance_tables": tables,
         "sessions": session_summaries(db, study, spec),
+        "suggestion_mix": suggestion_mix(db, study, spec, include_rehearsal),
         "include_rehearsal": include_rehearsal,
         "flag_labels": FLAG_LABELS,
         "bad_flags": BAD_FLAGS,
@@ -82,6 +84,7 @@ def overview_api(
         "progress": data["progress"].__dict__,
         "balance": data["balance"].to_dict(),
         "sessions": [summary.to_dict() for summary in data["sessions"]],
+        "suggestion_mix": data["suggestion_mix"].to_dict(),
     }
 
 

@@ -48,6 +48,7 @@ class Slot:
     task: str
     item_set: str
     item_order: Sequence[str]
+    robot_name: str = ""
 
 
 @dataclass(frozen=True)
@@ -157,6 +158,7 @@ def _actual_slot(interaction: Interaction) -> Slot:
         interaction.task,
         interaction.item_set,
         [str(item) for item in order],
+        interaction.robot_name,
     )
 
 
@@ -168,6 +170,7 @@ def _planned_slot(planned: dict[str, Any]) -> Slot:
         str(planned.get("task")),
         str(planned.get("item_set")),
         [str(item) for item in planned.get("item_order", [])],
+        str(planned.get("robot_name")),
     )
 
 

@@ -44,8 +44,9 @@ def _session() -> Column:
     return Column("session", "integer", "Session id (a participant normally has one session).")
 
 
-def _position() -> Column:
-    return Column("position", "integer", "Interaction position in the session.", "1..3")
+def _position(spec: StudySpec) -> Column:
+    k = spec.interactions_per_session
+    return Column("position", "integer", "Interaction position in the session.", f"1..{k}")
 
 
 def _condition(spec: StudySpec, what: str = "Condition actually run.") -> Column:
@@ -162,11 +163,11 @@ def participants_table(spec: StudySpec) -> TableSpec:
 def interactions_table(spec: StudySpec) -> TableSpec:
     return TableSpec(
         "interactions",
-        "One row per interaction (three per session).",
+        f"One row per interaction ({spec.interactions_per_session} per session).",
         (
             _participant(),
             _session(),
-            _position(),
+            _position(spec),
             Column(
                 "planned_condition",
                 "string",
@@ -204,6 +205,27 @@ def interactions_table(spec: StudySpec) -> TableSpec:
             _time("started_at", "Interaction start"),
             _time("ended_at", "Interaction end"),
             Column("duration_s", "number", "Interaction duration in seconds."),
+            Column(
+                "behaviour",
+                "string",
+                "The behaviour the robot ran for the condition (the study's conditions say "
+                "with which parameters).",
+                ", ".join(sorted({c.behaviour for c in spec.conditions})),
+            ),
+            Column(
+                "natural_source",
+                "string",
+                "What the natural behaviour replayed in this interaction: clip (one fixed "
+                "recording), yoked (another participant's recorded face) or synthetic; empty "
+                "when natural never ran in it.",
+                "clip, yoked, synthetic",
+            ),
+            Column(
+                "natural_recording",
+                "string",
+                "Which recording natural replayed (clip name, or the participant, interaction "
+                "and recording id it was yoked to).",
+            ),
         ),
     )
 
@@ -211,27 +233,38 @@ def interactions_table(spec: StudySpec) -> TableSpec:
 def suggestions_table(spec: StudySpec) -> TableSpec:
     return TableSpec(
         "suggestions",
-        "One row per robot suggestion (three per interaction).",
+        f"One row per robot suggestion ({spec.suggestions_per_interaction} per interaction).",
         (
             _participant(),
             _session(),
-            _position(),
+            _position(spec),
             _condition(spec),
-            Column("index", "integer", "Suggestion number within the interaction.", "1..3"),
+            Column(
+                "index",
+                "integer",
+                "Suggestion number within the interaction.",
+                f"1..{spec.suggestions_per_interaction}",
+            ),
             Column("item", "string", "Item the robot proposed to move."),
             Column("from_rank", "integer", "The item's rank when proposed (1 = most important)."),
-            Column("to_rank", "integer", "Rank the robot proposed (always above from_rank)."),
+            Column(
+                "to_rank",
+                "integer",
+                "Rank the robot proposed (above from_rank, or below it under the best-move "
+                "rule).",
+            ),
             Column(
                 "kind",
                 "string",
-                "optimal: moves toward the expert order; random: the fallback when"
-                " nothing useful was left.",
+                f"optimal: the {spec.suggestion_rule} rule's move toward the expert order;"
+                " random: the fallback (a random move up) when no move improved the ranking.",
                 "optimal, random",
             ),
             Column("accepted", "boolean", "The participant's decision; empty if never decided."),
             _time("proposed_at", "When the suggestion was made"),
             _time("decided_at", "When the decision was recorded"),
             Column("decision_s", "number", "Seconds from proposal to decision."),
+            Column("direction", "string", "Which way the item was to move.", "up, down"),
         ),
     )
 
@@ -247,7 +280,7 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 "position",
                 "integer",
                 "Interaction the answer is about; 0 = the final questionnaire.",
-                "0..3",
+                f"0..{spec.interactions_per_session}",
             ),
             Column(
                 "condition",
@@ -301,7 +334,7 @@ def scores_table(spec: StudySpec) -> TableSpec:
         (
             _participant(),
             _condition(spec),
-            _position(),
+            _position(spec),
             _accepted(spec, "Accepted robot suggestions in that interaction."),
             *(
                 Column(

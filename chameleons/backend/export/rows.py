@@ -87,6 +87,7 @@ def interaction_rows(
     db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
 ) -> Iterator[Row]:
     actors = {actor.id: actor for actor in spec.actors}
+    behaviours = {condition.id: condition.behaviour for condition in spec.conditions}
     for record in counted_interactions(db, study.id, include_rehearsal):
         interaction = record.interaction
         actor = actors.get(interaction.actor)
@@ -114,6 +115,9 @@ def interaction_rows(
             "started_at": iso(interaction.started_at),
             "ended_at": iso(interaction.ended_at),
             "duration_s": _seconds(interaction.started_at, interaction.ended_at),
+            "behaviour": behaviours.get(interaction.condition),
+            "natural_source": interaction.natural_source,
+            "natural_recording": interaction.natural_recording,
         }
 
 
@@ -144,6 +148,7 @@ def suggestion_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Ite
             "proposed_at": iso(suggestion.proposed_at),
             "decided_at": iso(suggestion.decided_at),
             "decision_s": _seconds(suggestion.proposed_at, suggestion.decided_at),
+            "direction": "up" if suggestion.to_rank < suggestion.from_rank else "down",
         }
 
 

@@ -10,7 +10,10 @@ from chameleons.backend.models.base import Base
 
 
 class Interaction(Base):
-    """One of a session's three interactions, as planned and as actually run."""
+    """One of a session's interactions (one per condition), as planned and as actually run.
+
+    ``natural_source``/``natural_recording``: what the ``natural`` behaviour replayed in this
+    interaction (clip, yoked or synthetic, and which recording), set when it first ran."""
 
     __tablename__ = "interaction"
     __table_args__ = (
@@ -33,5 +36,7 @@ class Interaction(Base):
     initial_ranking: Mapped[list[Any] | None]
     current_ranking: Mapped[list[Any] | None]
     final_ranking: Mapped[list[Any] | None]
+    natural_source: Mapped[str | None] = mapped_column(String(16))
+    natural_recording: Mapped[str | None] = mapped_column(String(255))
     started_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]

@@ -9,14 +9,15 @@ from chameleons.backend.models.base import Base, utcnow
 
 
 class Suggestion(Base):
-    """One of the robot's three ranking change requests in an interaction."""
+    """One of the robot's ranking change requests in an interaction (the study says how
+    many); it moves an item up or, under the best-move rule, down."""
 
     __tablename__ = "suggestion"
     __table_args__ = (
         UniqueConstraint("interaction_id", "index"),
-        CheckConstraint('"index" BETWEEN 1 AND 3', name="index_range"),
+        CheckConstraint('"index" >= 1', name="index_range"),
         CheckConstraint("kind IN ('optimal', 'random')", name="kind"),
-        CheckConstraint("to_rank < from_rank", name="moves_up"),
+        CheckConstraint("to_rank <> from_rank AND to_rank >= 1", name="moves"),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)

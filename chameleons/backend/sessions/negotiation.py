@@ -32,7 +32,7 @@ def propose_next(flow: Flow, interaction: Interaction) -> Suggestion | None:
         f"{flow.study.plan_seed}/{flow.row_number()}/{flow.participant.code}/"
         f"{interaction.position}/{index}"
     )
-    proposal = propose(ranking, expert, declined, seed)
+    proposal = propose(ranking, expert, declined, seed, flow.spec.suggestion_rule)
     suggestion = Suggestion(
         interaction_id=interaction.id,
         index=index,

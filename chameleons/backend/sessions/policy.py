@@ -8,16 +8,24 @@ from __future__ import annotations
 
 import random
 
-from chameleons.experiment.suggestions import Suggestion, apply_suggestion, next_suggestion
+from chameleons.experiment.suggestions import (
+    Rule,
+    Suggestion,
+    apply_suggestion,
+    next_suggestion,
+)
 
 __all__ = ["Suggestion", "accept", "move", "propose"]
 
 
 def propose(
-    ranking: list[str], expert_order: list[str], declined: set[str], seed: str
+    ranking: list[str], expert_order: list[str], declined: set[str], seed: str, rule: Rule
 ) -> Suggestion:
-    """The next suggestion, seeded deterministically (the same inputs give the same move)."""
-    return next_suggestion(ranking, expert_order, frozenset(declined), random.Random(seed))
+    """The next suggestion under the study's rule, seeded deterministically (the same
+    inputs give the same move)."""
+    return next_suggestion(
+        ranking, expert_order, frozenset(declined), random.Random(seed), rule
+    )
 
 
 def accept(ranking: list[str], item: str, from_rank: int, to_rank: int) -> list[str]:

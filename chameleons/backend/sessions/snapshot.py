@@ -10,6 +10,7 @@ from chameleons.backend.sessions.answers import FINAL_POSITION, answered, questi
 from chameleons.backend.sessions.flow import Flow, allowed_actions, undo_deadline
 from chameleons.backend.sessions.states import allowed_sentence
 from chameleons.backend.studies.specs import item_key
+from chameleons.experiment.model import Condition
 
 
 def phone_presence_key(session_id: int) -> str:
@@ -44,12 +45,35 @@ def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[
             "connections": phone_connections,
         },
         "conditions": list(flow.spec.condition_ids),
+        "suggestions_per_interaction": flow.spec.suggestions_per_interaction,
+        "condition_details": [_condition(c) for c in flow.spec.conditions],
         "interactions": [_interaction(flow, interaction) for interaction in flow.interactions],
         "final_questionnaire": _progress(flow, FINAL_POSITION),
         "allowed": actions,
         "allowed_sentence": allowed_sentence(actions),
         "version": events.last_id(flow.db, session.id),
     }
+
+
+def _condition(condition: Condition) -> dict[str, Any]:
+    """What the wizard needs to tell the conditions apart: label, behaviour, parameters."""
+    return {
+        "id": condition.id,
+        "label": condition.label,
+        "behaviour": condition.behaviour,
+        "summary": behaviour_summary(condition),
+    }
+
+
+def behaviour_summary(condition: Condition) -> str:
+    """A few words on what the robot does, e.g. "copy, 4 s delay" or "natural: clip"."""
+    params = condition.params
+    if condition.behaviour == "copy" and "delay" in params:
+        return f"copy, {params['delay']:g} s delay"
+    if condition.behaviour == "natural":
+        return f"natural: {params.get('source', 'clip')}"
+    shown = ", ".join(f"{k} {v}" for k, v in sorted(params.items()))
+    return condition.behaviour + (f" ({shown})" if shown else "")
 
 
 def _interaction(flow: Flow, interaction: Interaction) -> dict[str, Any]:
@@ -62,6 +86,11 @@ def _interaction(flow: Flow, interaction: Interaction) -> dict[str, Any]:
         "planned_condition": interaction.planned_condition,
         "condition": interaction.condition,
         "deviates_from_plan": interaction.condition != interaction.planned_condition,
+        "natural": (
+            {"source": interaction.natural_source, "recording": interaction.natural_recording}
+            if interaction.natural_source
+            else None
+        ),
         "actor": interaction.actor,
         "robot_name": interaction.robot_name,
         "face": interaction.face,

@@ -143,9 +143,14 @@ def suggestion_buttons(catalogue: Catalogue, facts: InteractionFacts) -> list[Bu
 def suggestion_groups(
     catalogue: Catalogue, task: str, item: str, to_rank: int, ranking: Sequence[str]
 ) -> list[str]:
-    """Group names phrasing "move ``item`` to ``to_rank``" in ``ranking``, best first."""
+    """Group names phrasing "move ``item`` to ``to_rank``" in ``ranking``, best first (a move
+    down when ``item`` now sits above ``to_rank``)."""
     other = ranking[to_rank - 1] if 1 <= to_rank <= len(ranking) else None
-    groups = catalogue.suggestion_prompts(task, item, to_rank, other if other != item else None)
+    down = item in ranking and ranking.index(item) + 1 < to_rank
+    groups = catalogue.suggestion_prompts(
+        task, item, to_rank, other if other != item else None, down=down,
+        last_rank=len(ranking),
+    )  # fmt: skip
     return [group.name for group in groups]
 
 
@@ -207,9 +212,16 @@ def _reply_label(group: PromptGroup) -> str:
     return text if len(text) <= SHORT_TEXT else _humanize(group.name.removeprefix("ack_"))
 
 
+SUGGESTION_LABELS = {
+    "make_first": "make first", "move_up": "move up", "make_last": "make last",
+    "move_down": "move down",
+}  # fmt: skip
+
+
 def _suggestion_label(group: PromptGroup, facts: InteractionFacts) -> str:
     other = group.prompts[0].other_item
-    if other is not None:
-        return f"above {facts.item_names.get(other, other)}"
     kind = group.suggestion_kind
-    return "make first" if kind is not None and kind.value == "make_first" else "move up"
+    if other is not None:
+        where = "below" if kind is not None and kind.down else "above"
+        return f"{where} {facts.item_names.get(other, other)}"
+    return SUGGESTION_LABELS.get(kind.value if kind is not None else "", "move up")

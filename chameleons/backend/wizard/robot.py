@@ -4,10 +4,10 @@ to the booth's worker, both logged (``robot.applied`` or ``robot.not_applied``).
 The console calls :func:`apply` when an interaction starts and after a condition switch, and
 the wizard can repeat it by hand; the server's booth flow (:mod:`chameleons.backend.booth`)
 calls :func:`apply_with` for the interaction whose events it reacts to, sending only what the
-worker has not acknowledged already, so the two never fight. Behaviour parameters come from
-:func:`chameleons.backend.booth.service.behaviour_params`: ``app.state.behaviour_params``
-per condition, and for ``natural`` the clip it replays (the yoked control or the demo clip),
-logged with the set-up.
+worker has not acknowledged already, so the two never fight. The behaviour and its
+parameters are the study's for the condition
+(:func:`chameleons.backend.booth.behaviour.robot_behaviour`); for ``natural`` also the
+recording it replays (clip, yoked or synthetic), logged with the set-up.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.booth.service import behaviour_params
+from chameleons.backend.booth.behaviour import robot_behaviour
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
@@ -42,11 +42,12 @@ class Target:
     booth: str
     condition: str
     face: str
+    behaviour: str = ""
     params: dict[str, Any] | None = None
     natural_source: dict[str, Any] | None = None
 
     def behaviour_body(self) -> dict[str, Any]:
-        body: dict[str, Any] = {"name": self.condition}
+        body: dict[str, Any] = {"name": self.behaviour or self.condition}
         if self.params:
             body["params"] = dict(self.params)
         return body
@@ -68,10 +69,13 @@ def target_of(db: Session, session_id: int) -> Target:
 
 
 def prepared(db: Session, state: Any, find: Finder) -> Target:
-    """The target with its behaviour parameters (choosing ``natural``'s clip once)."""
+    """The target with the study's behaviour for its condition (choosing what ``natural``
+    replays once per interaction)."""
     target = find(db)
-    params, source = behaviour_params(db, state, target.interaction_id, target.condition)
-    return replace(target, params=params, natural_source=source)
+    chosen = robot_behaviour(db, state, target.interaction_id, target.condition)
+    return replace(
+        target, behaviour=chosen.name, params=chosen.params, natural_source=chosen.natural_source
+    )
 
 
 def _result(outcome: Outcome) -> dict[str, Any]:
@@ -87,6 +91,7 @@ def record(
     payload: dict[str, Any] = {
         "position": target.position,
         "condition": target.condition,
+        "behaviour_name": target.behaviour,
         "face": target.face,
         "behaviour": _result(behaviour),
         "face_result": _result(face),

@@ -3,9 +3,11 @@ the scale of every measure (values outside it are refused)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 from chameleons.experiment.model import Study
+from chameleons.experiment.stats.analysis import PAPER_CONDITION_ORDER
 from chameleons.experiment.stats.scores import Scale
 
 
@@ -15,6 +17,23 @@ class StudyMeasures:
     conditions: tuple[str, ...]
     labels: dict[str, str]
     scales: dict[str, Scale]
+    titles: dict[str, str] = field(default_factory=dict)  # measure -> questionnaire title
+
+    @property
+    def order(self) -> list[str]:
+        """The order tables list the conditions in: the paper's Table I order for the
+        paper's three conditions, otherwise the study's own order."""
+        return condition_order(self.conditions)
+
+    @property
+    def ranges(self) -> dict[str, str]:
+        """Each measure's value range as the tables print it (``0-3``, ``1-7``)."""
+        return {m: f"{scale.low:g}-{scale.high:g}" for m, scale in self.scales.items()}
+
+
+def condition_order(conditions: Sequence[str]) -> list[str]:
+    ids = list(conditions)
+    return list(PAPER_CONDITION_ORDER) if sorted(ids) == sorted(PAPER_CONDITION_ORDER) else ids
 
 
 def study_measures(spec: Study) -> StudyMeasures:
@@ -36,4 +55,5 @@ def study_measures(spec: Study) -> StudyMeasures:
         spec.condition_ids,
         {condition.id: condition.label for condition in spec.conditions},
         scales,
+        {q.id: q.title for q in spec.questionnaires_for("interaction") if q.scored},
     )

@@ -20,15 +20,23 @@ CONDITION_LABELS = {"natural": "Natural movement", "copy": "Copy", "still": "Sti
 UNDEFINED = "undefined"
 
 
-def render_text(analysis: Analysis, condition_labels: Mapping[str, str] | None = None) -> str:
+def render_text(
+    analysis: Analysis,
+    condition_labels: Mapping[str, str] | None = None,
+    *,
+    measure_labels: Mapping[str, str] | None = None,
+    measure_ranges: Mapping[str, str] | None = None,
+) -> str:
     labels = {**CONDITION_LABELS, **(condition_labels or {})}
+    names = {**MEASURE_LABELS, **(measure_labels or {})}
+    ranges = {**MEASURE_RANGES, **(measure_ranges or {})}
     conditions = analysis.conditions
     header = f"{'measure (median, mean ± SD)':<34}" + "".join(
         f"{labels.get(c, c):<22}" for c in conditions
     )
     lines = [f"Analysed {analysis.view_title}.", analysis.summary(), "", header, "-" * len(header)]
     for measure, result in analysis.measures.items():
-        name = f"{MEASURE_LABELS.get(measure, measure)} ({MEASURE_RANGES.get(measure, '')})"
+        name = f"{names.get(measure, measure)} ({ranges.get(measure, '')})"
         cells = "".join(f"{result.conditions[c].cell():<22}" for c in conditions)
         lines.append(f"{name.replace(' ()', ''):<34}{cells}")
     lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
@@ -50,21 +58,30 @@ def render_latex(
     condition_labels: Mapping[str, str] | None = None,
     *,
     layout: Literal["paper", "wide"] = "paper",
+    measure_labels: Mapping[str, str] | None = None,
+    measure_ranges: Mapping[str, str] | None = None,
 ) -> str:
     """``paper``: Table I's layout (a multirow block per measure, a row per condition with
     median and mean $\\pm$ SD; needs ``\\usepackage{multirow}``). ``wide``: a row per
     measure, a column per condition, cells "median, mean $\\pm$ SD"."""
     labels = {**CONDITION_LABELS, **(condition_labels or {})}
-    body = _paper_body(analysis, labels) if layout == "paper" else _wide_body(analysis, labels)
+    names = {**MEASURE_LABELS, **(measure_labels or {})}
+    ranges = {**MEASURE_RANGES, **(measure_ranges or {})}
+    if layout == "paper":
+        body = _paper_body(analysis, labels, names)
+    else:
+        body = _wide_body(analysis, labels, names)
     comments = [f"% Analysed {analysis.view_title}. {analysis.summary()}"]
     comments += [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
+    scales = sorted({ranges[m] for m in analysis.measures if m != "accepted" and m in ranges})
     return "\n".join(
         [
             *comments,
             r"\begin{table}[]",
             r"    \centering",
             r"    \caption{Median and mean $\pm$ SD per condition of the accepted robot "
-            r"suggestions (0-3) and the questionnaire scores (1-7).}",
+            rf"suggestions ({ranges.get('accepted', '')}) and the questionnaire scores "
+            rf"({', '.join(scales)}).}}",
             *body,
             r"    \label{tab:stats}",
             r"\end{table}",
@@ -72,7 +89,9 @@ def render_latex(
     )
 
 
-def _paper_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+def _paper_body(
+    analysis: Analysis, labels: Mapping[str, str], names: Mapping[str, str]
+) -> list[str]:
     k = len(analysis.conditions)
     lines = [
         r"    \begin{tabular}{ |c|c|c|c| }",
@@ -81,7 +100,7 @@ def _paper_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
         r"    \hline",
     ]
     for measure, result in analysis.measures.items():
-        lines.append(rf"    \multirow{{{k}}}*{{{_tex(MEASURE_LABELS.get(measure, measure))}}}")
+        lines.append(rf"    \multirow{{{k}}}*{{{_tex(names.get(measure, measure))}}}")
         for condition in analysis.conditions:
             d = result.conditions[condition]
             median = fmt(d.exact_median, 1, "--")
@@ -94,7 +113,9 @@ def _paper_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
     return lines
 
 
-def _wide_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+def _wide_body(
+    analysis: Analysis, labels: Mapping[str, str], names: Mapping[str, str]
+) -> list[str]:
     columns = "|l|" + "c|" * len(analysis.conditions)
     heads = " & ".join(_tex(labels.get(c, c)) for c in analysis.conditions)
     lines = [rf"    \begin{{tabular}}{{{columns}}}", r"    \hline", rf"    Measure & {heads} \\"]
@@ -104,7 +125,7 @@ def _wide_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
             f"{fmt(d.exact_median, 1, '--')}, {_mean_sd_tex(d)}"
             for d in (result.conditions[c] for c in analysis.conditions)
         )
-        lines.append(rf"    {_tex(MEASURE_LABELS.get(measure, measure))} & {cells} \\")
+        lines.append(rf"    {_tex(names.get(measure, measure))} & {cells} \\")
     lines += [r"    \hline", r"    \end{tabular}"]
     return lines
 

@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from chameleons.worker.behaviours.history import FrameHistory
+from chameleons.worker.behaviours.params import Param
 from chameleons.worker.frames import N_BLENDSHAPES, F32Array, FaceFrame
 
 VECTOR_SIZE = FaceFrame.VECTOR_SIZE
@@ -51,6 +52,10 @@ class Behaviour(ABC):
     """Base class of behaviour modules. Register subclasses with ``@register_behaviour``."""
 
     name: ClassVar[str] = ""
+    # What a study may set in a condition's ``params`` (checked when the study is loaded,
+    # defaults filled in; see :mod:`chameleons.worker.behaviours.params`). A behaviour
+    # that declares none takes none.
+    parameters: ClassVar[Mapping[str, Param]] = {}
 
     def __init__(self, context: BehaviourContext) -> None:
         self.context = context

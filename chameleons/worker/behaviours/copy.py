@@ -20,14 +20,25 @@ from chameleons.worker.behaviours.base import (
     number_param,
     reject_unknown,
 )
+from chameleons.worker.behaviours.params import Param
 from chameleons.worker.behaviours.registry import register_behaviour
 from chameleons.worker.frames import F32Array
 
 DEFAULT_DELAY = 4.0
+# The worker keeps 12 s of participant history by default; a copy needs half a second of
+# slack to interpolate around ``t - delay``.
+MAX_DELAY = 11.5
 
 
 @register_behaviour("copy")
 class CopyBehaviour(Behaviour):
+    parameters = {
+        "delay": Param(
+            "number", DEFAULT_DELAY, "Seconds between the participant's movement and the "
+            "robot's copy of it (Bailenson & Yee 2005: 4 s).", minimum=0.0, maximum=MAX_DELAY,
+        ),
+    }  # fmt: skip
+
     def __init__(self, context: BehaviourContext, delay: float = DEFAULT_DELAY) -> None:
         super().__init__(context)
         if not math.isfinite(delay) or delay < 0:

@@ -1,6 +1,12 @@
 """``natural``: replays recorded face motion (a Live Link take or another participant's
 recorded stream — the yoked control), looping, starting at a chosen offset.
 
+What a *study* sets (``parameters``) and what the *worker* gets differ: a study names the
+source (``clip``: a recording in the prompt catalogue, the paper's "recording of facial
+gestures from an unrelated conversation"; ``yoked``: another participant's recorded stream;
+``synthetic``: the face simulator), and the server resolves it, per interaction, into the
+worker's parameters below (see ``chameleons.backend.booth.service``).
+
 The loop seam is crossfaded: with period ``P = duration - seam``, the first ``seam``
 seconds of each pass blend the clip's tail into its head, so output is continuous.
 Parameters: ``path`` (take CSV, Parquet recording or ``.npz``), ``offset`` seconds, ``loop``;
@@ -28,11 +34,14 @@ from chameleons.worker.behaviours.base import (
     reject_unknown,
 )
 from chameleons.worker.behaviours.clips import MotionClip, load_clip
+from chameleons.worker.behaviours.params import Param
 from chameleons.worker.behaviours.registry import register_behaviour
 from chameleons.worker.frames import F32Array
 
 MAX_SEAM = 0.5
 SYNTHETIC_SECONDS = 60.0
+SOURCES = ("clip", "yoked", "synthetic")
+DEFAULT_CLIP = "demo-natural"
 
 
 def synthetic_clip(seed: int = 0, seconds: float = SYNTHETIC_SECONDS) -> MotionClip:
@@ -48,6 +57,28 @@ def synthetic_clip(seed: int = 0, seconds: float = SYNTHETIC_SECONDS) -> MotionC
 
 @register_behaviour("natural")
 class NaturalBehaviour(Behaviour):
+    parameters = {
+        "source": Param(
+            "choice", "clip", "What is replayed: clip (one fixed recording, the paper), yoked "
+            "(another participant's recorded face) or synthetic (the face simulator).",
+            choices=SOURCES,
+        ),
+        "clip": Param(
+            "text", DEFAULT_CLIP, "The recording for source clip, and for yoked until another "
+            "participant has been recorded: a name in the prompts folder's _natural/ "
+            "(demo-natural) or a path inside the prompts folder (m1/natural/conversation).",
+        ),
+        "yoked_min_seconds": Param(
+            "number", 30.0, "Source yoked: the shortest recording of another participant "
+            "that may be replayed.", minimum=0.0, maximum=3600.0,
+        ),
+        "seed": Param("integer", 0, "Source synthetic: which synthetic face.", minimum=0,
+                      maximum=2**31 - 1),
+        "offset": Param("number", 0.0, "Seconds into the recording to start at.", minimum=0.0,
+                        maximum=1e6),
+        "loop": Param("boolean", True, "Start over at the end of the recording."),
+    }  # fmt: skip
+
     def __init__(
         self, context: BehaviourContext, clip: MotionClip, *, offset: float = 0.0,
         loop: bool = True, source: str = "",

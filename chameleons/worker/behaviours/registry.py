@@ -20,6 +20,7 @@ from importlib.metadata import entry_points
 from typing import Any, TypeVar
 
 from chameleons.worker.behaviours.base import Behaviour, BehaviourContext, BehaviourError
+from chameleons.worker.behaviours.params import Param
 
 ENTRY_POINT_GROUP = "chameleons.behaviours"
 _BUILTIN_MODULES = (
@@ -84,3 +85,8 @@ def create_behaviour(name: str, params: Mapping[str, Any], context: BehaviourCon
         raise
     except (TypeError, ValueError, OSError) as exc:
         raise BehaviourError(f"{name}: {exc}") from exc
+
+
+def behaviour_parameters() -> dict[str, Mapping[str, Param]]:
+    """Every registered behaviour's declared parameters (what a study may set)."""
+    return {name: dict(cls.parameters) for name, cls in available_behaviours().items()}

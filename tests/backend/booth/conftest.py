@@ -17,7 +17,6 @@ from fastapi.testclient import TestClient
 from sqlalchemy import Engine
 
 from chameleons.backend.booth.flows import BoothFlow
-from chameleons.backend.booth.service import BoothConfig
 from chameleons.backend.bridge import Bridge
 from chameleons.worker.runtime import Worker, WorkerConfig
 from chameleons.worker.simulate import LiveLinkSender, SyntheticFace
@@ -25,7 +24,6 @@ from tests.support.bots import ParticipantBot, StaffApi, WizardBot, staff_api, s
 
 ANY_PORT = "tcp://127.0.0.1:*"
 BOOTH = "booth-1"
-MIN_YOKED_FRAMES = 10
 
 
 def until(condition: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> Any:
@@ -62,7 +60,6 @@ def bridge(app: FastAPI, client: TestClient) -> Iterator[Bridge]:
 
 def start_flow(app: FastAPI, client: TestClient, bridge: Bridge | None) -> Iterator[BoothFlow]:
     assert client.portal is not None
-    app.state.booth_config = BoothConfig(min_yoked_frames=MIN_YOKED_FRAMES)
     flow = BoothFlow(app.state)
     client.portal.call(flow.start, bridge)
     yield flow

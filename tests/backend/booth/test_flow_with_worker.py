@@ -1,6 +1,7 @@
 """The booth follows the session through a real bridge to a real worker: an interaction
 started only through the session API sets the robot up and is recorded; the recording is
-indexed and downloadable; ``natural`` replays the yoked recording or the demo clip."""
+indexed and downloadable; ``natural`` replays the study's clip, the yoked recording (the clip
+until one exists) or a synthetic face, as the study says, and each interaction records it."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ from tests.backend.booth.conftest import (
     until,
     wait_for_event,
 )
-from tests.support.bots import StaffApi, WizardBot
+from tests.experiment.study_files import with_natural
+from tests.support.bots import StaffApi, WizardBot, study_with_plan
 
 pytestmark = pytest.mark.usefixtures("flow")
 
@@ -71,7 +73,8 @@ def test_an_interaction_started_through_the_api_sets_up_the_robot_and_is_recorde
     assert (applied["payload"]["condition"], applied["payload"]["face"]) == (
         "copy", interaction["face"],
     )  # fmt: skip
-    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    # The study's behaviour and parameters, not the condition's name alone.
+    assert bridge.state(BOOTH).behaviour == {"name": "copy", "params": {"delay": 4.0}}
     assert bridge.state(BOOTH).face == {"face_id": interaction["face"]}
 
     rows = recordings_of(app, interaction_id(app, wizard))
@@ -92,9 +95,17 @@ def test_an_interaction_started_through_the_api_sets_up_the_robot_and_is_recorde
     assert download.content[:4] == b"PAR1"
 
 
+def natural_interaction(app: FastAPI, wizard: WizardBot) -> Interaction:
+    with app.state.sessionmaker() as db:
+        found: Interaction | None = db.get(Interaction, interaction_id(app, wizard))
+        assert found is not None
+        return found
+
+
 def test_natural_replays_the_yoked_recording_of_an_earlier_participant(
-    app: FastAPI, pi: StaffApi, study_id: int, worker: Worker, bridge: Bridge, tmp_path: Path
+    app: FastAPI, pi: StaffApi, worker: Worker, bridge: Bridge, tmp_path: Path
 ) -> None:
+    study_id = study_with_plan(pi, 3, yaml=with_natural(source="yoked", yoked_min_seconds=0))
     first, first_phone = new_session(pi, study_id)
     first.switch_condition("still", 1)
     first.start()
@@ -117,15 +128,49 @@ def test_natural_replays_the_yoked_recording_of_an_earlier_participant(
     assert chosen["source"] == "yoked"
     assert chosen["recording_id"] == source.id
     assert chosen["from_interaction_id"] == interaction_id(app, first)
+    assert (chosen["from_participant"], chosen["from_position"], chosen["from_condition"]) == (
+        first.snapshot["participant"]["code"], 1, "still",
+    )  # fmt: skip
     path = f"data:{source.path}"  # the worker resolves it against its own data directory
     assert chosen["path"] == path
-    assert bridge.state(BOOTH).behaviour == {"name": "natural", "params": {"path": path}}
+    assert bridge.state(BOOTH).behaviour == {
+        "name": "natural", "params": {"offset": 0.0, "loop": True, "path": path},
+    }  # fmt: skip
     logged = [e for e in timeline(second) if e["kind"] == "behaviour.natural_source"]
     assert [e["payload"]["recording_id"] for e in logged] == [source.id]
+    recorded = natural_interaction(app, second)
+    assert recorded.natural_source == "yoked"
+    assert recorded.natural_recording == (
+        f"participant {first.snapshot['participant']['code']}, interaction 1 (still), "
+        f"recording {source.id}"
+    )
+    # The console shows it for the interaction.
+    assert second.refresh()["interactions"][0]["natural"]["source"] == "yoked"
 
 
-def test_natural_replays_the_demo_clip_before_anyone_was_recorded(
-    pi: StaffApi, study_id: int, worker: Worker, bridge: Bridge
+def test_yoked_replays_the_clip_until_another_participant_was_recorded(
+    app: FastAPI, pi: StaffApi, worker: Worker, bridge: Bridge
+) -> None:
+    study_id = study_with_plan(pi, 3, yaml=with_natural(source="yoked", clip="demo-natural"))
+    wizard, _ = new_session(pi, study_id)
+    wizard.switch_condition("natural", 1)
+    wizard.start()
+    wizard.advance(1, "discussion")
+    applied = wait_for_event(wizard, "robot.applied")  # the worker loaded the clip
+    path = "prompts:_natural/demo-natural.npz"
+    assert applied["payload"]["natural_source"] == {
+        "source": "clip", "clip": "demo-natural", "path": path,
+        "note": "yoked: no recording of another participant yet",
+    }  # fmt: skip
+    recorded = natural_interaction(app, wizard)
+    assert recorded.natural_source == "clip"
+    assert recorded.natural_recording == (
+        "clip demo-natural (yoked: no recording of another participant yet)"
+    )
+
+
+def test_natural_replays_the_studys_clip_by_default(
+    app: FastAPI, pi: StaffApi, study_id: int, worker: Worker, bridge: Bridge
 ) -> None:
     wizard, _ = new_session(pi, study_id)
     wizard.switch_condition("natural", 1)
@@ -133,8 +178,30 @@ def test_natural_replays_the_demo_clip_before_anyone_was_recorded(
     wizard.advance(1, "discussion")
     applied = wait_for_event(wizard, "robot.applied")  # the worker loaded the clip
     path = "prompts:_natural/demo-natural.npz"  # the worker's own prompts folder
-    assert applied["payload"]["natural_source"] == {"source": "demo", "path": path}
-    assert bridge.state(BOOTH).behaviour == {"name": "natural", "params": {"path": path}}
+    assert applied["payload"]["natural_source"] == {
+        "source": "clip", "clip": "demo-natural", "path": path,
+    }  # fmt: skip
+    assert applied["payload"]["behaviour_name"] == "natural"
+    assert bridge.state(BOOTH).behaviour == {
+        "name": "natural", "params": {"offset": 0.0, "loop": True, "path": path},
+    }  # fmt: skip
+    assert natural_interaction(app, wizard).natural_recording == "clip demo-natural"
+
+
+def test_a_synthetic_source_is_used_only_when_the_study_asks_for_it(
+    app: FastAPI, pi: StaffApi, worker: Worker, bridge: Bridge
+) -> None:
+    study_id = study_with_plan(pi, 3, yaml=with_natural(source="synthetic", seed=5, offset=2))
+    wizard, _ = new_session(pi, study_id)
+    wizard.switch_condition("natural", 1)
+    wizard.start()
+    wizard.advance(1, "discussion")
+    applied = wait_for_event(wizard, "robot.applied")
+    assert applied["payload"]["natural_source"] == {"source": "synthetic", "seed": 5}
+    assert bridge.state(BOOTH).behaviour == {
+        "name": "natural", "params": {"offset": 2.0, "loop": True, "seed": 5},
+    }  # fmt: skip
+    assert natural_interaction(app, wizard).natural_source == "synthetic"
 
 
 def test_a_switch_sends_only_what_changed_and_the_console_agrees(
@@ -153,8 +220,8 @@ def test_a_switch_sends_only_what_changed_and_the_console_agrees(
     assert switched["payload"]["behaviour"]["sent"] is True
     assert "unchanged" not in switched["payload"]["behaviour"]
     assert switched["payload"]["face_result"]["unchanged"] is True  # not re-sent
-    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    assert bridge.state(BOOTH).behaviour == {"name": "copy", "params": {"delay": 4.0}}
     # The console's own set-up of the same interaction targets the same state.
     console = wizard.staff.post(f"/api/wizard/sessions/{wizard.session_id}/robot/apply")
     assert (console["kind"], console["condition"]) == ("robot.applied", "copy")
-    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    assert bridge.state(BOOTH).behaviour == {"name": "copy", "params": {"delay": 4.0}}

@@ -45,7 +45,7 @@ def test_a_worker_connecting_after_the_start_gets_the_set_up_and_records(
     assert applied["source"] == "server"
     assert (applied["payload"]["condition"], applied["payload"]["face"]) == ("copy", face)
     assert started["interaction_id"] == interaction_id(app, wizard)
-    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    assert bridge.state(BOOTH).behaviour == {"name": "copy", "params": {"delay": 4.0}}
     assert bridge.state(BOOTH).face == {"face_id": face}
     kinds = [e["kind"] for e in timeline(wizard)]
     assert (kinds.count("robot.applied"), kinds.count("recording.started")) == (1, 1)

@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import zipfile
+from collections import Counter
 from datetime import datetime, timedelta
 from pathlib import Path
 
@@ -222,3 +223,37 @@ def test_a_large_export_streams_in_bounded_chunks(engine: Engine) -> None:
     assert events_csv.count(b"\n") > 10_000
     assert len(received) > 10
     assert max(len(chunk) for chunk in received) < len(events_csv) / 4
+
+
+def test_what_natural_replayed_and_which_way_suggestions_moved_are_exported(
+    db_session: DbSession, tmp_path: Path
+) -> None:
+    from sqlalchemy import select
+
+    from chameleons.backend.models import Interaction, Suggestion
+
+    data = populate(db_session, 3)
+    interactions = list(db_session.scalars(select(Interaction).order_by(Interaction.id)))
+    natural = next(i for i in interactions if i.condition == "natural")
+    natural.natural_source, natural.natural_recording = "clip", "clip demo-natural"
+    down = db_session.scalars(select(Suggestion).order_by(Suggestion.id)).first()
+    assert down is not None
+    down.from_rank, down.to_rank = 1, 4
+    db_session.commit()
+    export_to_directory(db_session, ExportRequest(), tmp_path)
+    _, rows = read_csv(tmp_path / "interactions.csv")
+    by_key = {(r["session"], r["position"]): r for r in rows}
+    row = by_key[(str(natural.session_id), str(natural.position))]
+    assert (row["behaviour"], row["natural_source"], row["natural_recording"]) == (
+        "natural", "clip", "clip demo-natural",
+    )  # fmt: skip
+    others = [r for r in rows if r is not row]
+    assert all(r["natural_source"] == "" and r["natural_recording"] == "" for r in others)
+    assert {r["behaviour"] for r in rows} == {"still", "natural", "copy"}
+    _, suggestions = read_csv(tmp_path / "suggestions.csv")
+    directions = Counter(r["direction"] for r in suggestions)
+    assert directions == {"down": 1, "up": len(suggestions) - 1}
+    codebook = (tmp_path / "codebook.csv").read_text("utf-8")
+    assert "natural_source" in codebook
+    assert "clip, yoked, synthetic" in codebook
+    assert data.study_id

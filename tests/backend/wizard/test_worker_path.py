@@ -17,7 +17,8 @@ from chameleons.backend.display.channel import get_display_channel
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.backend.wizard.conftest import api
 from tests.backend.wizard.test_live import next_of
-from tests.support.bots import WizardBot
+from tests.experiment.study_files import with_natural
+from tests.support.bots import WizardBot, study_with_plan
 
 # The bridge is the pipeline engineer's; until it is in the tree these tests cannot run.
 Bridge = pytest.importorskip("chameleons.backend.bridge").Bridge
@@ -123,24 +124,24 @@ def test_the_robot_is_set_to_the_interaction_s_condition_and_face(
     result = wizard.staff.post(f"{api(wizard)}/robot/apply")
     assert result["kind"] == "robot.applied", result
     assert (result["condition"], result["face"]) == ("copy", wizard.interaction(1)["face"])
-    assert bridge.state(BOOTH).behaviour == {"name": "copy"}
+    assert bridge.state(BOOTH).behaviour == {"name": "copy", "params": {"delay": 4.0}}
     assert bridge.state(BOOTH).face == {"face_id": wizard.interaction(1)["face"]}
     events = wizard.staff.get(f"/api/sessions/{wizard.session_id}/events")
     assert events[-1]["kind"] == "robot.applied"
 
 
 @pytest.mark.usefixtures("worker")
-def test_a_refusal_by_the_worker_is_logged_with_its_reason(
-    app: FastAPI, wizard: WizardBot, tmp_path: Path
-) -> None:
-    # ``natural`` works out of the box (yoked or demo clip): a lab-configured clip that is
-    # missing on the worker's disk is refused instead.
-    app.state.behaviour_params = {"natural": {"path": str(tmp_path / "missing.npz")}}
+def test_a_refusal_by_the_worker_is_logged_with_its_reason(wizard: WizardBot) -> None:
+    # ``natural`` works out of the box (the shipped clip): a study naming a clip that is not
+    # in the prompts folder is refused by the worker instead, with the file it looked for.
+    study = study_with_plan(wizard.staff, 2, yaml=with_natural(clip="no-such-clip"))
+    wizard = WizardBot.create(wizard.staff, study)
     wizard.switch_condition("natural", 1)
     result = wizard.staff.post(f"{api(wizard)}/robot/apply")
     assert result["kind"] == "robot.not_applied"
     assert result["behaviour"]["reason"] == "bad_behaviour"
     assert "motion recording not found" in result["behaviour"]["detail"]
+    assert "_natural/no-such-clip.npz" in result["behaviour"]["detail"]
     assert result["face_result"]["sent"] is True
 
 

@@ -78,29 +78,40 @@ export function renderPrimary(state, api, perform) {
   $("primary-hint").textContent = state.session.allowed_sentence;
 }
 
+/** What the robot does in a condition, e.g. "copy, 4 s delay" (from the study). */
+function conditionDetails(state, condition) {
+  return (state.session.condition_details || []).find((c) => c.id === condition) || { id: condition, label: condition, summary: "" };
+}
+
 export function renderCondition(state, requestSwitch, applyRobot) {
   const interaction = interactionAt(state);
   const closed = interaction.state === "done" || !["pending", "running"].includes(state.session.state);
-  const buttons = state.session.conditions.map((condition) =>
-    el(
+  const buttons = state.session.conditions.map((condition) => {
+    const details = conditionDetails(state, condition);
+    return el(
       "button",
       {
         type: "button",
         class: condition === interaction.condition ? "active" : "",
         "aria-pressed": String(condition === interaction.condition),
         disabled: closed,
+        title: `${details.label}: ${details.summary}`,
         dataset: { condition },
         onclick: () => requestSwitch(interaction, condition),
       },
       condition,
       condition === interaction.planned_condition ? el("span", { class: "planned", text: " planned" }) : null,
-    ),
-  );
+    );
+  });
   $("condition-switch").replaceChildren(...buttons);
+  const running = conditionDetails(state, interaction.condition);
+  const natural = interaction.natural;
   $("condition-note").replaceChildren(
     interaction.deviates_from_plan
       ? `Deviation: running ${interaction.condition}, planned ${interaction.planned_condition} (logged). `
       : `Interaction ${interaction.position} runs as planned. `,
+    el("span", { id: "condition-behaviour", text: `Robot: ${running.summary}. ` }),
+    natural ? el("span", { id: "natural-source", text: `Natural replays ${natural.recording}. ` }) : null,
     el("button", { type: "button", class: "link", id: "robot-apply", disabled: closed, onclick: applyRobot }, "Send condition and face to the robot"),
   );
 }
@@ -126,8 +137,9 @@ export function renderNegotiation(state, board, act) {
       el(
         "div",
         { class: "suggestion-now" },
-        el("div", { class: "k", text: `Suggestion ${pending.index} of 3 · ${pending.kind}` }),
-        el("div", { class: "suggestion-move" }, "Move ", el("strong", { text: names.get(pending.item) || pending.item }), ` from ${pending.from_rank} to ${pending.to_rank}`),
+        el("div", { class: "k", text: `Suggestion ${pending.index} of ${state.session.suggestions_per_interaction} · ${pending.kind}` }),
+        el("div", { class: "suggestion-move" }, "Move ", el("strong", { text: names.get(pending.item) || pending.item }),
+          ` ${pending.to_rank < pending.from_rank ? "up" : "down"} from ${pending.from_rank} to ${pending.to_rank}`),
         el(
           "div",
           { class: "pb-row", id: "suggestion-prompts" },
