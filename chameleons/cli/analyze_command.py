@@ -1,4 +1,5 @@
-"""``chameleons analyze``: the paper's analysis (Table I, Friedman tests) from score rows."""
+"""``chameleons analyze``: the paper's analysis (Table I, Friedman tests) from score rows,
+plus effect sizes with bootstrap intervals and the regression models."""
 
 from __future__ import annotations
 
@@ -11,9 +12,12 @@ from typing import Any, Literal
 import click
 
 from chameleons.experiment.stats import AnalysisError, analyze, render_latex, render_text
+from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES, BootstrapOptions
+from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import load_default_study
 
 REQUIRED_COLUMNS = ("participant", "condition")
+Rows = list[dict[str, Any]]
 
 
 def analysis_output(
@@ -24,11 +28,26 @@ def analysis_output(
     seed: int = 0,
     alpha: float = 0.05,
     latex_layout: Literal["paper", "wide"] = "paper",
+    bootstrap: int = DEFAULT_RESAMPLES,
+    models: bool = True,
+    suggestions: Iterable[Mapping[str, Any]] | None = None,
+    reference: str | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
-    file, the database). Raises ``click.ClickException`` for unusable rows."""
+    file, the database). ``bootstrap``: resamples for the effect sizes' intervals (0: no
+    effect sizes); ``suggestions``: per-suggestion rows for the acceptance model. Raises
+    ``click.ClickException`` for unusable rows."""
     try:
-        analysis = analyze(rows, permutations=permutations, seed=seed, alpha=alpha)
+        analysis = analyze(
+            rows,
+            permutations=permutations,
+            seed=seed,
+            alpha=alpha,
+            bootstrap=BootstrapOptions(bootstrap, seed) if bootstrap else None,
+            models=models,
+            suggestions=suggestions,
+            reference=reference,
+        )
     except AnalysisError as exc:
         raise click.ClickException(str(exc)) from exc
     labels = {c.id: c.label for c in load_default_study().conditions}
@@ -39,8 +58,8 @@ def analysis_output(
     return render_text(analysis, labels)
 
 
-def read_scores_csv(path: Path) -> list[dict[str, str]]:
-    """Rows of a ``scores.csv`` (the export's shape), with readable errors."""
+def read_csv_rows(path: Path, required: Iterable[str] = REQUIRED_COLUMNS) -> list[dict[str, str]]:
+    """Rows of an exported CSV table, with readable errors."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
             reader = csv.DictReader(handle)
@@ -48,10 +67,30 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise click.ClickException(f"cannot read {path}: {exc}") from exc
-    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
+    missing = [c for c in required if c not in columns]
     if missing:
         raise click.ClickException(f"{path}: missing column(s) {', '.join(missing)}")
     return rows
+
+
+def read_scores_csv(path: Path) -> list[dict[str, str]]:
+    """Rows of a ``scores.csv`` (the export's shape), with readable errors."""
+    return read_csv_rows(path)
+
+
+def read_suggestions_beside(scores: Path) -> Rows | None:
+    """The acceptance model's rows from ``suggestions.csv`` and ``interactions.csv`` in the
+    directory of ``scores.csv`` (an export bundle); ``None`` when they are not there."""
+    suggestions, interactions = (
+        scores.with_name("suggestions.csv"),
+        scores.with_name("interactions.csv"),
+    )
+    if not (suggestions.is_file() and interactions.is_file()):
+        return None
+    return suggestions_with_item_set(
+        read_csv_rows(suggestions, ("participant", "session", "position", "kind", "accepted")),
+        read_csv_rows(interactions, ("participant", "session", "position", "item_set")),
+    )
 
 
 @click.command("analyze")
@@ -92,6 +131,27 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
     show_default=True,
     help="paper: Table I's layout; wide: a column per condition.",
 )
+@click.option(
+    "--bootstrap",
+    type=click.IntRange(min=0, max=100_000),
+    default=DEFAULT_RESAMPLES,
+    show_default=True,
+    help="Bootstrap resamples for the effect sizes' 95% intervals (seeded by --seed); "
+    "0 leaves the effect sizes out.",
+)
+@click.option(
+    "--models/--no-models",
+    default=True,
+    show_default=True,
+    help="Fit the regression models (GEE for acceptance, mixed models for the scores). "
+    "With --scores, the acceptance model reads suggestions.csv and interactions.csv "
+    "from the same directory.",
+)
+@click.option(
+    "--reference",
+    default=None,
+    help="Condition the models compare the others with (default: still, else the first).",
+)
 def analyze_command(
     scores_path: Path | None,
     study_id: int | None,
@@ -101,12 +161,18 @@ def analyze_command(
     seed: int,
     alpha: float,
     latex_layout: Literal["paper", "wide"],
+    bootstrap: int,
+    models: bool,
+    reference: str | None,
 ) -> None:
-    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests."""
+    """Descriptives, Friedman tests (Bonferroni, Kendall's W), post-hoc tests, effect sizes
+    with bootstrap intervals and the regression models."""
+    suggestions: Rows | None
     if scores_path is not None:
-        rows = read_scores_csv(scores_path)
+        rows: Any = read_scores_csv(scores_path)
+        suggestions = read_suggestions_beside(scores_path) if models else None
     else:
-        rows = database_score_rows(study_id, include_rehearsal)
+        rows, suggestions = database_rows(study_id, include_rehearsal)
     click.echo(
         analysis_output(
             rows,
@@ -115,21 +181,25 @@ def analyze_command(
             seed=seed,
             alpha=alpha,
             latex_layout=latex_layout,
+            bootstrap=bootstrap,
+            models=models,
+            suggestions=suggestions,
+            reference=reference,
         )
     )
 
 
-def database_score_rows(study_id: int | None, include_rehearsal: bool) -> list[dict[str, Any]]:
-    """The export's scores rows read from the configured database."""
+def database_rows(study_id: int | None, include_rehearsal: bool) -> tuple[Rows, Rows]:
+    """The export's scores rows and the acceptance model's rows from the configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
-    from chameleons.backend.analysis.service import score_rows_from_database
+    from chameleons.backend.analysis.service import rows_from_database
     from chameleons.backend.export.selection import StudyNotFoundError
     from chameleons.cli.common import load_settings
 
     url = load_settings().effective_database_url
     try:
-        return score_rows_from_database(url, study_id, include_rehearsal)
+        return rows_from_database(url, study_id, include_rehearsal)
     except StudyNotFoundError as exc:
         raise click.ClickException(str(exc)) from exc
     except SQLAlchemyError as exc:

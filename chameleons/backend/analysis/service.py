@@ -12,7 +12,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.rows import interaction_rows
+from chameleons.backend.export.rows import interaction_rows, suggestion_rows
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.models import Study
@@ -26,6 +26,8 @@ from chameleons.experiment.stats import (
     render_latex,
     render_text,
 )
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions
+from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import study_from_config
 
 ERROR_LABELS = {
@@ -78,8 +80,35 @@ def database_scores(
     return StudyScores(study, spec, score_rows(db, study, spec, include_rehearsal))
 
 
-def run_analysis(scores: StudyScores, permutations: int | None = None, seed: int = 0) -> Analysis:
-    return analyze(scores.rows, measures=scores.measures, permutations=permutations, seed=seed)
+def model_rows(
+    db: DbSession, scores: StudyScores, include_rehearsal: bool = False
+) -> list[dict[str, Any]]:
+    """The acceptance model's rows: the export's suggestions with their item set."""
+    study, spec = scores.study, scores.spec
+    return suggestions_with_item_set(
+        suggestion_rows(db, study, include_rehearsal),
+        interaction_rows(db, study, spec, include_rehearsal),
+    )
+
+
+def run_analysis(
+    scores: StudyScores,
+    permutations: int | None = None,
+    seed: int = 0,
+    suggestions: list[dict[str, Any]] | None = None,
+    bootstrap: BootstrapOptions | None = None,
+) -> Analysis:
+    """The paper's analysis plus effect sizes (``bootstrap``) and the models (the
+    acceptance model when ``suggestions`` are given)."""
+    return analyze(
+        scores.rows,
+        measures=scores.measures,
+        permutations=permutations,
+        seed=seed,
+        bootstrap=bootstrap,
+        models=suggestions is not None,
+        suggestions=suggestions,
+    )
 
 
 def error_scores(
@@ -103,21 +132,26 @@ def study_analysis(
     errors = error_scores(db, scores, include_rehearsal)
     if not scores.rows:
         return StudyAnalysis(scores, None, "No counted sessions yet: nothing to analyse.", errors)
+    suggestions = model_rows(db, scores, include_rehearsal)
+    bootstrap = BootstrapOptions()
     try:
-        return StudyAnalysis(scores, run_analysis(scores, permutations), None, errors)
+        analysis = run_analysis(scores, permutations, 0, suggestions, bootstrap)
+        return StudyAnalysis(scores, analysis, None, errors)
     except AnalysisError as exc:
         return StudyAnalysis(scores, None, f"The analysis cannot run: {exc}", errors)
 
 
-def score_rows_from_database(
+def rows_from_database(
     database_url: str, study_id: int | None = None, include_rehearsal: bool = False
-) -> list[dict[str, Any]]:
-    """The scores table straight from a database (``chameleons analyze`` without a file)."""
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The scores table and the acceptance model's rows straight from a database
+    (``chameleons analyze`` without a file)."""
     from chameleons.backend.db import build_engine, build_sessionmaker
 
     engine = build_engine(database_url)
     try:
         with build_sessionmaker(engine)() as db:
-            return database_scores(db, study_id, include_rehearsal).rows
+            scores = database_scores(db, study_id, include_rehearsal)
+            return scores.rows, model_rows(db, scores, include_rehearsal)
     finally:
         engine.dispose()

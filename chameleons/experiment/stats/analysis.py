@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
 from itertools import combinations
 from typing import Any
 
@@ -23,15 +23,19 @@ from chameleons.experiment.stats.descriptive import (
     describe,
     wilcoxon_pair,
 )
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions, EffectSizes, effect_sizes
 from chameleons.experiment.stats.friedman_test import (
     FriedmanResult,
     PermutationResult,
     friedman,
     permutation_p,
 )
+from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
+from chameleons.experiment.stats.numbers import finite
 
 DEFAULT_MEASURES = ("accepted", "credibility", "likeability", "trust")
 PAPER_CONDITION_ORDER = ("natural", "copy", "still")
+PAPER_REFERENCE = "still"  # the models' default baseline: the robot without facial gestures
 MISSING = {"", "na", "nan", "none", "null"}
 
 
@@ -51,6 +55,8 @@ class MeasureAnalysis:
     posthoc_note: str
     excluded: list[str]
     notes: list[str]
+    blocks: list[list[float]] = field(default_factory=list, repr=False)
+    effect_sizes: EffectSizes | None = None
 
     def to_dict(self) -> dict[str, Any]:
         test = self.friedman
@@ -77,6 +83,7 @@ class MeasureAnalysis:
             "posthoc_note": self.posthoc_note,
             "excluded_participants": self.excluded,
             "notes": self.notes,
+            "effect_sizes": finite(self.effect_sizes.to_dict()) if self.effect_sizes else None,
         }
 
 
@@ -86,6 +93,7 @@ class Analysis:
     measures: dict[str, MeasureAnalysis]
     alpha: float
     notes: list[str]
+    models: Models | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -93,6 +101,7 @@ class Analysis:
             "alpha": self.alpha,
             "measures": {m: a.to_dict() for m, a in self.measures.items()},
             "notes": self.notes,
+            "models": finite(self.models.to_dict()) if self.models else None,
         }
 
 
@@ -104,11 +113,20 @@ def analyze(
     alpha: float = 0.05,
     permutations: int | None = None,
     seed: int = 0,
+    bootstrap: BootstrapOptions | None = None,
+    models: bool = False,
+    suggestions: Iterable[Mapping[str, Any]] | None = None,
+    reference: str | None = None,
 ) -> Analysis:
     """Analyse score rows (keys ``participant``, ``condition`` and one per measure).
 
     ``permutations``: when given, add a permutation p-value per measure (exact when
-    feasible, otherwise Monte Carlo with that many resamples and ``seed``)."""
+    feasible, otherwise Monte Carlo with that many resamples and ``seed``).
+    ``bootstrap``: add effect sizes with bootstrap intervals per measure.
+    ``models``: fit the regression models (:mod:`.models`): the score models from the
+    rows (they need ``position``), the acceptance model from ``suggestions`` (per-suggestion
+    rows), both against the ``reference`` condition (default: still, else the first)."""
+    rows = list(rows)
     table, present = _read(rows, measures)
     conditions = order_conditions({c for _, c in _keys(table)}, condition_order)
     chosen = [m for m in (measures or DEFAULT_MEASURES) if m in present]
@@ -118,11 +136,30 @@ def analyze(
         m: _analyze_measure(m, table, conditions, len(chosen), alpha, permutations, seed)
         for m in chosen
     }
+    if bootstrap is not None:
+        results = {m: _with_effect_sizes(r, conditions, bootstrap) for m, r in results.items()}
+    fitted = None
+    if models:
+        baseline = reference or (PAPER_REFERENCE if PAPER_REFERENCE in conditions else None)
+        try:
+            fitted = fit_models(
+                rows, suggestions, measures=chosen, conditions=conditions, reference=baseline
+            )
+        except ModelInputError as exc:
+            raise AnalysisError(str(exc)) from exc
     notes = [
         f"Bonferroni: Friedman p x {len(chosen)} measures (capped at 1); post-hoc Wilcoxon "
         f"signed-rank p x {math.comb(len(conditions), 2)} pairs, only where corrected p < {alpha}."
     ]
-    return Analysis(conditions, results, alpha, notes)
+    return Analysis(conditions, results, alpha, notes, fitted)
+
+
+def _with_effect_sizes(
+    result: MeasureAnalysis, conditions: list[str], options: BootstrapOptions
+) -> MeasureAnalysis:
+    """The measure's effect sizes over the participants its Friedman test used."""
+    effects = effect_sizes(result.blocks, conditions, options, key=result.measure)
+    return replace(result, effect_sizes=effects)
 
 
 def order_conditions(found: Iterable[str], preferred: Sequence[str] | None = None) -> list[str]:
@@ -176,6 +213,7 @@ def _analyze_measure(
         posthoc_note=posthoc_note,
         excluded=excluded,
         notes=notes,
+        blocks=blocks,
     )
 
 

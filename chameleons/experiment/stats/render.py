@@ -7,6 +7,12 @@ from typing import Literal
 
 from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
 from chameleons.experiment.stats.descriptive import Descriptive
+from chameleons.experiment.stats.render_models import (
+    effect_sizes_latex,
+    effect_sizes_text,
+    models_latex,
+    models_text,
+)
 
 MEASURE_LABELS = {
     "accepted": "Accepted robot suggestions",
@@ -42,6 +48,7 @@ def render_text(analysis: Analysis, condition_labels: Mapping[str, str] | None =
                 f"p = {_p(test.p)}, Bonferroni p = {_p(test.p_bonferroni)}, n = {test.n}"
                 + (f" ({test.note})" if test.note else "")
             )
+    lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
     return "\n".join(lines)
@@ -69,6 +76,8 @@ def render_latex(
             *body,
             r"    \label{tab:stats}",
             r"\end{table}",
+            *effect_sizes_latex(analysis, labels),
+            *models_latex(analysis, labels),
         ]
     )
 

@@ -1,0 +1,201 @@
+"""Effect sizes and models as readable text and as LaTeX tables (beside Table I)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from chameleons.experiment.stats.analysis import Analysis
+from chameleons.experiment.stats.effect_sizes import Interval
+from chameleons.experiment.stats.models import Coefficient, ModelResult
+
+UNDEFINED = "undefined"
+
+
+def _num(value: float | None, digits: int = 2) -> str:
+    return UNDEFINED if value is None else f"{value:.{digits}f}"
+
+
+def _p(value: float | None) -> str:
+    if value is None:
+        return UNDEFINED
+    return "< 0.0001" if value < 0.0001 else f"{value:.4f}"
+
+
+def interval_text(interval: Interval, digits: int = 2) -> str:
+    if interval.estimate is None:
+        return interval.note or UNDEFINED
+    if interval.ci_low is None or interval.ci_high is None:
+        return f"{interval.estimate:.{digits}f} (no interval: {interval.note})"
+    return (
+        f"{interval.estimate:.{digits}f} [{interval.ci_low:.{digits}f}, "
+        f"{interval.ci_high:.{digits}f}]"
+    )
+
+
+def effect_sizes_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    first = next((r.effect_sizes for r in analysis.measures.values() if r.effect_sizes), None)
+    if first is None:
+        return []
+    lines = [
+        "",
+        f"Effect sizes ({first.confidence:.0%} bootstrap intervals over participants, "
+        f"{first.resamples} resamples, seed {first.seed}):",
+    ]
+    for measure, result in analysis.measures.items():
+        effects = result.effect_sizes
+        if effects is None:
+            continue
+        lines.append(f"  {measure:<12} Kendall's W = {interval_text(effects.kendall_w, 3)}")
+        for pair in effects.pairs:
+            a, b = labels.get(pair.a, pair.a), labels.get(pair.b, pair.b)
+            lines.append(
+                f"  {'':<12} {a} - {b}: rank-biserial r = {interval_text(pair.rank_biserial)}, "
+                f"median difference = {interval_text(pair.median_difference)}"
+            )
+    return lines
+
+
+def models_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    models = analysis.models
+    if models is None:
+        return []
+    lines = ["", "Models (secondary analyses; 95% Wald intervals):"]
+    fitted = [m for m in [models.acceptance, *models.scores.values()] if m is not None]
+    for model in fitted:
+        lines += ["", f"  {model.name}: {model.formula}", f"    {model.method}"]
+        if model.error:
+            lines.append(f"    not available: {model.error}")
+            continue
+        lines.append(
+            f"    {model.n_observations} observations from {model.n_participants} participants"
+        )
+        for test in model.tests:
+            lines.append(
+                f"    test of {test.term}: Wald chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}"
+            )
+        for c in model.coefficients:
+            lines.append(f"    {_coefficient_name(c, labels):<28} {_coefficient_text(c)}")
+        lines += [f"    note: {n}" for n in model.notes]
+    lines += [f"  note: {n}" for n in models.notes]
+    return lines
+
+
+def _coefficient_name(c: Coefficient, labels: Mapping[str, str]) -> str:
+    if c.term == "Intercept":
+        return "intercept"
+    level = labels.get(c.level, c.level) if c.term == "condition" else c.level
+    return f"{c.term} = {level}"
+
+
+def _coefficient_text(c: Coefficient) -> str:
+    text = f"{c.estimate:+.3f} [{c.ci_low:+.3f}, {c.ci_high:+.3f}], z = {c.z:.2f}, p = {_p(c.p)}"
+    if c.odds_ratio is not None:
+        text += f"; odds ratio {c.odds_ratio:.2f} [{_num(c.or_ci_low)}, {_num(c.or_ci_high)}]"
+    return text
+
+
+def effect_sizes_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    rows = []
+    for measure, result in analysis.measures.items():
+        effects = result.effect_sizes
+        if effects is None:
+            continue
+        w = _tex_interval(effects.kendall_w, 3)
+        rows.append(rf"    {tex(measure)} & Kendall's $W$ & {w} \\")
+        for pair in effects.pairs:
+            name = f"{labels.get(pair.a, pair.a)} -- {labels.get(pair.b, pair.b)}"
+            rows.append(rf"    & {tex(name)}: $r_{{rb}}$ & {_tex_interval(pair.rank_biserial)} \\")
+            rows.append(
+                rf"    & {tex(name)}: median diff. & {_tex_interval(pair.median_difference)} \\"
+            )
+        rows.append(r"    \hline")
+    if not rows:
+        return []
+    return [
+        r"\begin{table}[]",
+        r"    \centering",
+        r"    \caption{Effect sizes with 95\% bootstrap confidence intervals (resampling "
+        r"participants).}",
+        r"    \begin{tabular}{ |l|l|c| }",
+        r"    \hline",
+        r"    Measure & Effect & Estimate [95\% CI] \\",
+        r"    \hline",
+        *rows,
+        r"    \end{tabular}",
+        r"    \label{tab:effects}",
+        r"\end{table}",
+    ]
+
+
+def models_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    models = analysis.models
+    if models is None:
+        return []
+    fitted = [
+        m for m in [models.acceptance, *models.scores.values()] if m is not None and not m.error
+    ]
+    rows = []
+    for model in fitted:
+        condition = model.test("condition")
+        test = (
+            rf" ($\chi^2({condition.df})={condition.chi2:.2f}$, $p={_p(condition.p)}$)"
+            if condition
+            else ""
+        )
+        rows.append(rf"    \multicolumn{{3}}{{|l|}}{{{tex(model.name)}{test}}} \\")
+        for c in model.coefficients:
+            if c.term == "Intercept":
+                continue
+            rows.append(rf"    & {tex(_coefficient_name(c, labels))} & {_tex_coefficient(c)} \\")
+        rows.append(r"    \hline")
+    if not rows:
+        return []
+    return [
+        r"\begin{table}[]",
+        r"    \centering",
+        r"    \caption{Models: odds ratios (acceptance, GEE) and score differences "
+        r"(linear mixed models) with 95\% Wald confidence intervals.}",
+        r"    \begin{tabular}{ |l|l|c| }",
+        r"    \hline",
+        r"    Model & Effect & Estimate [95\% CI] \\",
+        r"    \hline",
+        *rows,
+        r"    \end{tabular}",
+        r"    \label{tab:models}",
+        r"\end{table}",
+    ]
+
+
+def _tex_interval(interval: Interval, digits: int = 2) -> str:
+    if interval.estimate is None:
+        return "--"
+    if interval.ci_low is None or interval.ci_high is None:
+        return f"${interval.estimate:.{digits}f}$"
+    return (
+        f"${interval.estimate:.{digits}f}$ [${interval.ci_low:.{digits}f}$, "
+        f"${interval.ci_high:.{digits}f}$]"
+    )
+
+
+def _tex_coefficient(c: Coefficient) -> str:
+    if c.odds_ratio is not None:
+        return f"${c.odds_ratio:.2f}$ [${_num(c.or_ci_low)}$, ${_num(c.or_ci_high)}$]"
+    return f"${c.estimate:.2f}$ [${c.ci_low:.2f}$, ${c.ci_high:.2f}$]"
+
+
+def model_by_name(analysis: Analysis, name: str) -> ModelResult | None:
+    models = analysis.models
+    if models is None:
+        return None
+    if name == "acceptance":
+        return models.acceptance
+    return models.scores.get(name)
+
+
+def tex(text: str) -> str:
+    for char, escaped in [
+        ("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
+        ("#", r"\#"), ("_", r"\_"), ("{", r"\{"), ("}", r"\}"),
+    ]:  # fmt: skip
+        text = text.replace(char, escaped)
+    return text
