@@ -28,6 +28,7 @@ from chameleons.backend.dependencies import DbSession as Db
 from chameleons.backend.dependencies import Templates
 from chameleons.backend.export.selection import StudyNotFoundError
 from chameleons.experiment.stats import bonferroni, friedman, order_conditions
+from chameleons.experiment.stats.render_models import effect_sizes_latex, models_latex
 
 router = APIRouter(tags=["analysis"])
 MAX_PERMUTATIONS = 100_000
@@ -35,10 +36,15 @@ Permutations = Annotated[int | None, Query(ge=1, le=MAX_PERMUTATIONS)]
 
 
 def _load(
-    db: DbSession, study: int | None, include_rehearsal: bool, permutations: int | None = None
+    db: DbSession,
+    study: int | None,
+    include_rehearsal: bool,
+    permutations: int | None = None,
+    *,
+    extended: bool = True,
 ) -> StudyAnalysis:
     try:
-        return study_analysis(db, study, include_rehearsal, permutations)
+        return study_analysis(db, study, include_rehearsal, permutations, extended=extended)
     except StudyNotFoundError as exc:
         raise HTTPException(status.HTTP_404_NOT_FOUND, str(exc)) from exc
 
@@ -66,7 +72,9 @@ def analysis_page(
     include_rehearsal: bool = False,
     permutations: Permutations = None,
 ) -> Response:
-    result = _load(db, study, include_rehearsal, permutations)
+    # The first render has the paper's analysis; the effect sizes and models (about a
+    # second for a large study) arrive from /pi/analysis/extended after it.
+    result = _load(db, study, include_rehearsal, permutations, extended=False)
     found = study_or_404(db, result.scores.study.id)
     query = f"?study={found.id}" + ("&include_rehearsal=true" if include_rehearsal else "")
     context = page_context(
@@ -83,6 +91,37 @@ def analysis_page(
         error_labels=ERROR_LABELS,
     )
     return templates.TemplateResponse(request, "pi/analysis.html", context)
+
+
+@router.get("/pi/analysis/extended", response_class=HTMLResponse)
+def analysis_extended(
+    request: Request,
+    _pi: CurrentPI,
+    db: Db,
+    templates: Templates,
+    study: int | None = None,
+    include_rehearsal: bool = False,
+    permutations: Permutations = None,
+) -> Response:
+    """The page's effect-size and model sections (an HTML fragment the page fetches)."""
+    result = _load(db, study, include_rehearsal, permutations)
+    labels = result.scores.condition_labels
+    latex = (
+        "\n".join(
+            effect_sizes_latex(result.analysis, labels) + models_latex(result.analysis, labels)
+        )
+        if result.analysis
+        else ""
+    )
+    context = {
+        "result": result,
+        "analysis": result.analysis,
+        "measure_titles": MEASURE_TITLES,
+        "extended_latex": latex,
+    }
+    return templates.TemplateResponse(
+        request, "pi/analysis_extended.html", context, headers={"Cache-Control": "no-store"}
+    )
 
 
 @router.get("/pi/analysis/plots/{measure}.{fmt}")

@@ -12,6 +12,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.analysis.cache import analyses, digest
 from chameleons.backend.export.rows import interaction_rows, suggestion_rows
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
@@ -126,16 +127,32 @@ def study_analysis(
     study_id: int | None = None,
     include_rehearsal: bool = False,
     permutations: int | None = None,
+    *,
+    extended: bool = True,
 ) -> StudyAnalysis:
-    """Everything the analysis page shows; an unusable data set gives a message, not a 500."""
+    """Everything the analysis page shows; an unusable data set gives a message, not a 500.
+
+    ``extended``: with the effect sizes and the models (cached per input, see
+    :mod:`.cache`); without, only the paper's analysis (the page's first render)."""
     scores = database_scores(db, study_id, include_rehearsal)
     errors = error_scores(db, scores, include_rehearsal)
     if not scores.rows:
         return StudyAnalysis(scores, None, "No counted sessions yet: nothing to analyse.", errors)
-    suggestions = model_rows(db, scores, include_rehearsal)
-    bootstrap = BootstrapOptions()
     try:
-        analysis = run_analysis(scores, permutations, 0, suggestions, bootstrap)
+        if not extended:
+            return StudyAnalysis(scores, run_analysis(scores, permutations), None, errors)
+        suggestions = model_rows(db, scores, include_rehearsal)
+        bootstrap = BootstrapOptions()
+        key = (
+            scores.study.id,
+            scores.study.config_hash,
+            permutations,
+            bootstrap,
+            digest(scores.rows, suggestions),
+        )
+        analysis = analyses.get_or_compute(
+            key, lambda: run_analysis(scores, permutations, 0, suggestions, bootstrap)
+        )
         return StudyAnalysis(scores, analysis, None, errors)
     except AnalysisError as exc:
         return StudyAnalysis(scores, None, f"The analysis cannot run: {exc}", errors)

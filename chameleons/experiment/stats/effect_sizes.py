@@ -1,19 +1,18 @@
 """Effect sizes with seeded bootstrap confidence intervals, per measure.
 
-- **Kendall's W** (the Friedman test's effect size, tie-corrected: ``W = chi2 / (n (k-1))``)
-  with a BCa bootstrap interval over participants.
+- **Kendall's W** (the Friedman test's effect size, tie-corrected: ``W = chi2 / (n (k-1))``).
 - Per pair of conditions (a, b), over the same participants:
   the **matched-pairs rank-biserial correlation** ``r = (T+ - T-) / (T+ + T-)`` (Kerby's
   simple difference formula; ``T+``/``T-`` are the Wilcoxon signed-rank sums of the
   positive/negative differences a - b, zero differences dropped as in the post-hoc test),
-  with a BCa interval; and the **median of the paired differences** a - b with a
-  percentile interval (BCa's jackknife is unreliable for a median of a few discrete values).
+  and the **median of the paired differences** a - b.
 
-Intervals come from ``scipy.stats.bootstrap`` resampling participants (rows stay paired).
-Every interval has its own generator seeded from ``(seed, what it measures)``, so the same
-data, seed and number of resamples give the same interval, whatever else is computed.
-When BCa cannot be computed (a degenerate bootstrap distribution, e.g. every resample
-gives the same value) the percentile interval is reported instead, with a note.
+Intervals are percentile intervals of ``scipy.stats.bootstrap`` resampling participants
+(rows stay paired), as R's ``rcompanion::kendallW`` does by default (``type = "perc"``).
+BCa was tried and rejected: W sits at its boundary 0 when the conditions do not differ,
+and BCa's bias correction then shrinks the interval to a misleading sliver near 0. Every
+interval has its own generator seeded from ``(seed, what it measures)``, so the same data,
+seed and number of resamples give the same interval, whatever else is computed.
 """
 
 from __future__ import annotations
@@ -179,13 +178,15 @@ def effect_sizes(
 
 
 def _kendall_w(data: Array, columns: list[Array], options: BootstrapOptions, key: str) -> Interval:
-    how = "BCa bootstrap over participants"
+    how = "percentile bootstrap over participants"
     if data.shape[0] < 2 or data.shape[1] < 2:
         return Interval(None, None, None, how, "needs at least 2 participants")
     if _all_tied(data):
         return Interval(None, None, None, how, "undefined: every participant's values are tied")
     estimate = float(kendall_w_batch(data[None])[0])
-    low, high, method, note = bootstrap_interval(columns, _w_statistic, options, f"{key}:W", "BCa")
+    low, high, method, note = bootstrap_interval(
+        columns, _w_statistic, options, f"{key}:W", "percentile"
+    )
     return Interval(estimate, low, high, f"{method} bootstrap over participants", note)
 
 
@@ -210,7 +211,7 @@ def _pair(a: str, b: str, x: Array, y: Array, options: BootstrapOptions, key: st
         return PairEffect(a, b, n, 0, undefined, median_interval)
     r = float(rank_biserial_batch(differences[None])[0])
     low, high, method, note = bootstrap_interval(
-        [x, y], _r_statistic, options, f"{key}:{a}-{b}:r", "BCa"
+        [x, y], _r_statistic, options, f"{key}:{a}-{b}:r", "percentile"
     )
     r_interval = Interval(r, low, high, f"{method} bootstrap over participants", note)
     return PairEffect(a, b, n, nonzero, r_interval, median_interval)
