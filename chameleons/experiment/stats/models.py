@@ -319,7 +319,13 @@ def _fit(result: ModelResult, data: pd.DataFrame, factors: list[str], *, binomia
         params = np.asarray(fitted.params, dtype=float)
         names = list(fitted.model.exog_names)
         cov = np.asarray(fitted.cov_params(), dtype=float)[: len(names), : len(names)]
-    except (np.linalg.LinAlgError, ValueError, ZeroDivisionError) as exc:
+    except np.linalg.LinAlgError:
+        result.error = (
+            "the model could not be fitted: its factors are confounded in these data (for "
+            "example every participant met the conditions in the same positions)"
+        )
+        return
+    except (ValueError, ZeroDivisionError) as exc:
         result.error = f"the model could not be fitted: {exc}"
         return
     result.notes += _warning_notes(caught)
