@@ -150,6 +150,9 @@ def test_condition_test_equals_the_repeated_measures_anova() -> None:
     test = model.test("condition")
     assert test is not None
     assert test.chi2 / test.df == pytest.approx(f_value, rel=1e-4)
+    assert test.f == pytest.approx(f_value, rel=1e-4)
+    assert test.df_denominator == int(anova.anova_table.loc["condition", "Den DF"])
+    assert test.p_f == pytest.approx(float(anova.anova_table.loc["condition", "Pr > F"]), rel=1e-3)
 
 
 def test_models_that_cannot_be_fitted_say_why() -> None:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from scipy.stats import chi2 as chi2_distribution
+from scipy.stats import f as f_distribution
 from scipy.stats import norm
 
 Z95 = float(norm.ppf(0.975))
@@ -59,10 +60,16 @@ class Coefficient:
 
 @dataclass(frozen=True)
 class TermTest:
+    """Joint Wald test of a factor; for the mixed models also as an F test with the
+    within-participant residual degrees of freedom (exact for complete balanced data)."""
+
     term: str
     chi2: float
     df: int
     p: float
+    f: float | None = None
+    df_denominator: int | None = None
+    p_f: float | None = None
 
 
 @dataclass
@@ -309,7 +316,7 @@ def _fit(result: ModelResult, data: pd.DataFrame, factors: list[str], *, binomia
                 )
             else:
                 model = smf.mixedlm(f"outcome_value ~ {right}", data, groups=data["participant"])
-                fitted = model.fit(reml=True)
+                fitted = _fit_mixed(model, caught)
                 between, within = float(fitted.cov_re.iloc[0, 0]), float(fitted.scale)
                 result.variance.update(
                     participant_intercept=between,
@@ -331,8 +338,26 @@ def _fit(result: ModelResult, data: pd.DataFrame, factors: list[str], *, binomia
     result.notes += _warning_notes(caught)
     result.coefficients = _coefficients(names, params[: len(names)], cov, binomial)
     result.tests = _term_tests(names, params[: len(names)], cov, factors)
+    if not binomial:
+        # Every fixed effect varies within participants: the "between-within" denominator
+        # df (SAS's DDFM=BETWITHIN) is the within-participant residual df.
+        within = result.n_observations - result.n_participants - (len(names) - 1)
+        result.tests = [_with_f(t, within) for t in result.tests]
     if not all(math.isfinite(c.se) for c in result.coefficients):
         result.error = "the model did not give finite standard errors (separation or no data)"
+
+
+def _fit_mixed(model: Any, caught: list[warnings.WarningMessage]) -> Any:
+    """REML fit; when the gradient optimizers fail (typically with the participant
+    variance at its boundary 0), Nelder-Mead from the same start, keeping the better."""
+    fitted = model.fit(reml=True)
+    if fitted.converged and not any("failed" in str(w.message) for w in caught):
+        return fitted
+    retry = model.fit(reml=True, method=["nm"], maxiter=20_000)
+    if retry.converged and retry.llf >= fitted.llf:
+        caught.clear()  # the first attempt's failures no longer describe the result
+        return retry
+    return fitted
 
 
 def _warning_notes(caught: list[warnings.WarningMessage]) -> list[str]:
@@ -389,6 +414,14 @@ def _term_tests(
         p = float(chi2_distribution.sf(statistic, len(index))) if math.isfinite(statistic) else 1
         tests.append(TermTest(factor, statistic, len(index), p))
     return tests
+
+
+def _with_f(test: TermTest, df_denominator: int) -> TermTest:
+    if df_denominator < 1 or not math.isfinite(test.chi2):
+        return test
+    f = test.chi2 / test.df
+    p = float(f_distribution.sf(f, test.df, df_denominator))
+    return TermTest(test.term, test.chi2, test.df, test.p, f, df_denominator, p)
 
 
 def _words_acceptance(factors: list[str], reference: Mapping[str, str]) -> str:

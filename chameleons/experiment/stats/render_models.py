@@ -6,7 +6,7 @@ from collections.abc import Mapping
 
 from chameleons.experiment.stats.analysis import Analysis
 from chameleons.experiment.stats.effect_sizes import Interval
-from chameleons.experiment.stats.models import Coefficient, ModelResult
+from chameleons.experiment.stats.models import Coefficient, ModelResult, TermTest
 
 UNDEFINED = "undefined"
 
@@ -69,15 +69,19 @@ def models_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
         lines.append(
             f"    {model.n_observations} observations from {model.n_participants} participants"
         )
-        for test in model.tests:
-            lines.append(
-                f"    test of {test.term}: Wald chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}"
-            )
+        lines += [f"    test of {test.term}: {test_text(test)}" for test in model.tests]
         for c in model.coefficients:
             lines.append(f"    {_coefficient_name(c, labels):<28} {_coefficient_text(c)}")
         lines += [f"    note: {n}" for n in model.notes]
     lines += [f"  note: {n}" for n in models.notes]
     return lines
+
+
+def test_text(test: TermTest) -> str:
+    wald = f"Wald chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}"
+    if test.f is None or test.p_f is None:
+        return wald
+    return f"F({test.df}, {test.df_denominator}) = {test.f:.2f}, p = {_p(test.p_f)} ({wald})"
 
 
 def _coefficient_name(c: Coefficient, labels: Mapping[str, str]) -> str:
@@ -137,11 +141,14 @@ def models_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
     rows = []
     for model in fitted:
         condition = model.test("condition")
-        test = (
-            rf" ($\chi^2({condition.df})={condition.chi2:.2f}$, $p={_p(condition.p)}$)"
-            if condition
-            else ""
-        )
+        test = ""
+        if condition and condition.f is not None and condition.p_f is not None:
+            test = (
+                rf" ($F({condition.df}, {condition.df_denominator})={condition.f:.2f}$, "
+                rf"$p={_p(condition.p_f)}$)"
+            )
+        elif condition:
+            test = rf" ($\chi^2({condition.df})={condition.chi2:.2f}$, $p={_p(condition.p)}$)"
         rows.append(rf"    \multicolumn{{3}}{{|l|}}{{{tex(model.name)}{test}}} \\")
         for c in model.coefficients:
             if c.term == "Intercept":
