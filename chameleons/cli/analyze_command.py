@@ -11,12 +11,26 @@ from typing import Any, Literal
 
 import click
 
-from chameleons.experiment.stats import AnalysisError, analyze, render_latex, render_text
+from chameleons.experiment.model import Study
+from chameleons.experiment.stats import (
+    DEFAULT_RULE,
+    DEFAULT_VIEW,
+    VIEWS,
+    WILCOXON_RULES,
+    AnalysisError,
+    View,
+    WilcoxonRule,
+    analyze,
+    render_latex,
+    render_text,
+)
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES, BootstrapOptions
+from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
-from chameleons.experiment.study import load_default_study
+from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
+STUDY_CONFIG_NAME = "study_config.json"
 Rows = list[dict[str, Any]]
 
 
@@ -24,38 +38,49 @@ def analysis_output(
     rows: Iterable[Mapping[str, Any]],
     output_format: str = "text",
     *,
+    study: StudyMeasures | None = None,
+    view: View = DEFAULT_VIEW,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     permutations: int | None = None,
     seed: int = 0,
     alpha: float = 0.05,
     latex_layout: Literal["paper", "wide"] = "paper",
+    row_name: str = "row",
+    first_row: int = 1,
     bootstrap: int = DEFAULT_RESAMPLES,
     models: bool = True,
     suggestions: Iterable[Mapping[str, Any]] | None = None,
     reference: str | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
-    file, the database). ``bootstrap``: resamples for the effect sizes' intervals (0: no
-    effect sizes); ``suggestions``: per-suggestion rows for the acceptance model. Raises
-    ``click.ClickException`` for unusable rows."""
+    file, the database), checked against the study's conditions and scales (default: the
+    built-in study). Raises ``click.ClickException`` for unusable rows."""
+    design = study or study_measures(load_default_study())
     try:
         analysis = analyze(
             rows,
+            measures=design.measures,
+            conditions=design.conditions,
+            scales=design.scales,
+            view=view,
             permutations=permutations,
             seed=seed,
             alpha=alpha,
+            wilcoxon_rule=wilcoxon_rule,
+            row_name=row_name,
+            first_row=first_row,
             bootstrap=BootstrapOptions(bootstrap, seed) if bootstrap else None,
             models=models,
             suggestions=suggestions,
             reference=reference,
         )
     except AnalysisError as exc:
-        raise click.ClickException(str(exc)) from exc
-    labels = {c.id: c.label for c in load_default_study().conditions}
+        raise click.ClickException(f"{exc} Nothing was analysed.") from exc
     if output_format == "json":
         return json.dumps(analysis.to_dict(), indent=2)
     if output_format == "latex":
-        return render_latex(analysis, labels, layout=latex_layout)
-    return render_text(analysis, labels)
+        return render_latex(analysis, design.labels, layout=latex_layout)
+    return render_text(analysis, design.labels)
 
 
 def read_csv_rows(path: Path, required: Iterable[str] = REQUIRED_COLUMNS) -> list[dict[str, str]]:
@@ -93,6 +118,21 @@ def read_suggestions_beside(scores: Path) -> Rows | None:
     )
 
 
+def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | None]:
+    """The study the scores were exported from: ``config`` (a ``study_config.json``), else
+    the one beside the scores file, else the built-in study (with a note saying so)."""
+    path = config or scores.with_name(STUDY_CONFIG_NAME)
+    if config is None and not path.is_file():
+        return load_default_study(), (
+            f"no {STUDY_CONFIG_NAME} beside {scores}: checking the rows against the built-in "
+            "study's conditions and scales (--study-config FILE for another)"
+        )
+    try:
+        return study_from_config(json.loads(path.read_text(encoding="utf-8"))), None
+    except (OSError, ValueError, StudyError) as exc:
+        raise click.ClickException(f"cannot use {path} as the study configuration: {exc}") from exc
+
+
 @click.command("analyze")
 @click.option(
     "--scores",
@@ -101,6 +141,14 @@ def read_suggestions_beside(scores: Path) -> Rows | None:
     default=None,
     help="scores.csv: participant, condition, accepted, credibility, likeability, trust. "
     "Without it, the scores come from the database (CHAMELEONS_DATABASE_URL).",
+)
+@click.option(
+    "--study-config",
+    "config_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help=f"With --scores: the study's {STUDY_CONFIG_NAME} (default: the one beside the "
+    "scores file, else the built-in study). Sets the conditions and the measures' scales.",
 )
 @click.option("--study", "study_id", type=int, help="Database mode: study id (default: newest).")
 @click.option("--include-rehearsal", is_flag=True, help="Database mode: count rehearsals too.")
@@ -116,6 +164,22 @@ def read_suggestions_beside(scores: Path) -> Rows | None:
     type=click.IntRange(min=1),
     default=None,
     help="Add permutation p-values: exact when feasible, else Monte Carlo with N resamples.",
+)
+@click.option(
+    "--view",
+    type=click.Choice(VIEWS),
+    default=DEFAULT_VIEW,
+    show_default=True,
+    help="as_planned: intention to treat, each interaction counts for its planned condition; "
+    "as_run: per protocol, participants with a deviation from the plan are left out.",
+)
+@click.option(
+    "--wilcoxon-rule",
+    type=click.Choice(WILCOXON_RULES),
+    default=DEFAULT_RULE,
+    show_default=True,
+    help="Which R version's wilcox.test the post-hoc tests follow; they differ only for tied "
+    "differences without zeros (R >= 4.6: exact conditional p).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Monte Carlo seed.")
 @click.option(
@@ -154,10 +218,13 @@ def read_suggestions_beside(scores: Path) -> Rows | None:
 )
 def analyze_command(
     scores_path: Path | None,
+    config_path: Path | None,
     study_id: int | None,
     include_rehearsal: bool,
     output_format: str,
     permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
     seed: int,
     alpha: float,
     latex_layout: Literal["paper", "wide"],
@@ -166,21 +233,35 @@ def analyze_command(
     reference: str | None,
 ) -> None:
     """Descriptives, Friedman tests (Bonferroni, Kendall's W), post-hoc tests, effect sizes
-    with bootstrap intervals and the regression models."""
-    suggestions: Rows | None
+    with bootstrap intervals and the regression models.
+
+    Excluded participants leave every test; so do, in the as_run view, participants with a
+    deviation from the plan; a participant without a value in every condition leaves that
+    measure. The output says who and why. Impossible values are refused, naming the line.
+    """
     if scores_path is not None:
-        rows: Any = read_scores_csv(scores_path)
+        rows = read_scores_csv(scores_path)
+        spec, note = study_for_scores(scores_path, config_path)
+        if note:
+            click.echo(f"Note: {note}.", err=True)
+        row_name, first_row = "line", 2  # a CSV file's data start on its second line
         suggestions = read_suggestions_beside(scores_path) if models else None
     else:
-        rows, suggestions = database_rows(study_id, include_rehearsal)
+        spec, rows, suggestions = database_score_rows(study_id, include_rehearsal)
+        row_name, first_row = "row", 1
     click.echo(
         analysis_output(
             rows,
             output_format,
+            study=study_measures(spec),
+            view=view,
+            wilcoxon_rule=wilcoxon_rule,
             permutations=permutations,
             seed=seed,
             alpha=alpha,
             latex_layout=latex_layout,
+            row_name=row_name,
+            first_row=first_row,
             bootstrap=bootstrap,
             models=models,
             suggestions=suggestions,
@@ -189,17 +270,18 @@ def analyze_command(
     )
 
 
-def database_rows(study_id: int | None, include_rehearsal: bool) -> tuple[Rows, Rows]:
-    """The export's scores rows and the acceptance model's rows from the configured database."""
+def database_score_rows(study_id: int | None, include_rehearsal: bool) -> tuple[Study, Rows, Rows]:
+    """The study, the export's scores rows and the acceptance model's rows, read from the
+    configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
-    from chameleons.backend.analysis.service import rows_from_database
+    from chameleons.backend.analysis.service import score_rows_from_database
     from chameleons.backend.export.selection import StudyNotFoundError
     from chameleons.cli.common import load_settings
 
     url = load_settings().effective_database_url
     try:
-        return rows_from_database(url, study_id, include_rehearsal)
+        return score_rows_from_database(url, study_id, include_rehearsal)
     except StudyNotFoundError as exc:
         raise click.ClickException(str(exc)) from exc
     except SQLAlchemyError as exc:

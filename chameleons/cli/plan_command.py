@@ -9,6 +9,7 @@ from pathlib import Path
 
 import click
 
+from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.design import Plan, PlanError, plan, plan_to_dict
 from chameleons.experiment.model import Study
 from chameleons.experiment.study import StudyError, load_default_study, load_study
@@ -98,15 +99,12 @@ def balance_text(result: Plan) -> str:
     report = result.balance
     lines = ["", "Balance (constraint numbers from study.md; 0 = extra safeguard):"]
     for c in report.constraints:
-        verdict = "exact" if c.exact else ("within 1" if c.ok else "UNEVEN")
+        verdict = c.verdict() if c.ok else c.verdict().replace(c.status, c.status.upper(), 1)
         lines.append(
             f"  [{c.constraint}] {c.id:<34} ideal {c.ideal:7.2f}  "
             f"largest deviation {c.max_deviation:5.2f}  {verdict}"
         )
     lines += [f"  note: {note}" for note in result.notes]
-    if report.ok:
-        lines.append("Every count is as even as whole numbers allow.")
-    else:
-        lines.append("Not every count is as even as whole numbers allow:")
-        lines += [f"  - {problem}" for problem in report.problems()]
+    lines.append(balance_summary(report))
+    lines += [f"  - {problem}" for problem in report.problems()]
     return "\n".join(lines)

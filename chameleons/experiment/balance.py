@@ -1,20 +1,33 @@
 """How balanced a set of plan rows is: one count table per constraint of study.md.
 
 Computed from the rows alone (any rows: a fresh plan, or the rows actually used so far),
-never from the planner's own bookkeeping. A table is ``ok`` when every count is within
-less than 1 of its ideal (the best integer counts can do) and ``exact`` when every count
-equals its ideal.
+never from the planner's own bookkeeping. Each table has a status:
+
+- ``exact``: every count equals its ideal;
+- ``within 1``: every count is within less than 1 of its ideal (the best whole numbers
+  can do for a table on its own);
+- ``minimal``: not within 1, but as even as is possible with this many rows given the
+  constraints that come first (:mod:`.balance_bounds` proves the minimum);
+- ``uneven``: more uneven than that (or than 1, where no minimum is known);
+- ``cannot hold``: a requirement that no set of this many rows can meet (every item first
+  and last at least once needs a scenario shown at least as often as it has items).
+
+A table (and the report) is ``ok`` unless it is ``uneven`` or ``cannot hold``.
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import pairwise
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
+from chameleons.experiment.balance_bounds import carry_over_bound, condition_scenario_bound
 from chameleons.experiment.model import Study
+
+Status = Literal["exact", "within 1", "minimal", "uneven", "cannot hold"]
+TOLERANCE = 1e-6
 
 
 class _Interaction(Protocol):
@@ -44,18 +57,46 @@ class ConstraintBalance:
     description: str
     counts: dict[str, int]
     ideal: float
+    lower_bound: float | None = None  # the smallest largest deviation possible, if known
+    impossible: str = ""  # why the requirement cannot hold with these rows ("": it can)
 
     @property
     def max_deviation(self) -> float:
         return max((abs(c - self.ideal) for c in self.counts.values()), default=0.0)
 
     @property
-    def ok(self) -> bool:
+    def within_one(self) -> bool:
         return self.max_deviation < 1 - 1e-9
 
     @property
     def exact(self) -> bool:
         return self.max_deviation < 1e-9
+
+    @property
+    def status(self) -> Status:
+        if self.impossible:
+            return "cannot hold"
+        if self.exact:
+            return "exact"
+        if self.within_one:
+            return "within 1"
+        if self.lower_bound is not None and self.max_deviation <= self.lower_bound + TOLERANCE:
+            return "minimal"
+        return "uneven"
+
+    @property
+    def ok(self) -> bool:
+        return self.status not in ("uneven", "cannot hold")
+
+    def verdict(self) -> str:
+        """The status in words (the plan command and the dashboard)."""
+        if self.status == "minimal":
+            return "minimal possible imbalance"
+        if self.status == "uneven" and self.lower_bound is not None:
+            return f"uneven (the minimum possible is {self.lower_bound:.2f})"
+        if self.status == "cannot hold":
+            return f"cannot hold: {self.impossible}"
+        return self.status
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -65,6 +106,9 @@ class ConstraintBalance:
             "counts": self.counts,
             "ideal": round(self.ideal, 6),
             "max_deviation": round(self.max_deviation, 6),
+            "lower_bound": None if self.lower_bound is None else round(self.lower_bound, 6),
+            "status": self.status,
+            "verdict": self.verdict(),
             "ok": self.ok,
             "exact": self.exact,
         }
@@ -79,12 +123,21 @@ class BalanceReport:
     def ok(self) -> bool:
         return all(c.ok for c in self.constraints)
 
+    @property
+    def minimal(self) -> list[ConstraintBalance]:
+        """Tables that are as even as these rows allow, but not within 1."""
+        return [c for c in self.constraints if c.status == "minimal"]
+
     def problems(self) -> list[str]:
         return [
-            f"{c.id}: a count is {c.max_deviation:.2f} away from its ideal {c.ideal:.2f}"
+            f"{c.id}: {c.impossible}"
+            if c.impossible
+            else f"{c.id}: a count is {c.max_deviation:.2f} away from its ideal {c.ideal:.2f}"
+            + (f" (the minimum possible is {c.lower_bound:.2f})" if c.lower_bound is not None
+               else "")
             for c in self.constraints
             if not c.ok
-        ]
+        ]  # fmt: skip
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -185,7 +238,34 @@ def balance_report(study: Study, rows: Iterable[_Row]) -> BalanceReport:
                Counter(f"{i.condition}/{i.face}" for i in slots),
                [f"{c}/{f}" for c in conditions for f in faces], n / len(faces)),
     ]  # fmt: skip
-    return BalanceReport(n, entries)
+    entries += _at_ends(study, slots, n)
+    return BalanceReport(n, [_with_bound(study, n, entry) for entry in entries])
+
+
+def balance_summary(report: BalanceReport) -> str:
+    """One sentence on the whole report (the plan command and the dashboard)."""
+    people = f"{report.participants} participant{'s' if report.participants != 1 else ''}"
+    if not report.ok:
+        return f"Not every constraint holds with {people}:"
+    if report.minimal:
+        names = ", ".join(c.id for c in report.minimal)
+        return (
+            f"Every count is as even as possible with {people}; {names} cannot be within 1 "
+            "of the ideal (minimal possible imbalance)."
+        )
+    return "Every count is as even as whole numbers allow."
+
+
+BOUNDS = {"carry_over": carry_over_bound, "condition_scenario": condition_scenario_bound}
+
+
+def _with_bound(study: Study, n: int, entry: ConstraintBalance) -> ConstraintBalance:
+    """The provable minimum, for the tables that other constraints can keep from being
+    within 1 (computed only when they are not)."""
+    bound = BOUNDS.get(entry.id)
+    if bound is None or entry.within_one:
+        return entry
+    return replace(entry, lower_bound=bound(study, n))
 
 
 def _table(
@@ -205,6 +285,38 @@ def _repeats(
 
     repeated = sum(len({key(i) for i in s}) < len(s) for s in sessions)
     return ConstraintBalance(name, number, text, {"sessions": repeated}, 0.0)
+
+
+def _at_ends(study: Study, slots: list[_Interaction], n: int) -> list[ConstraintBalance]:
+    """Constraint 8 as study.md words it: every item at least once first and at least once
+    last. It cannot hold while a scenario has been shown fewer times than it has items."""
+    entries = []
+    for scenario in study.scenarios:
+        shown = [i for i in slots if (i.task, i.item_set) == (scenario.task, scenario.item_set)]
+        firsts = {i.item_order[0] for i in shown if i.item_order}
+        lasts = {i.item_order[-1] for i in shown if i.item_order}
+        counts = {
+            "items never first": sum(item not in firsts for item in scenario.items),
+            "items never last": sum(item not in lasts for item in scenario.items),
+        }
+        impossible = ""
+        if n > 0 and len(shown) < len(scenario.items):
+            impossible = (
+                f"with {n} participant{'s' if n != 1 else ''}, {scenario.id} is shown "
+                f"{len(shown)} time{'s' if len(shown) != 1 else ''} for its "
+                f"{len(scenario.items)} items, so not every item can be first and last"
+            )
+        entries.append(
+            ConstraintBalance(
+                f"item_at_ends:{scenario.id}",
+                8,
+                f"every item of {scenario.id} at least once first and at least once last",
+                counts,
+                0.0,
+                impossible=impossible,
+            )
+        )
+    return entries
 
 
 def _first_last(study: Study, slots: list[_Interaction]) -> list[ConstraintBalance]:

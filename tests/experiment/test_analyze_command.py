@@ -6,9 +6,11 @@ import csv
 import json
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from chameleons.cli.main import cli
+from chameleons.experiment.study import load_default_study
 from tests.experiment.test_analysis import score_rows
 
 
@@ -55,7 +57,7 @@ def test_analyze_reports_bad_input_readably(tmp_path: Path) -> None:
     rows[4]["trust"] = "lots"
     code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "bad.csv", rows)))
     assert code == 1
-    assert "row 5, trust: 'lots' is not a number" in err
+    assert "line 6 (participant 2, condition copy), column trust: 'lots' is not a number" in err
     assert "Traceback" not in err
     no_condition = [{"participant": r["participant"], "trust": r["trust"]} for r in score_rows()]
     code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "x.csv", no_condition)))
@@ -63,6 +65,115 @@ def test_analyze_reports_bad_input_readably(tmp_path: Path) -> None:
     assert "missing column(s) condition" in err
     code, _, err = run("analyze", "--scores", str(tmp_path / "x.csv"), "--permutations", "0")
     assert code == 2
+
+
+REFUSALS = [
+    # (row index, column, value, what the sentence must say)
+    (4, "trust", "inf", "'inf' is not a finite number (leave the cell empty, or write NA"),
+    (4, "trust", "NaN", "'NaN' is not a finite number"),
+    (4, "accepted", "4", "'4' is outside 0..3 (accepted suggestions (of 3) takes whole numbers"),
+    (4, "accepted", "-1", "'-1' is outside 0..3"),
+    (4, "accepted", "2.5", "'2.5' is not a whole number"),
+    (4, "credibility", "7.5", "'7.5' is outside 1..7 (the Credibility score"),
+    (4, "likeability", "0", "'0' is outside 1..7"),
+    (
+        4,
+        "condition",
+        "Copy",
+        "'Copy' is not a condition of the study (still, natural, copy); "
+        "did you mean 'copy'? Labels are case-sensitive",
+    ),
+]
+
+
+@pytest.mark.parametrize(("index", "column", "value", "sentence"), REFUSALS)
+def test_each_impossible_value_is_refused_with_row_column_and_value(
+    tmp_path: Path, index: int, column: str, value: str, sentence: str
+) -> None:
+    rows = score_rows()
+    rows[index][column] = value
+    code, out, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
+    assert code == 1, out
+    assert f"line {index + 2} (participant 2" in err
+    assert sentence in err
+    assert "Nothing was analysed" in err
+    assert "Traceback" not in err
+
+
+def test_duplicate_participant_condition_rows_are_refused(tmp_path: Path) -> None:
+    rows = score_rows()
+    rows.append(dict(rows[1]))  # participant 1, copy, again
+    code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
+    assert code == 1
+    assert "lines 3 and 38: participant 1 has copy twice" in err
+
+
+def test_empty_and_na_cells_are_missing_not_refused(tmp_path: Path) -> None:
+    rows = score_rows()
+    rows[0]["trust"] = ""
+    rows[1]["trust"] = "NA"
+    code, out, _ = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
+    assert code == 0
+    assert "1 left out of trust: no value for natural, copy" in out
+
+
+def test_the_study_config_beside_the_scores_sets_conditions_and_scales(tmp_path: Path) -> None:
+    rows = score_rows()
+    write_scores(tmp_path / "scores.csv", rows)
+    code, _, err = run("analyze", "--scores", str(tmp_path / "scores.csv"))
+    assert code == 0
+    assert "no study_config.json beside" in err  # the built-in study, said so
+    spec = load_default_study().config
+    five = {**spec, "suggestions_per_interaction": 5}
+    (tmp_path / "study_config.json").write_text(json.dumps(five), encoding="utf-8")
+    rows[4]["accepted"] = 5  # impossible with 3 suggestions, possible with 5
+    write_scores(tmp_path / "scores.csv", rows)
+    code, _out, err = run("analyze", "--scores", str(tmp_path / "scores.csv"))
+    assert code == 0, err
+    assert "study_config.json" not in err
+    code, _, err = run(
+        "analyze", "--scores", str(tmp_path / "scores.csv"), "--study-config",
+        str(tmp_path / "missing.json"),
+    )  # fmt: skip
+    assert code == 1
+    assert "cannot use" in err
+
+
+def test_views_and_excluded_participants(tmp_path: Path) -> None:
+    rows = score_rows()
+    for row in rows:
+        row.update(planned_condition=row["condition"], deviation="false", excluded="false")
+        row["exclusion_reason"] = ""
+    # Participant 3 ran copy twice (a switch to a condition already run)...
+    natural, copy = rows[6], rows[7]
+    assert (natural["participant"], natural["condition"], copy["condition"]) == (
+        "3", "natural", "copy"
+    )  # fmt: skip
+    natural.update(condition="copy", deviation="true")
+    # ... and participant 5 was excluded by the PI.
+    for row in rows[12:15]:
+        row.update(excluded="true", exclusion_reason="fell asleep")
+    path = write_scores(tmp_path / "scores.csv", rows)
+    code, out, _ = run("analyze", "--scores", str(path), "--format", "json")
+    assert code == 0
+    planned = json.loads(out)
+    assert planned["view"] == "as_planned"
+    assert planned["left_out"] == [
+        {"participant": "5", "reason": "excluded by the PI: fell asleep"}
+    ]
+    assert planned["measures"]["trust"]["friedman"]["n"] == 11
+    code, out, _ = run("analyze", "--scores", str(path), "--format", "json", "--view", "as_run")
+    assert code == 0
+    run_view = json.loads(out)
+    assert [o["participant"] for o in run_view["left_out"]] == ["3", "5"]
+    assert (
+        "deviation from the plan (line 8 ran copy, planned natural)"
+        in run_view["left_out"][0]["reason"]
+    )
+    assert run_view["measures"]["trust"]["friedman"]["n"] == 10
+    code, out, _ = run("analyze", "--scores", str(path))
+    assert "2 in the data" not in out
+    assert "12 participants in the data; 1 left out" in out
 
 
 def test_analyze_json_has_effect_sizes_and_models(tmp_path: Path) -> None:

@@ -193,3 +193,34 @@ def test_analysis_json_has_models_without_nan() -> None:
     assert [t["term"] for t in trust["tests"]] == ["condition", "position"]
     assert trust["formula"] == "trust ~ C(condition) + C(position) + (1 | participant)"
     assert analyze(scores).to_dict()["models"] is None
+
+
+def test_models_follow_the_views_participants_and_conditions() -> None:
+    """Excluded participants leave the models; as planned, a deviating interaction counts
+    for its planned condition; as run, the deviating participant leaves."""
+    scores, suggestions = simulated(n=12, seed=6)
+    for row in scores:
+        row["planned_condition"] = row["condition"]
+        row["excluded"] = row["participant"] == "P000"
+    swapped = {"P001": {"copy": "still", "still": "copy"}}
+    for row in [*scores, *suggestions]:
+        row["planned_condition"] = row["condition"]
+        row["condition"] = swapped.get(row["participant"], {}).get(
+            row["condition"], row["condition"]
+        )
+    planned = analyze(scores, models=True, suggestions=suggestions)
+    run = analyze(scores, models=True, suggestions=suggestions, view="as_run")
+    assert planned.models is not None
+    assert run.models is not None
+    assert planned.models.acceptance is not None
+    assert run.models.acceptance is not None
+    assert planned.models.acceptance.n_participants == 11  # P000 excluded
+    assert run.models.acceptance.n_participants == 10  # and P001 deviated
+    assert planned.models.scores["trust"].n_participants == 11
+    # As planned, P001's interactions count for the planned conditions: the same model as
+    # data in which the swap never happened.
+    unswapped = [{**row, "condition": row["planned_condition"]} for row in suggestions]
+    plain = analyze(scores, models=True, suggestions=unswapped)
+    assert plain.models is not None
+    assert plain.models.acceptance is not None
+    assert plain.models.acceptance.coefficients == planned.models.acceptance.coefficients

@@ -46,9 +46,60 @@ def test_balance_report_is_exact_for_twelve_and_says_where_it_is_not() -> None:
     assert {c.constraint for c in report.constraints} == set(range(9))
     partial = balance_report(study, plan(study, 2, 1).rows)
     carry = next(c for c in partial.constraints if c.id == "carry_over")
-    assert not carry.ok  # two rows of three conditions cannot be even in adjacent pairs
-    assert any(p.startswith("carry_over:") for p in partial.problems())
+    # Two rows of three conditions cannot be even in adjacent pairs once every condition
+    # must be within 1 at each position: uneven, but the least uneven possible.
+    assert not carry.within_one
+    assert carry.status == "minimal"
+    assert carry.ok
+    assert carry.verdict() == "minimal possible imbalance"
     json.dumps(partial.to_dict())
+
+
+def test_balance_says_minimal_possible_where_counts_cannot_be_more_even() -> None:
+    """N = 100: carry-over 1.33 and condition x scenario 1.00 from their ideals are the
+    provable minimum (an integer program over the row kinds), not "UNEVEN"."""
+    study = load_default_study()
+    report = plan(study, 100, 7).balance
+    minimal = {c.id: c for c in report.minimal}
+    assert set(minimal) == {"carry_over", "condition_scenario"}
+    assert minimal["carry_over"].max_deviation == pytest.approx(4 / 3)
+    assert minimal["carry_over"].lower_bound == pytest.approx(4 / 3, abs=1e-6)
+    assert report.ok
+    assert report.problems() == []
+    rows = plan(study, 100, 7).rows
+    # The same 100 rows with one row's conditions reversed: no longer the minimum.
+    first = rows[0]
+    reversed_row = replace(first, interactions=[
+        replace(i, condition=first.interactions[-1 - n].condition)
+        for n, i in enumerate(first.interactions)
+    ])  # fmt: skip
+    worse = balance_report(study, [reversed_row, *rows[1:]])
+    assert any(c.status == "uneven" for c in worse.constraints)
+
+
+def test_every_item_first_and_last_cannot_hold_with_six() -> None:
+    """N = 6: two scenarios are shown 4 times for their 5 items, so constraint 8 (every
+    item at least once first and last) cannot hold, and the report does not say ok."""
+    study = load_default_study()
+    report = plan(study, 6, 7).balance
+    blocked = [c for c in report.constraints if c.status == "cannot hold"]
+    assert blocked
+    assert all(c.id.startswith("item_at_ends:") for c in blocked)
+    assert "shown 4 times for its 5 items" in blocked[0].verdict()
+    assert not report.ok
+    assert any("not every item can be first and last" in p for p in report.problems())
+    assert plan(study, 12, 7).balance.ok
+    out = CliRunner().invoke(cli, ["plan", "-n", "6", "--seed", "7"]).stdout
+    assert "CANNOT HOLD: with 6 participants, desert-" in out
+    assert "Every count is as even" not in out
+
+
+def test_plan_command_words_the_minimum() -> None:
+    out = CliRunner().invoke(cli, ["plan", "-n", "100", "--seed", "7"]).stdout
+    assert "carry_over" in out
+    assert "UNEVEN" not in out
+    assert out.count("minimal possible imbalance") == 3  # two tables and the summary
+    assert "Every count is as even as possible with 100 participants" in out
 
 
 def test_report_counts_what_it_is_given() -> None:

@@ -12,7 +12,6 @@ from chameleons.backend.analysis.plots import (
     MEASURE_TITLES,
     MEDIA_TYPES,
     PlotFormat,
-    paired_values,
     plot_measure,
 )
 from chameleons.backend.analysis.service import (
@@ -20,6 +19,7 @@ from chameleons.backend.analysis.service import (
     StudyAnalysis,
     StudyScores,
     database_scores,
+    run_analysis,
     study_analysis,
 )
 from chameleons.backend.auth.dependencies import CurrentPI
@@ -27,12 +27,31 @@ from chameleons.backend.dashboard.context import page_context, study_or_404
 from chameleons.backend.dependencies import DbSession as Db
 from chameleons.backend.dependencies import Templates
 from chameleons.backend.export.selection import StudyNotFoundError
-from chameleons.experiment.stats import bonferroni, friedman, order_conditions
-from chameleons.experiment.stats.render_models import effect_sizes_latex, models_latex
+from chameleons.experiment.stats import (
+    DEFAULT_RULE,
+    DEFAULT_VIEW,
+    VIEW_TITLES,
+    VIEWS,
+    AnalysisError,
+    View,
+    WilcoxonRule,
+    fmt_p,
+)
+from chameleons.experiment.stats import fmt as fmt_number
+from chameleons.experiment.stats.render import posthoc_text
+from chameleons.experiment.stats.render_models import (
+    effect_sizes_latex,
+    models_latex,
+    number_text,
+    p_text,
+)
+from chameleons.experiment.stats.rounding import RULE
 
 router = APIRouter(tags=["analysis"])
 MAX_PERMUTATIONS = 100_000
 Permutations = Annotated[int | None, Query(ge=1, le=MAX_PERMUTATIONS)]
+ViewQuery = Annotated[View, Query(description="as_planned (intention to treat) or as_run")]
+RuleQuery = Annotated[WilcoxonRule, Query(description="R version whose wilcox.test to follow")]
 
 
 def _load(
@@ -40,13 +59,29 @@ def _load(
     study: int | None,
     include_rehearsal: bool,
     permutations: int | None = None,
+    view: View = DEFAULT_VIEW,
+    wilcoxon: WilcoxonRule = DEFAULT_RULE,
     *,
     extended: bool = True,
 ) -> StudyAnalysis:
     try:
-        return study_analysis(db, study, include_rehearsal, permutations, extended=extended)
+        return study_analysis(
+            db, study, include_rehearsal, permutations, view, wilcoxon, extended=extended
+        )
     except StudyNotFoundError as exc:
         raise HTTPException(status.HTTP_404_NOT_FOUND, str(exc)) from exc
+
+
+def _query(
+    study: int, include_rehearsal: bool, view: View, wilcoxon: WilcoxonRule = DEFAULT_RULE
+) -> str:
+    """The page's query string: what every link and plot of the page must repeat."""
+    query = f"?study={study}&view={view}"
+    if include_rehearsal:
+        query += "&include_rehearsal=true"
+    if wilcoxon != DEFAULT_RULE:
+        query += f"&wilcoxon={wilcoxon.replace('>', '%3E').replace('<', '%3C')}"
+    return query
 
 
 def value_range(scores: StudyScores, measure: str) -> tuple[float, float]:
@@ -58,8 +93,8 @@ def value_range(scores: StudyScores, measure: str) -> tuple[float, float]:
 def friedman_text(chi2: float | None, p_bonferroni: float | None, w: float | None) -> str:
     if chi2 is None or p_bonferroni is None:
         return "Friedman test undefined"
-    text = f"Friedman \u03c7\u00b2 = {chi2:.2f}, p (Bonferroni) = {p_bonferroni:.3g}"
-    return text + (f", W = {w:.2f}" if w is not None else "")
+    text = f"Friedman \u03c7\u00b2 = {fmt_number(chi2, 2)}, p (Bonferroni) = {fmt_p(p_bonferroni)}"
+    return text + (f", W = {fmt_number(w, 3)}" if w is not None else "")
 
 
 @router.get("/pi/analysis", response_class=HTMLResponse)
@@ -71,12 +106,14 @@ def analysis_page(
     study: int | None = None,
     include_rehearsal: bool = False,
     permutations: Permutations = None,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> Response:
     # The first render has the paper's analysis; the effect sizes and models (about a
     # second for a large study) arrive from /pi/analysis/extended after it.
-    result = _load(db, study, include_rehearsal, permutations, extended=False)
+    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon, extended=False)
     found = study_or_404(db, result.scores.study.id)
-    query = f"?study={found.id}" + ("&include_rehearsal=true" if include_rehearsal else "")
+    query = _query(found.id, include_rehearsal, view, wilcoxon)
     context = page_context(
         request,
         user,
@@ -89,6 +126,15 @@ def analysis_page(
         permutations=permutations,
         measure_titles=MEASURE_TITLES,
         error_labels=ERROR_LABELS,
+        view=view,
+        views=VIEW_TITLES,
+        default_view=DEFAULT_VIEW,
+        view_links={v: _query(found.id, include_rehearsal, v, wilcoxon) for v in VIEWS},
+        rehearsal_link=_query(found.id, not include_rehearsal, view, wilcoxon),
+        fmt=fmt_number,
+        fmt_p=fmt_p,
+        posthoc_text=posthoc_text,
+        rounding_rule=RULE,
     )
     return templates.TemplateResponse(request, "pi/analysis.html", context)
 
@@ -102,22 +148,23 @@ def analysis_extended(
     study: int | None = None,
     include_rehearsal: bool = False,
     permutations: Permutations = None,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> Response:
     """The page's effect-size and model sections (an HTML fragment the page fetches)."""
-    result = _load(db, study, include_rehearsal, permutations)
+    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon)
     labels = result.scores.condition_labels
-    latex = (
-        "\n".join(
-            effect_sizes_latex(result.analysis, labels) + models_latex(result.analysis, labels)
-        )
-        if result.analysis
-        else ""
-    )
+    latex = ""
+    if result.analysis:
+        tables = effect_sizes_latex(result.analysis, labels) + models_latex(result.analysis, labels)
+        latex = "\n".join(tables)
     context = {
         "result": result,
         "analysis": result.analysis,
         "measure_titles": MEASURE_TITLES,
         "extended_latex": latex,
+        "number": number_text,
+        "p_text": p_text,
     }
     return templates.TemplateResponse(
         request, "pi/analysis_extended.html", context, headers={"Cache-Control": "no-store"}
@@ -132,6 +179,8 @@ def analysis_plot(
     db: Db,
     study: int | None = None,
     include_rehearsal: bool = False,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> Response:
     try:
         scores = database_scores(db, study, include_rehearsal)
@@ -139,28 +188,39 @@ def analysis_plot(
         raise HTTPException(status.HTTP_404_NOT_FOUND, str(exc)) from exc
     if measure not in scores.measures:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no measure {measure!r}.")
-    # Only the omnibus test for the subtitle: post-hoc tests are not needed for a plot.
-    conditions = order_conditions({str(row["condition"]) for row in scores.rows})
-    test = friedman(paired_values(scores.rows, measure, conditions))
+    try:
+        # The same analysis as the page (same view, same participants), without the extras.
+        whole = run_analysis(scores, view=view, wilcoxon_rule=wilcoxon)
+    except AnalysisError as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"The analysis cannot run: {exc}") from exc
+    if measure not in whole.measures:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"There are no {measure} values yet.")
+    analysis = whole.measures[measure]
+    test = analysis.friedman
     image = plot_measure(
-        scores.rows,
+        list(analysis.values.values()),
         measure,
-        conditions,
+        whole.conditions,
         scores.condition_labels,
         value_range(scores, measure),
-        friedman_text(test.chi2, bonferroni(test.p, len(scores.measures)), test.kendall_w),
+        friedman_text(test.chi2, analysis.p_bonferroni, test.kendall_w),
         fmt,
     )
-    name = f"{measure}-study{scores.study.id}.{fmt}"
+    name = f"{measure}-study{scores.study.id}-{view}.{fmt}"
     headers = {"Content-Disposition": f'inline; filename="{name}"', "Cache-Control": "no-store"}
     return Response(image, media_type=MEDIA_TYPES[fmt], headers=headers)
 
 
 @router.get("/pi/analysis/table1.tex", response_class=PlainTextResponse)
 def table_latex(
-    _pi: CurrentPI, db: Db, study: int | None = None, include_rehearsal: bool = False
+    _pi: CurrentPI,
+    db: Db,
+    study: int | None = None,
+    include_rehearsal: bool = False,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> PlainTextResponse:
-    result = _load(db, study, include_rehearsal)
+    result = _load(db, study, include_rehearsal, None, view, wilcoxon)
     if result.analysis is None:
         raise HTTPException(status.HTTP_409_CONFLICT, result.error or "No analysis.")
     return PlainTextResponse(result.latex + "\n")
@@ -173,15 +233,18 @@ def analysis_api(
     study: int | None = None,
     include_rehearsal: bool = False,
     permutations: Permutations = None,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> dict[str, Any]:
-    result = _load(db, study, include_rehearsal, permutations)
+    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon)
     errors = {
-        column: {c: d.__dict__ for c, d in per_condition.items()}
+        column: {c: d.to_dict() for c, d in per_condition.items()}
         for column, per_condition in result.errors.items()
     }
     return {
         "study": {"id": result.scores.study.id, "config_hash": result.scores.study.config_hash},
         "include_rehearsal": include_rehearsal,
+        "view": view,
         "error": result.error,
         "analysis": result.analysis.to_dict() if result.analysis else None,
         "error_scores": errors,

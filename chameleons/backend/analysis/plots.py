@@ -28,30 +28,13 @@ LINE_COLOUR = "#5b6575"
 BOX_COLOUR = "#1f6feb"
 
 
-def paired_values(
-    rows: Sequence[Mapping[str, Any]], measure: str, conditions: Sequence[str]
-) -> list[list[float]]:
-    """Per participant with a value in every condition: the values in condition order."""
-    table: dict[str, dict[str, float]] = {}
-    for row in rows:
-        value = row.get(measure)
-        if value is None or value == "":
-            continue
-        table.setdefault(str(row["participant"]), {})[str(row["condition"])] = float(value)
-    return [
-        [values[c] for c in conditions]
-        for _, values in sorted(table.items())
-        if all(c in values for c in conditions)
-    ]
-
-
 def _jitter(index: int, spread: float) -> float:
     """A fixed small offset per participant, so tied lines stay visible (deterministic)."""
     return ((index * 7919) % 11 - 5) / 5 * spread
 
 
 def plot_measure(
-    rows: Sequence[Mapping[str, Any]],
+    participants: Sequence[Sequence[float]],
     measure: str,
     conditions: Sequence[str],
     labels: Mapping[str, str],
@@ -59,10 +42,11 @@ def plot_measure(
     subtitle: str = "",
     fmt: PlotFormat = "svg",
 ) -> bytes:
+    """``participants``: the analysed values, one list per participant in condition order
+    (the analysis' own complete cases, so the plot shows exactly what was tested)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    participants = paired_values(rows, measure, conditions)
     figure = Figure(figsize=(4.6, 3.8), dpi=110, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()

@@ -19,15 +19,20 @@ from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.stats import (
+    DEFAULT_RULE,
+    DEFAULT_VIEW,
     Analysis,
     AnalysisError,
     Descriptive,
+    View,
+    WilcoxonRule,
     analyze,
     error_score_table,
     render_latex,
     render_text,
 )
 from chameleons.experiment.stats.effect_sizes import BootstrapOptions
+from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import study_from_config
 
@@ -45,12 +50,20 @@ class StudyScores:
     rows: list[dict[str, Any]]
 
     @property
+    def design(self) -> StudyMeasures:
+        return study_measures(self.spec)
+
+    @property
     def condition_labels(self) -> dict[str, str]:
-        return {condition.id: condition.label for condition in self.spec.conditions}
+        return self.design.labels
 
     @property
     def measures(self) -> tuple[str, ...]:
         return self.spec.measures
+
+    @property
+    def participant_count(self) -> int:
+        return len({row["participant"] for row in self.rows})
 
 
 @dataclass
@@ -96,16 +109,23 @@ def run_analysis(
     scores: StudyScores,
     permutations: int | None = None,
     seed: int = 0,
+    view: View = DEFAULT_VIEW,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     suggestions: list[dict[str, Any]] | None = None,
     bootstrap: BootstrapOptions | None = None,
 ) -> Analysis:
     """The paper's analysis plus effect sizes (``bootstrap``) and the models (the
     acceptance model when ``suggestions`` are given)."""
+    design = scores.design
     return analyze(
         scores.rows,
-        measures=scores.measures,
+        measures=design.measures,
+        conditions=design.conditions,
+        scales=design.scales,
+        view=view,
         permutations=permutations,
         seed=seed,
+        wilcoxon_rule=wilcoxon_rule,
         bootstrap=bootstrap,
         models=suggestions is not None,
         suggestions=suggestions,
@@ -113,12 +133,20 @@ def run_analysis(
 
 
 def error_scores(
-    db: DbSession, scores: StudyScores, include_rehearsal: bool = False
+    db: DbSession,
+    scores: StudyScores,
+    include_rehearsal: bool = False,
+    analysis: Analysis | None = None,
 ) -> dict[str, dict[str, Descriptive]]:
-    """Survival-task error scores per condition: before, after and their change."""
+    """Survival-task error scores per condition: before, after and their change; with an
+    ``analysis``, of the same participants and conditions as its view."""
     rows: Iterable[dict[str, Any]] = interaction_rows(
         db, scores.study, scores.spec, include_rehearsal
     )
+    if analysis is not None:
+        kept = set(analysis.participants)
+        column = "planned_condition" if analysis.view == "as_planned" else "condition"
+        rows = [{**row, "condition": row[column]} for row in rows if row["participant"] in kept]
     return error_score_table(rows)
 
 
@@ -127,6 +155,8 @@ def study_analysis(
     study_id: int | None = None,
     include_rehearsal: bool = False,
     permutations: int | None = None,
+    view: View = DEFAULT_VIEW,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     *,
     extended: bool = True,
 ) -> StudyAnalysis:
@@ -135,33 +165,50 @@ def study_analysis(
     ``extended``: with the effect sizes and the models (cached per input, see
     :mod:`.cache`); without, only the paper's analysis (the page's first render)."""
     scores = database_scores(db, study_id, include_rehearsal)
-    errors = error_scores(db, scores, include_rehearsal)
     if not scores.rows:
+        errors = error_scores(db, scores, include_rehearsal)
         return StudyAnalysis(scores, None, "No counted sessions yet: nothing to analyse.", errors)
     try:
-        if not extended:
-            return StudyAnalysis(scores, run_analysis(scores, permutations), None, errors)
-        suggestions = model_rows(db, scores, include_rehearsal)
-        bootstrap = BootstrapOptions()
-        key = (
-            scores.study.id,
-            scores.study.config_hash,
-            permutations,
-            bootstrap,
-            digest(scores.rows, suggestions),
-        )
-        analysis = analyses.get_or_compute(
-            key, lambda: run_analysis(scores, permutations, 0, suggestions, bootstrap)
-        )
-        return StudyAnalysis(scores, analysis, None, errors)
+        if extended:
+            analysis = _extended(db, scores, include_rehearsal, permutations, view, wilcoxon_rule)
+        else:
+            analysis = run_analysis(scores, permutations, view=view, wilcoxon_rule=wilcoxon_rule)
     except AnalysisError as exc:
+        errors = error_scores(db, scores, include_rehearsal)
         return StudyAnalysis(scores, None, f"The analysis cannot run: {exc}", errors)
+    errors = error_scores(db, scores, include_rehearsal, analysis)
+    return StudyAnalysis(scores, analysis, None, errors)
 
 
-def rows_from_database(
+def _extended(
+    db: DbSession,
+    scores: StudyScores,
+    include_rehearsal: bool,
+    permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
+) -> Analysis:
+    suggestions = model_rows(db, scores, include_rehearsal)
+    bootstrap = BootstrapOptions()
+    key = (
+        scores.study.id,
+        scores.study.config_hash,
+        permutations,
+        view,
+        wilcoxon_rule,
+        bootstrap,
+        digest(scores.rows, suggestions),
+    )
+    return analyses.get_or_compute(
+        key,
+        lambda: run_analysis(scores, permutations, 0, view, wilcoxon_rule, suggestions, bootstrap),
+    )
+
+
+def score_rows_from_database(
     database_url: str, study_id: int | None = None, include_rehearsal: bool = False
-) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """The scores table and the acceptance model's rows straight from a database
+) -> tuple[StudySpec, list[dict[str, Any]], list[dict[str, Any]]]:
+    """The study, its scores table and the acceptance model's rows straight from a database
     (``chameleons analyze`` without a file)."""
     from chameleons.backend.db import build_engine, build_sessionmaker
 
@@ -169,6 +216,6 @@ def rows_from_database(
     try:
         with build_sessionmaker(engine)() as db:
             scores = database_scores(db, study_id, include_rehearsal)
-            return scores.rows, model_rows(db, scores, include_rehearsal)
+            return scores.spec, scores.rows, model_rows(db, scores, include_rehearsal)
     finally:
         engine.dispose()

@@ -16,6 +16,7 @@ from chameleons.backend.dependencies import AppSettings, DbSession, Templates
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.withdrawal.files import recording_file
+from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.study import study_from_config
 
 router = APIRouter(tags=["dashboard"])
@@ -33,6 +34,7 @@ def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str,
     return {
         "progress": plan_progress(db, study),
         "balance": report,
+        "balance_summary": balance_summary(report),
         "balance_tables": tables,
         "sessions": session_summaries(db, study, spec),
         "include_rehearsal": include_rehearsal,

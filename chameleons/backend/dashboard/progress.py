@@ -67,6 +67,8 @@ class BalanceTable:
     max_deviation: float
     ok: bool
     differs_from_plan: bool
+    status: str
+    verdict: str
     cells: list[BalanceCell] = field(default_factory=list)
 
 
@@ -176,6 +178,8 @@ def live_balance(
                 constraint.max_deviation,
                 constraint.ok,
                 any(cell.planned != cell.actual for cell in cells),
+                constraint.status,
+                constraint.verdict(),
                 cells,
             )
         )

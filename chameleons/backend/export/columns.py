@@ -59,6 +59,38 @@ def _list(name: str, what: str) -> Column:
     return Column(name, "string", f"{what}; item ids joined by '{LIST_SEPARATOR}', first = rank 1.")
 
 
+def _decided(spec: StudySpec) -> Column:
+    n = spec.suggestions_per_interaction
+    return Column(
+        "suggestions_decided",
+        "integer",
+        f"How many of the interaction's {n} suggestions were decided (accepted or declined);"
+        f" below {n}: the negotiation was not finished.",
+        f"0..{n}",
+    )
+
+
+def _interaction_status() -> Column:
+    return Column(
+        "interaction_status",
+        "string",
+        "complete: every step done; partial: started but not finished (e.g. the session"
+        " ended early); not_run: never started (missing, not zero).",
+        "complete, partial, not_run",
+    )
+
+
+def _accepted(spec: StudySpec, what: str) -> Column:
+    n = spec.suggestions_per_interaction
+    return Column(
+        "accepted",
+        "integer",
+        f"{what} MISSING (empty) unless all {n} suggestions were decided: an interaction that"
+        " never ran or stopped early has no count (never 0).",
+        f"0..{n}",
+    )
+
+
 def participants_table(spec: StudySpec) -> TableSpec:
     return TableSpec(
         "participants",
@@ -123,7 +155,9 @@ def interactions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "final_error", "integer", "Error score of the final ranking (as initial_error)."
             ),
-            Column("accepted", "integer", "Suggestions the participant accepted.", "0..3"),
+            _accepted(spec, "Suggestions the participant accepted."),
+            _decided(spec),
+            _interaction_status(),
             _time("started_at", "Interaction start"),
             _time("ended_at", "Interaction end"),
             Column("duration_s", "number", "Interaction duration in seconds."),
@@ -219,14 +253,13 @@ def scores_table(spec: StudySpec) -> TableSpec:
     scored = [q for q in spec.questionnaires_for("interaction") if q.scored]
     return TableSpec(
         "scores",
-        "One row per participant x condition: the analysed measures (input to the Friedman tests).",
+        "One row per participant x planned interaction: the analysed measures (input to the"
+        " Friedman tests); interactions that did not run are rows with empty measures.",
         (
             _participant(),
             _condition(spec),
             _position(),
-            Column(
-                "accepted", "integer", "Accepted robot suggestions in that interaction.", "0..3"
-            ),
+            _accepted(spec, "Accepted robot suggestions in that interaction."),
             *(
                 Column(
                     q.id,
@@ -236,6 +269,29 @@ def scores_table(spec: StudySpec) -> TableSpec:
                     f"1..{q.points}",
                 )
                 for q in scored
+            ),
+            Column(
+                "planned_condition",
+                "string",
+                "Condition the plan prescribed: the as-planned (intention-to-treat) analysis"
+                " groups by it.",
+                ", ".join(spec.condition_ids),
+            ),
+            Column(
+                "deviation",
+                "boolean",
+                "The condition run differs from the planned one: the as-run (per-protocol)"
+                " analysis leaves the participant out.",
+            ),
+            _decided(spec),
+            _interaction_status(),
+            Column(
+                "session_status",
+                "string",
+                "The participant's session: complete, in_progress, not_started (registered,"
+                " never started) or ended_early (ended by the wizard; reason in"
+                " participants.csv).",
+                "complete, in_progress, not_started, ended_early",
             ),
         ),
     )

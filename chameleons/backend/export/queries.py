@@ -1,7 +1,10 @@
-"""Queries shared by the export tables, the scores and the dashboard."""
+"""Queries shared by the export tables, the scores and the dashboard, and the rules that
+turn what was recorded into measures: an interaction that never ran, or whose suggestions
+were not all decided, has no ``accepted`` count (missing, never 0)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy import ColumnElement, Select, false, select
@@ -26,27 +29,84 @@ def joined(query: Select[Any], study_id: int, include_rehearsal: bool) -> Select
     )
 
 
-def accepted_counts(db: DbSession, interaction_ids: list[int]) -> dict[int, int]:
-    counts = dict.fromkeys(interaction_ids, 0)
-    if not interaction_ids:
-        return counts
-    query = select(Suggestion.interaction_id, Suggestion.accepted).where(
-        Suggestion.interaction_id.in_(interaction_ids)
-    )
-    for interaction_id, accepted in db.execute(query):
-        if accepted:
-            counts[interaction_id] += 1
-    return counts
+INTERACTION_STATUSES = ("complete", "partial", "not_run")
+SESSION_STATUSES = ("complete", "in_progress", "not_started", "ended_early")
+
+
+@dataclass(frozen=True)
+class Decisions:
+    decided: int
+    accepted: int
+
+
+@dataclass(frozen=True)
+class InteractionRecord:
+    """A counted interaction with its session, participant and suggestion decisions."""
+
+    interaction: Interaction
+    session: Session
+    participant: Participant
+    decisions: Decisions
+
+    @property
+    def code(self) -> str:
+        return self.participant.code
+
+    def accepted(self, suggestions: int) -> int | None:
+        """Accepted suggestions, only when all ``suggestions`` were decided (else missing)."""
+        return self.decisions.accepted if self.decisions.decided >= suggestions else None
+
+    @property
+    def status(self) -> str:
+        return interaction_status(self.interaction)
+
+
+def interaction_status(interaction: Interaction) -> str:
+    """complete (all steps done), partial (started, not finished) or not_run."""
+    if interaction.state == "done":
+        return "complete"
+    if interaction.state == "pending" and interaction.started_at is None:
+        return "not_run"
+    return "partial"
+
+
+def session_status(session: Session) -> str:
+    if session.state == "complete":
+        return "complete"
+    if session.state == "ended":
+        return "ended_early"
+    if session.state == "pending":
+        return "not_started"
+    return "in_progress"
+
+
+def decisions(db: DbSession, interaction_ids: list[int]) -> dict[int, Decisions]:
+    """Per interaction: how many suggestions were decided, and how many of them accepted."""
+    decided = dict.fromkeys(interaction_ids, 0)
+    accepted = dict.fromkeys(interaction_ids, 0)
+    if interaction_ids:
+        query = select(Suggestion.interaction_id, Suggestion.accepted).where(
+            Suggestion.interaction_id.in_(interaction_ids), Suggestion.accepted.is_not(None)
+        )
+        for interaction_id, was_accepted in db.execute(query):
+            decided[interaction_id] += 1
+            accepted[interaction_id] += int(bool(was_accepted))
+    return {i: Decisions(decided[i], accepted[i]) for i in interaction_ids}
 
 
 def counted_interactions(
     db: DbSession, study_id: int, include_rehearsal: bool
-) -> list[tuple[Interaction, str]]:
-    """The counted interactions with their participant codes, in code/session/position order."""
-    query = select(Interaction, Participant.code).join(
+) -> list[InteractionRecord]:
+    """The counted interactions, in participant code / session / position order."""
+    query = select(Interaction, Session, Participant).join(
         Session, Session.id == Interaction.session_id
     )
     query = joined(query, study_id, include_rehearsal).order_by(
         Participant.code, Session.id, Interaction.position
     )
-    return [(interaction, code) for interaction, code in db.execute(query).tuples()]
+    found = list(db.execute(query).tuples())
+    counts = decisions(db, [interaction.id for interaction, _, _ in found])
+    return [
+        InteractionRecord(interaction, session, participant, counts[interaction.id])
+        for interaction, session, participant in found
+    ]

@@ -18,7 +18,6 @@ from sqlalchemy.orm import Session as DbSession
 from chameleons.backend.export.columns import LIST_SEPARATOR
 from chameleons.backend.export.queries import (
     BATCH,
-    accepted_counts,
     counted_interactions,
     joined,
     session_filter,
@@ -81,13 +80,12 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
 def interaction_rows(
     db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
 ) -> Iterator[Row]:
-    interactions = counted_interactions(db, study.id, include_rehearsal)
-    accepted = accepted_counts(db, [i.id for i, _ in interactions])
     actors = {actor.id: actor for actor in spec.actors}
-    for interaction, code in interactions:
+    for record in counted_interactions(db, study.id, include_rehearsal):
+        interaction = record.interaction
         actor = actors.get(interaction.actor)
         yield {
-            "participant": code,
+            "participant": record.code,
             "session": interaction.session_id,
             "position": interaction.position,
             "planned_condition": interaction.planned_condition,
@@ -104,7 +102,9 @@ def interaction_rows(
             "final_ranking": _joined_list(interaction.final_ranking),
             "initial_error": error_score(spec, interaction.task, interaction.initial_ranking),
             "final_error": error_score(spec, interaction.task, interaction.final_ranking),
-            "accepted": accepted[interaction.id],
+            "accepted": record.accepted(spec.suggestions_per_interaction),
+            "suggestions_decided": record.decisions.decided,
+            "interaction_status": record.status,
             "started_at": iso(interaction.started_at),
             "ended_at": iso(interaction.ended_at),
             "duration_s": _seconds(interaction.started_at, interaction.ended_at),

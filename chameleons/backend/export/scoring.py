@@ -1,8 +1,10 @@
 """Per-interaction measures: accepted suggestions, questionnaire scores, ranking error.
 
-The scores table (one row per participant x condition) is what the analysis reads, from
-the database as well as from an exported ``scores.csv``; both go through
-:func:`score_rows`, so the two paths cannot disagree.
+The scores table (one row per participant x interaction: every planned interaction, run or
+not) is what the analysis reads, from the database as well as from an exported
+``scores.csv``; both go through :func:`score_rows`, so the two paths cannot disagree. A
+measure that was not recorded is missing (empty), never 0: ``accepted`` needs every
+suggestion of the interaction decided, a questionnaire score every item answered.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.queries import accepted_counts, counted_interactions
+from chameleons.backend.export.queries import counted_interactions, session_status
 from chameleons.backend.models import QuestionnaireResponse, Study
 from chameleons.experiment import suggestions
 from chameleons.experiment.model import Questionnaire
@@ -70,22 +72,30 @@ def score_rows(
     db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
 ) -> list[dict[str, Any]]:
     """One row per counted interaction (= participant x condition when the plan was kept)."""
-    interactions = counted_interactions(db, study.id, include_rehearsal)
-    ids = [interaction.id for interaction, _ in interactions]
-    accepted = accepted_counts(db, ids)
-    answers = _answers_by_interaction(db, ids)
+    records = counted_interactions(db, study.id, include_rehearsal)
+    answers = _answers_by_interaction(db, [record.interaction.id for record in records])
     scored = [q for q in spec.questionnaires_for("interaction") if q.scored]
     rows = []
-    for interaction, code in interactions:
+    for record in records:
+        interaction = record.interaction
         row: dict[str, Any] = {
-            "participant": code,
+            "participant": record.code,
             "condition": interaction.condition,
             "position": interaction.position,
-            "accepted": accepted[interaction.id],
+            "accepted": record.accepted(spec.suggestions_per_interaction),
         }
         for questionnaire in scored:
             row[questionnaire.id] = questionnaire_score(
                 questionnaire, answers[interaction.id][questionnaire.id]
             )
+        row.update(
+            {
+                "planned_condition": interaction.planned_condition,
+                "deviation": interaction.condition != interaction.planned_condition,
+                "suggestions_decided": record.decisions.decided,
+                "interaction_status": record.status,
+                "session_status": session_status(record.session),
+            }
+        )
         rows.append(row)
     return rows

@@ -3,9 +3,11 @@
 For each measure: descriptives per condition, the Friedman test across conditions with a
 Bonferroni correction over the measures (p x m, capped at 1), Kendall's W, optionally a
 permutation p-value, and pairwise Wilcoxon signed-rank tests (Bonferroni over the pairs)
-only where the corrected Friedman p is below alpha. A participant without a value for
-every condition of a measure is left out of that measure, with a note; descriptives are
-over the same complete cases as the test, so the table and the test describe the same data.
+only where the corrected Friedman p is below alpha. Rows are read and checked by
+:mod:`.scores` (the view, exclusions, refusals). A participant without a value for every
+condition of a measure is left out of that measure, with a note saying why; descriptives
+are over the same complete cases as the test, so the table and the test describe the same
+data.
 """
 
 from __future__ import annotations
@@ -32,15 +34,32 @@ from chameleons.experiment.stats.friedman_test import (
 )
 from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
 from chameleons.experiment.stats.numbers import finite
+from chameleons.experiment.stats.scores import (
+    DEFAULT_VIEW,
+    VIEW_TITLES,
+    AnalysisError,
+    LeftOut,
+    Reader,
+    Scale,
+    ScoreTable,
+    View,
+    missing_reason,
+)
+from chameleons.experiment.stats.wilcoxon import DEFAULT_RULE, WilcoxonRule
 
 DEFAULT_MEASURES = ("accepted", "credibility", "likeability", "trust")
 PAPER_CONDITION_ORDER = ("natural", "copy", "still")
 PAPER_REFERENCE = "still"  # the models' default baseline: the robot without facial gestures
-MISSING = {"", "na", "nan", "none", "null"}
-
-
-class AnalysisError(ValueError):
-    """The score rows cannot be analysed (e.g. a value is not a number)."""
+__all__ = [
+    "DEFAULT_MEASURES",
+    "PAPER_CONDITION_ORDER",
+    "Analysis",
+    "AnalysisError",
+    "MeasureAnalysis",
+    "Scale",
+    "analyze",
+    "order_conditions",
+]
 
 
 @dataclass(frozen=True)
@@ -53,9 +72,10 @@ class MeasureAnalysis:
     permutation_p_bonferroni: float | None
     posthoc: list[PairwiseTest]
     posthoc_note: str
-    excluded: list[str]
+    excluded: list[str]  # participants without a value in every condition of this measure
     notes: list[str]
-    blocks: list[list[float]] = field(default_factory=list, repr=False)
+    # The analysed values: participant -> one value per condition (the plots draw these).
+    values: dict[str, list[float]] = field(default_factory=dict, compare=False, repr=False)
     effect_sizes: EffectSizes | None = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -77,9 +97,9 @@ class MeasureAnalysis:
                 "p_bonferroni": self.permutation_p_bonferroni,
             }
         return {
-            "conditions": {c: asdict(d) for c, d in self.conditions.items()},
+            "conditions": {c: d.to_dict() for c, d in self.conditions.items()},
             "friedman": friedman_dict,
-            "posthoc": [asdict(t) for t in self.posthoc],
+            "posthoc": [t.to_dict() for t in self.posthoc],
             "posthoc_note": self.posthoc_note,
             "excluded_participants": self.excluded,
             "notes": self.notes,
@@ -93,12 +113,41 @@ class Analysis:
     measures: dict[str, MeasureAnalysis]
     alpha: float
     notes: list[str]
+    view: View = DEFAULT_VIEW
+    participants: list[str] = field(default_factory=list)  # in the view (before per-measure)
+    left_out: list[LeftOut] = field(default_factory=list)  # whole participants, with why
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE
     models: Models | None = None
+
+    @property
+    def view_title(self) -> str:
+        return VIEW_TITLES[self.view]
+
+    def summary(self) -> str:
+        """How many participants the tests use and why others are not in them."""
+        total = len(self.participants) + len(self.left_out)
+        text = f"{total} participant{'s' if total != 1 else ''} in the data"
+        if self.left_out:
+            text += f"; {len(self.left_out)} left out of every test: " + "; ".join(
+                f"{out.participant} ({out.reason})" for out in self.left_out
+            )
+        per_measure = [
+            f"{m} n = {r.friedman.n}" + (f" (incomplete: {', '.join(r.excluded)})" if r.excluded
+                                          else "")
+            for m, r in self.measures.items()
+        ]  # fmt: skip
+        return f"{text}. Analysed {self.view_title}: {'; '.join(per_measure)}."
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "view": self.view,
+            "view_title": self.view_title,
             "conditions": self.conditions,
             "alpha": self.alpha,
+            "participants": self.participants,
+            "left_out": [asdict(out) for out in self.left_out],
+            "summary": self.summary(),
+            "wilcoxon_rule": self.wilcoxon_rule,
             "measures": {m: a.to_dict() for m, a in self.measures.items()},
             "notes": self.notes,
             "models": finite(self.models.to_dict()) if self.models else None,
@@ -110,56 +159,140 @@ def analyze(
     *,
     measures: Sequence[str] | None = None,
     condition_order: Sequence[str] | None = None,
+    conditions: Sequence[str] | None = None,
+    scales: Mapping[str, Scale] | None = None,
+    view: View = DEFAULT_VIEW,
     alpha: float = 0.05,
     permutations: int | None = None,
     seed: int = 0,
+    wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
+    row_name: str = "row",
+    first_row: int = 1,
     bootstrap: BootstrapOptions | None = None,
     models: bool = False,
     suggestions: Iterable[Mapping[str, Any]] | None = None,
     reference: str | None = None,
 ) -> Analysis:
-    """Analyse score rows (keys ``participant``, ``condition`` and one per measure).
+    """Analyse score rows (keys ``participant``, ``condition`` and one per measure; optional
+    ``planned_condition``, ``position``, ``deviation``, ``excluded``, ``exclusion_reason``,
+    ``interaction_status``, as the export's scores table has them).
 
-    ``permutations``: when given, add a permutation p-value per measure (exact when
-    feasible, otherwise Monte Carlo with that many resamples and ``seed``).
-    ``bootstrap``: add effect sizes with bootstrap intervals per measure.
-    ``models``: fit the regression models (:mod:`.models`): the score models from the
-    rows (they need ``position``), the acceptance model from ``suggestions`` (per-suggestion
-    rows), both against the ``reference`` condition (default: still, else the first)."""
+    ``conditions``: the study's condition ids (a row with another label is refused);
+    ``condition_order``: the columns' order (default: the paper's, then the rest sorted);
+    ``scales``: the values each measure can take (others are refused);
+    ``view``: ``as_planned`` or ``as_run`` (see :mod:`.scores`); ``permutations``: add a
+    permutation p-value per measure (exact when feasible, otherwise Monte Carlo with that
+    many resamples and ``seed``); ``row_name``/``first_row``: how refusals number the rows
+    (a CSV file's data start on line 2).
+
+    ``bootstrap``: add effect sizes with bootstrap intervals per measure (over the
+    participants of its Friedman test). ``models``: fit the regression models
+    (:mod:`.models`) on the participants of the view, conditions as the view counts them:
+    the score models from the rows (with their ``position``), the acceptance model from
+    ``suggestions`` (per-suggestion rows), against ``reference`` (default: still, else the
+    first condition)."""
     rows = list(rows)
-    table, present = _read(rows, measures)
-    conditions = order_conditions({c for _, c in _keys(table)}, condition_order)
-    chosen = [m for m in (measures or DEFAULT_MEASURES) if m in present]
+    wanted = list(measures or DEFAULT_MEASURES)
+    reader = Reader(wanted, conditions, scales or {}, view, row_name, first_row)
+    table = reader.read(rows)
+    found = table.conditions if conditions is None else table.conditions | set(conditions)
+    ordered = order_conditions(found, condition_order)
+    chosen = [m for m in wanted if m in table.measures]
     if not chosen:
-        raise AnalysisError(f"no measure columns found (expected some of {list(DEFAULT_MEASURES)})")
+        raise AnalysisError(f"no measure columns found (expected some of {wanted})")
     results = {
-        m: _analyze_measure(m, table, conditions, len(chosen), alpha, permutations, seed)
+        m: _analyze_measure(m, table, ordered, len(chosen), alpha, permutations, seed,
+                            wilcoxon_rule)
         for m in chosen
-    }
+    }  # fmt: skip
     if bootstrap is not None:
-        results = {m: _with_effect_sizes(r, conditions, bootstrap) for m, r in results.items()}
+        results = {m: _with_effect_sizes(r, ordered, bootstrap) for m, r in results.items()}
     fitted = None
     if models:
-        baseline = reference or (PAPER_REFERENCE if PAPER_REFERENCE in conditions else None)
+        baseline = reference or (PAPER_REFERENCE if PAPER_REFERENCE in ordered else None)
         try:
             fitted = fit_models(
-                rows, suggestions, measures=chosen, conditions=conditions, reference=baseline
+                model_score_rows(rows, table, view, chosen),
+                None if suggestions is None else model_suggestion_rows(suggestions, table, view),
+                measures=chosen,
+                conditions=ordered,
+                reference=baseline,
             )
         except ModelInputError as exc:
             raise AnalysisError(str(exc)) from exc
+    rule = "R < 4.6" if wilcoxon_rule == "R<4.6" else "R >= 4.6"
     notes = [
+        *table.notes,
         f"Bonferroni: Friedman p x {len(chosen)} measures (capped at 1); post-hoc Wilcoxon "
-        f"signed-rank p x {math.comb(len(conditions), 2)} pairs, only where corrected p < {alpha}."
+        f"signed-rank p x {math.comb(len(ordered), 2)} pairs, only where corrected p < {alpha}.",
+        f"Wilcoxon signed-rank tests as R's wilcox.test(paired = TRUE) ({rule}): zero "
+        "differences dropped; exact p below 50 pairs without zeros"
+        + (" or ties" if wilcoxon_rule == "R<4.6" else " (conditional on ties)")
+        + ", otherwise the normal approximation with continuity correction. V is R's "
+        "statistic (rank sum of the positive differences first - second), W the smaller "
+        "rank sum.",
     ]
-    return Analysis(conditions, results, alpha, notes, fitted)
+    return Analysis(
+        ordered,
+        results,
+        alpha,
+        notes,
+        view,
+        table.participants,
+        table.left_out,
+        wilcoxon_rule,
+        fitted,
+    )
 
 
 def _with_effect_sizes(
     result: MeasureAnalysis, conditions: list[str], options: BootstrapOptions
 ) -> MeasureAnalysis:
     """The measure's effect sizes over the participants its Friedman test used."""
-    effects = effect_sizes(result.blocks, conditions, options, key=result.measure)
+    blocks = list(result.values.values())
+    effects = effect_sizes(blocks, conditions, options, key=result.measure)
     return replace(result, effect_sizes=effects)
+
+
+def _view_condition(row: Mapping[str, Any], view: View) -> str:
+    planned = str(row.get("planned_condition") or "").strip()
+    return planned if view == "as_planned" and planned else str(row.get("condition")).strip()
+
+
+def model_score_rows(
+    rows: list[Mapping[str, Any]], table: ScoreTable, view: View, measures: Sequence[str]
+) -> list[dict[str, Any]]:
+    """The score rows the models use: the view's participants and conditions, the values
+    as the tests read them (checked and parsed), and each row's position."""
+    kept = set(table.participants)
+    result = []
+    for row in rows:
+        participant = str(row.get("participant")).strip()
+        if participant not in kept:
+            continue
+        condition = _view_condition(row, view)
+        values = table.values.get((participant, condition), {})
+        result.append(
+            {
+                "participant": participant,
+                "condition": condition,
+                **({"position": row["position"]} if "position" in row else {}),
+                **{m: values.get(m) for m in measures},
+            }
+        )
+    return result
+
+
+def model_suggestion_rows(
+    rows: Iterable[Mapping[str, Any]], table: ScoreTable, view: View
+) -> list[dict[str, Any]]:
+    """Per-suggestion rows of the view's participants, conditions as the view counts them."""
+    kept = set(table.participants)
+    return [
+        {**row, "condition": _view_condition(row, view)}
+        for row in rows
+        if str(row.get("participant")).strip() in kept
+    ]
 
 
 def order_conditions(found: Iterable[str], preferred: Sequence[str] | None = None) -> list[str]:
@@ -171,37 +304,42 @@ def order_conditions(found: Iterable[str], preferred: Sequence[str] | None = Non
 
 def _analyze_measure(
     measure: str,
-    table: dict[tuple[str, str], dict[str, float | None]],
+    table: ScoreTable,
     conditions: list[str],
     tests: int,
     alpha: float,
     permutations: int | None,
     seed: int,
+    rule: WilcoxonRule,
 ) -> MeasureAnalysis:
-    participants = sorted({p for p, _ in _keys(table)}, key=_natural)
-    blocks, included, excluded, notes = [], [], [], []
-    for participant in participants:
-        values = [table.get((participant, c), {}).get(measure) for c in conditions]
+    blocks, excluded, notes = [], [], []
+    included: dict[str, list[float]] = {}
+    for participant in table.participants:
+        keys = [(participant, c) for c in conditions]
+        values = [table.values.get(key, {}).get(measure) for key in keys]
         if any(v is None for v in values):
-            missing = [c for c, v in zip(conditions, values, strict=True) if v is None]
+            missing = [
+                c + (f" ({why})" if (why := missing_reason(table.status.get(key, ""))) else "")
+                for c, key, v in zip(conditions, keys, values, strict=True)
+                if v is None
+            ]
             excluded.append(participant)
-            notes.append(
-                f"participant {participant} excluded: no {measure} for {', '.join(missing)}"
-            )
+            notes.append(f"{participant} left out of {measure}: no value for {', '.join(missing)}")
         else:
             blocks.append([float(v) for v in values if v is not None])
-            included.append(participant)
+            included[participant] = blocks[-1]
     test = friedman(blocks)
     if test.chi2 is None:
         notes.append(
-            "Friedman statistic undefined: every participant's values are tied (or no data)"
+            f"{measure}: Friedman statistic undefined: every participant's values are tied "
+            "(or no complete participant)"
         )
     permutation = (
         None if permutations is None else permutation_p(blocks, resamples=permutations, seed=seed)
     )
     descriptives = {c: describe([b[j] for b in blocks]) for j, c in enumerate(conditions)}
     p_corrected = bonferroni(test.p, tests)
-    posthoc, posthoc_note = _posthoc(blocks, conditions, p_corrected, alpha)
+    posthoc, posthoc_note = _posthoc(blocks, conditions, p_corrected, alpha, rule)
     return MeasureAnalysis(
         measure=measure,
         conditions=descriptives,
@@ -213,12 +351,16 @@ def _analyze_measure(
         posthoc_note=posthoc_note,
         excluded=excluded,
         notes=notes,
-        blocks=blocks,
+        values=included,
     )
 
 
 def _posthoc(
-    blocks: list[list[float]], conditions: list[str], p_corrected: float | None, alpha: float
+    blocks: list[list[float]],
+    conditions: list[str],
+    p_corrected: float | None,
+    alpha: float,
+    rule: WilcoxonRule,
 ) -> tuple[list[PairwiseTest], str]:
     if p_corrected is None:
         return [], "not done: the Friedman test is undefined"
@@ -227,49 +369,13 @@ def _posthoc(
     pairs = list(combinations(range(len(conditions)), 2))
     tests = [
         wilcoxon_pair(
-            conditions[i], conditions[j], [b[i] for b in blocks], [b[j] for b in blocks], len(pairs)
+            conditions[i],
+            conditions[j],
+            [b[i] for b in blocks],
+            [b[j] for b in blocks],
+            len(pairs),
+            rule,
         )
         for i, j in pairs
     ]
     return tests, f"Wilcoxon signed-rank, Bonferroni over {len(pairs)} pairs"
-
-
-def _read(
-    rows: Iterable[Mapping[str, Any]], measures: Sequence[str] | None
-) -> tuple[dict[tuple[str, str], dict[str, float | None]], set[str]]:
-    table: dict[tuple[str, str], dict[str, float | None]] = {}
-    present: set[str] = set()
-    wanted = measures or DEFAULT_MEASURES
-    for number, row in enumerate(rows, start=1):
-        participant, condition = _text(row, "participant", number), _text(row, "condition", number)
-        if (participant, condition) in table:
-            raise AnalysisError(f"row {number}: participant {participant} has {condition} twice")
-        present.update(m for m in wanted if m in row)
-        table[(participant, condition)] = {m: _number(row.get(m), number, m) for m in wanted}
-    return table, present
-
-
-def _keys(table: Mapping[tuple[str, str], object]) -> Iterable[tuple[str, str]]:
-    return table.keys()
-
-
-def _text(row: Mapping[str, Any], column: str, number: int) -> str:
-    value = row.get(column)
-    if value is None or str(value).strip() == "":
-        raise AnalysisError(f"row {number}: no {column}")
-    return str(value).strip()
-
-
-def _number(value: object, number: int, column: str) -> float | None:
-    if value is None or (isinstance(value, str) and value.strip().lower() in MISSING):
-        return None
-    try:
-        result = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise AnalysisError(f"row {number}, {column}: {value!r} is not a number") from None
-    return None if math.isnan(result) else result
-
-
-def _natural(participant: str) -> tuple[int, int | str]:
-    """Participants 2 before 10; codes that are not numbers after, alphabetically."""
-    return (0, int(participant)) if participant.isdigit() else (1, participant)

@@ -6,13 +6,14 @@ from collections.abc import Mapping
 from typing import Literal
 
 from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
-from chameleons.experiment.stats.descriptive import Descriptive
+from chameleons.experiment.stats.descriptive import Descriptive, PairwiseTest
 from chameleons.experiment.stats.render_models import (
     effect_sizes_latex,
     effect_sizes_text,
     models_latex,
     models_text,
 )
+from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
 
 MEASURE_LABELS = {
     "accepted": "Accepted robot suggestions",
@@ -31,10 +32,10 @@ def render_text(analysis: Analysis, condition_labels: Mapping[str, str] | None =
     header = f"{'measure (median, mean ± SD)':<34}" + "".join(
         f"{labels.get(c, c):<22}" for c in conditions
     )
-    lines = [header, "-" * len(header)]
+    lines = [f"Analysed {analysis.view_title}.", analysis.summary(), "", header, "-" * len(header)]
     for measure, result in analysis.measures.items():
         name = f"{MEASURE_LABELS.get(measure, measure)} ({MEASURE_RANGES.get(measure, '')})"
-        cells = "".join(f"{_cell(result.conditions[c], '±'):<22}" for c in conditions)
+        cells = "".join(f"{result.conditions[c].cell():<22}" for c in conditions)
         lines.append(f"{name.replace(' ()', ''):<34}{cells}")
     lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
     lines += [f"  {m:<12} {_friedman_text(r)}" for m, r in analysis.measures.items()]
@@ -43,13 +44,10 @@ def render_text(analysis: Analysis, condition_labels: Mapping[str, str] | None =
         if not result.posthoc:
             lines.append(f"  {measure:<12} {result.posthoc_note}")
         for test in result.posthoc:
-            lines.append(
-                f"  {measure:<12} {test.a} vs {test.b}: W = {_num(test.statistic, 1)}, "
-                f"p = {_p(test.p)}, Bonferroni p = {_p(test.p_bonferroni)}, n = {test.n}"
-                + (f" ({test.note})" if test.note else "")
-            )
+            lines.append(f"  {measure:<12} {posthoc_text(test)}")
     lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
+    notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
     return "\n".join(lines)
 
@@ -65,7 +63,8 @@ def render_latex(
     measure, a column per condition, cells "median, mean $\\pm$ SD"."""
     labels = {**CONDITION_LABELS, **(condition_labels or {})}
     body = _paper_body(analysis, labels) if layout == "paper" else _wide_body(analysis, labels)
-    comments = [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
+    comments = [f"% Analysed {analysis.view_title}. {analysis.summary()}"]
+    comments += [f"% Friedman {m}: {_friedman_text(r)}" for m, r in analysis.measures.items()]
     return "\n".join(
         [
             *comments,
@@ -94,8 +93,9 @@ def _paper_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
         lines.append(rf"    \multirow{{{k}}}*{{{_tex(MEASURE_LABELS.get(measure, measure))}}}")
         for condition in analysis.conditions:
             d = result.conditions[condition]
+            median = fmt(d.exact_median, 1, "--")
             lines.append(
-                rf"    & {_tex(labels.get(condition, condition))} & {_num(d.median, 1, '--')} & "
+                rf"    & {_tex(labels.get(condition, condition))} & {median} & "
                 rf"{_mean_sd_tex(d)} \\"
             )
         lines.append(r"    \hline")
@@ -110,12 +110,23 @@ def _wide_body(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
     lines.append(r"    \hline")
     for measure, result in analysis.measures.items():
         cells = " & ".join(
-            f"{_num(result.conditions[c].median, 1, '--')}, {_mean_sd_tex(result.conditions[c])}"
-            for c in analysis.conditions
+            f"{fmt(d.exact_median, 1, '--')}, {_mean_sd_tex(d)}"
+            for d in (result.conditions[c] for c in analysis.conditions)
         )
         lines.append(rf"    {_tex(MEASURE_LABELS.get(measure, measure))} & {cells} \\")
     lines += [r"    \hline", r"    \end{tabular}"]
     return lines
+
+
+def posthoc_text(test: PairwiseTest) -> str:
+    """One post-hoc test in words (the text report and the analysis page)."""
+    if test.p is None:
+        return f"{test.a} vs {test.b}: undefined ({test.note}), n = {test.n}"
+    return (
+        f"{test.a} vs {test.b}: V = {fmt(test.v, 1)}, W = {fmt(test.statistic, 1)}, "
+        f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(test.p_bonferroni)}, n = {test.n}"
+        f" ({test.method}{'; ' + test.note if test.note else ''})"
+    )
 
 
 def _friedman_text(result: MeasureAnalysis) -> str:
@@ -123,8 +134,8 @@ def _friedman_text(result: MeasureAnalysis) -> str:
     if test.chi2 is None:
         return f"chi2 {UNDEFINED} (n = {test.n}; every participant's values tied or no data)"
     text = (
-        f"chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}, Bonferroni p = "
-        f"{_p(result.p_bonferroni)}, Kendall's W = {_num(test.kendall_w, 3)}, n = {test.n}"
+        f"chi2({test.df}) = {fmt(test.chi2, 2)}, p = {fmt_p(test.p)}, Bonferroni p = "
+        f"{fmt_p(result.p_bonferroni)}, Kendall's W = {fmt(test.kendall_w, 3)}, n = {test.n}"
     )
     if result.permutation is not None:
         perm = result.permutation
@@ -134,32 +145,16 @@ def _friedman_text(result: MeasureAnalysis) -> str:
             else f"Monte Carlo, {perm.resamples} resamples, seed {perm.seed}"
         )
         text += (
-            f"; permutation p ({how}) = {_p(perm.p)}, Bonferroni "
-            f"{_p(result.permutation_p_bonferroni)}"
+            f"; permutation p ({how}) = {fmt_p(perm.p)}, Bonferroni "
+            f"{fmt_p(result.permutation_p_bonferroni)}"
         )
     return text
 
 
-def _cell(d: Descriptive, plus_minus: str) -> str:
-    if d.n == 0:
-        return "no data"
-    return f"{_num(d.median, 1)}, {_num(d.mean, 1)} {plus_minus} {_num(d.sd, 1)}"
-
-
 def _mean_sd_tex(d: Descriptive) -> str:
-    if d.mean is None:
+    if d.exact_mean is None:
         return "--"
-    return rf"${d.mean:.1f}\pm{_num(d.sd, 1, '--')}$"
-
-
-def _num(value: float | None, digits: int, missing: str = UNDEFINED) -> str:
-    return missing if value is None else f"{value:.{digits}f}"
-
-
-def _p(value: float | None) -> str:
-    if value is None:
-        return UNDEFINED
-    return "< 0.0001" if value < 0.0001 else f"{value:.4f}"
+    return rf"${fmt(d.exact_mean, 1)}\pm{fmt(d.exact_sd, 1, '--')}$"
 
 
 def _tex(text: str) -> str:

@@ -2,33 +2,42 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from chameleons.experiment.stats.analysis import Analysis
 from chameleons.experiment.stats.effect_sizes import Interval
 from chameleons.experiment.stats.models import Coefficient, ModelResult, TermTest
+from chameleons.experiment.stats.rounding import fmt, fmt_p
 
 UNDEFINED = "undefined"
 
 
-def _num(value: float | None, digits: int = 2) -> str:
-    return UNDEFINED if value is None else f"{value:.{digits}f}"
+def number_text(value: float | None, digits: int = 2, missing: str = UNDEFINED) -> str:
+    """The software's one rounding rule; ``missing`` for None, NaN or an infinity."""
+    if value is None or not math.isfinite(value):
+        return missing
+    return fmt(value, digits)
 
 
-def _p(value: float | None) -> str:
-    if value is None:
+def p_text(value: float | None) -> str:
+    if value is None or not math.isfinite(value):
         return UNDEFINED
-    return "< 0.0001" if value < 0.0001 else f"{value:.4f}"
+    return fmt_p(value)
+
+
+_num = number_text
+_p = p_text
 
 
 def interval_text(interval: Interval, digits: int = 2) -> str:
     if interval.estimate is None:
         return interval.note or UNDEFINED
     if interval.ci_low is None or interval.ci_high is None:
-        return f"{interval.estimate:.{digits}f} (no interval: {interval.note})"
+        return f"{_num(interval.estimate, digits)} (no interval: {interval.note})"
     return (
-        f"{interval.estimate:.{digits}f} [{interval.ci_low:.{digits}f}, "
-        f"{interval.ci_high:.{digits}f}]"
+        f"{_num(interval.estimate, digits)} [{_num(interval.ci_low, digits)}, "
+        f"{_num(interval.ci_high, digits)}]"
     )
 
 
@@ -78,10 +87,10 @@ def models_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
 
 
 def test_text(test: TermTest) -> str:
-    wald = f"Wald chi2({test.df}) = {test.chi2:.2f}, p = {_p(test.p)}"
+    wald = f"Wald chi2({test.df}) = {_num(test.chi2)}, p = {_p(test.p)}"
     if test.f is None or test.p_f is None:
         return wald
-    return f"F({test.df}, {test.df_denominator}) = {test.f:.2f}, p = {_p(test.p_f)} ({wald})"
+    return f"F({test.df}, {test.df_denominator}) = {_num(test.f)}, p = {_p(test.p_f)} ({wald})"
 
 
 def _coefficient_name(c: Coefficient, labels: Mapping[str, str]) -> str:
@@ -92,9 +101,12 @@ def _coefficient_name(c: Coefficient, labels: Mapping[str, str]) -> str:
 
 
 def _coefficient_text(c: Coefficient) -> str:
-    text = f"{c.estimate:+.3f} [{c.ci_low:+.3f}, {c.ci_high:+.3f}], z = {c.z:.2f}, p = {_p(c.p)}"
+    text = (
+        f"{_num(c.estimate, 3)} [{_num(c.ci_low, 3)}, {_num(c.ci_high, 3)}], "
+        f"z = {_num(c.z)}, p = {_p(c.p)}"
+    )
     if c.odds_ratio is not None:
-        text += f"; odds ratio {c.odds_ratio:.2f} [{_num(c.or_ci_low)}, {_num(c.or_ci_high)}]"
+        text += f"; odds ratio {_num(c.odds_ratio)} [{_num(c.or_ci_low)}, {_num(c.or_ci_high)}]"
     return text
 
 
@@ -144,11 +156,11 @@ def models_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
         test = ""
         if condition and condition.f is not None and condition.p_f is not None:
             test = (
-                rf" ($F({condition.df}, {condition.df_denominator})={condition.f:.2f}$, "
+                rf" ($F({condition.df}, {condition.df_denominator})={_num(condition.f)}$, "
                 rf"$p={_p(condition.p_f)}$)"
             )
         elif condition:
-            test = rf" ($\chi^2({condition.df})={condition.chi2:.2f}$, $p={_p(condition.p)}$)"
+            test = rf" ($\chi^2({condition.df})={_num(condition.chi2)}$, $p={_p(condition.p)}$)"
         rows.append(rf"    \multicolumn{{3}}{{|l|}}{{{tex(model.name)}{test}}} \\")
         for c in model.coefficients:
             if c.term == "Intercept":
@@ -177,17 +189,17 @@ def _tex_interval(interval: Interval, digits: int = 2) -> str:
     if interval.estimate is None:
         return "--"
     if interval.ci_low is None or interval.ci_high is None:
-        return f"${interval.estimate:.{digits}f}$"
+        return f"${_num(interval.estimate, digits)}$"
     return (
-        f"${interval.estimate:.{digits}f}$ [${interval.ci_low:.{digits}f}$, "
-        f"${interval.ci_high:.{digits}f}$]"
+        f"${_num(interval.estimate, digits)}$ [${_num(interval.ci_low, digits)}$, "
+        f"${_num(interval.ci_high, digits)}$]"
     )
 
 
 def _tex_coefficient(c: Coefficient) -> str:
     if c.odds_ratio is not None:
-        return f"${c.odds_ratio:.2f}$ [${_num(c.or_ci_low)}$, ${_num(c.or_ci_high)}$]"
-    return f"${c.estimate:.2f}$ [${c.ci_low:.2f}$, ${c.ci_high:.2f}$]"
+        return f"${_num(c.odds_ratio)}$ [${_num(c.or_ci_low)}$, ${_num(c.or_ci_high)}$]"
+    return f"${_num(c.estimate)}$ [${_num(c.ci_low)}$, ${_num(c.ci_high)}$]"
 
 
 def model_by_name(analysis: Analysis, name: str) -> ModelResult | None:

@@ -12,7 +12,7 @@ from fastapi.testclient import TestClient
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.analysis.plots import paired_values, plot_measure
+from chameleons.backend.analysis.plots import plot_measure
 from chameleons.backend.analysis.service import database_scores, run_analysis, study_analysis
 from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.export.service import ExportRequest, export_to_directory
@@ -103,16 +103,19 @@ def test_error_scores_per_condition(
 
 def test_plots_in_every_format(db_session: DbSession, populated: PopulatedStudy) -> None:
     scores = database_scores(db_session)
-    conditions = ["natural", "copy", "still"]
-    assert len(paired_values(scores.rows, "trust", conditions)) == 12
+    analysis = run_analysis(scores)
+    conditions = analysis.conditions
+    trust = list(analysis.measures["trust"].values.values())
+    accepted = list(analysis.measures["accepted"].values.values())
+    assert len(trust) == 12
     labels = scores.condition_labels
-    svg = plot_measure(scores.rows, "trust", conditions, labels, (1, 7), "subtitle", "svg")
+    svg = plot_measure(trust, "trust", conditions, labels, (1, 7), "subtitle", "svg")
     assert b"<svg" in svg[:500]
     assert svg.count(b'id="line2d_') >= 12  # a line per participant (plus boxes' lines)
-    assert plot_measure(scores.rows, "accepted", conditions, labels, (0, 3), fmt="png")[:8] == (
+    assert plot_measure(accepted, "accepted", conditions, labels, (0, 3), fmt="png")[:8] == (
         b"\x89PNG\r\n\x1a\n"
     )
-    assert plot_measure(scores.rows, "trust", conditions, labels, (1, 7), fmt="pdf")[:5] == b"%PDF-"
+    assert plot_measure(trust, "trust", conditions, labels, (1, 7), fmt="pdf")[:5] == b"%PDF-"
     empty = plot_measure([], "trust", conditions, labels, (1, 7), fmt="svg")
     assert b"<svg" in empty[:500]
 
@@ -135,7 +138,8 @@ def test_analysis_page_json_latex_and_plot_downloads(client: TestClient, engine:
     assert "\\begin{tabular}" in page.text
     assert 'data-column="error_change"' in page.text
     latex = client.get("/pi/analysis/table1.tex")
-    assert latex.text.startswith("% Friedman accepted")
+    assert latex.text.startswith("% Analysed as planned")
+    assert "% Friedman accepted" in latex.text
     assert "\\multirow" in latex.text
     api = client.get("/api/pi/analysis").json()
     assert api["analysis"]["measures"]["trust"]["friedman"]["n"] == 6

@@ -93,9 +93,10 @@ def test_analysis_page_loads_effect_sizes_and_models_after_its_first_render(
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
     page = client.get("/pi/analysis")
-    assert f'data-src="/pi/analysis/extended?study={data.study_id}"' in page.text
+    source = f'data-src="/pi/analysis/extended?study={data.study_id}&amp;view=as_planned"'
+    assert source in page.text
     assert 'id="effect-sizes"' not in page.text  # not in the first render
-    fragment = client.get(f"/pi/analysis/extended?study={data.study_id}")
+    fragment = client.get(f"/pi/analysis/extended?study={data.study_id}&view=as_planned")
     assert fragment.status_code == 200
     assert 'id="effect-sizes"' in fragment.text
     assert 'id="model-acceptance"' in fragment.text

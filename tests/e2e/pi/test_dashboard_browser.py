@@ -78,7 +78,8 @@ def test_pi_walks_the_dashboard(live_server: LiveServer, page: Page, study: Popu
     for index in range(4):
         image = images.nth(index)
         image.scroll_into_view_if_needed()
-        expect(image).to_have_js_property("complete", True)
+        # Four plots drawn at once on a busy machine: wait for them, not for 5 s.
+        expect(image).to_have_js_property("complete", True, timeout=60_000)
         assert image.evaluate("img => img.naturalWidth") > 100, "a plot did not load"
 
 
