@@ -1,4 +1,5 @@
-"""``chameleons analyze``: the paper's analysis (Table I, Friedman tests) from score rows."""
+"""``chameleons analyze``: the paper's analysis (Table I, Friedman tests) from score rows,
+plus effect sizes with bootstrap intervals and the regression models."""
 
 from __future__ import annotations
 
@@ -23,11 +24,14 @@ from chameleons.experiment.stats import (
     render_latex,
     render_text,
 )
+from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES, BootstrapOptions
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
+from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
 STUDY_CONFIG_NAME = "study_config.json"
+Rows = list[dict[str, Any]]
 
 
 def analysis_output(
@@ -43,6 +47,10 @@ def analysis_output(
     latex_layout: Literal["paper", "wide"] = "paper",
     row_name: str = "row",
     first_row: int = 1,
+    bootstrap: int = DEFAULT_RESAMPLES,
+    models: bool = True,
+    suggestions: Iterable[Mapping[str, Any]] | None = None,
+    reference: str | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
     file, the database), checked against the study's conditions and scales (default: the
@@ -62,6 +70,10 @@ def analysis_output(
             wilcoxon_rule=wilcoxon_rule,
             row_name=row_name,
             first_row=first_row,
+            bootstrap=BootstrapOptions(bootstrap, seed) if bootstrap else None,
+            models=models,
+            suggestions=suggestions,
+            reference=reference,
         )
     except AnalysisError as exc:
         raise click.ClickException(f"{exc} Nothing was analysed.") from exc
@@ -74,8 +86,8 @@ def analysis_output(
     return render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
 
 
-def read_scores_csv(path: Path) -> list[dict[str, str]]:
-    """Rows of a ``scores.csv`` (the export's shape), with readable errors."""
+def read_csv_rows(path: Path, required: Iterable[str] = REQUIRED_COLUMNS) -> list[dict[str, str]]:
+    """Rows of an exported CSV table, with readable errors."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
             reader = csv.DictReader(handle)
@@ -83,10 +95,30 @@ def read_scores_csv(path: Path) -> list[dict[str, str]]:
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise click.ClickException(f"cannot read {path}: {exc}") from exc
-    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
+    missing = [c for c in required if c not in columns]
     if missing:
         raise click.ClickException(f"{path}: missing column(s) {', '.join(missing)}")
     return rows
+
+
+def read_scores_csv(path: Path) -> list[dict[str, str]]:
+    """Rows of a ``scores.csv`` (the export's shape), with readable errors."""
+    return read_csv_rows(path)
+
+
+def read_suggestions_beside(scores: Path) -> Rows | None:
+    """The acceptance model's rows from ``suggestions.csv`` and ``interactions.csv`` in the
+    directory of ``scores.csv`` (an export bundle); ``None`` when they are not there."""
+    suggestions, interactions = (
+        scores.with_name("suggestions.csv"),
+        scores.with_name("interactions.csv"),
+    )
+    if not (suggestions.is_file() and interactions.is_file()):
+        return None
+    return suggestions_with_item_set(
+        read_csv_rows(suggestions, ("participant", "session", "position", "kind", "accepted")),
+        read_csv_rows(interactions, ("participant", "session", "position", "item_set")),
+    )
 
 
 def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | None]:
@@ -167,6 +199,27 @@ def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | No
     show_default=True,
     help="paper: Table I's layout; wide: a column per condition.",
 )
+@click.option(
+    "--bootstrap",
+    type=click.IntRange(min=0, max=100_000),
+    default=DEFAULT_RESAMPLES,
+    show_default=True,
+    help="Bootstrap resamples for the effect sizes' 95% intervals (seeded by --seed); "
+    "0 leaves the effect sizes out.",
+)
+@click.option(
+    "--models/--no-models",
+    default=True,
+    show_default=True,
+    help="Fit the regression models (GEE for acceptance, mixed models for the scores). "
+    "With --scores, the acceptance model reads suggestions.csv and interactions.csv "
+    "from the same directory.",
+)
+@click.option(
+    "--reference",
+    default=None,
+    help="Condition the models compare the others with (default: still, else the first).",
+)
 def analyze_command(
     scores_path: Path | None,
     config_path: Path | None,
@@ -179,8 +232,12 @@ def analyze_command(
     seed: int,
     alpha: float,
     latex_layout: Literal["paper", "wide"],
+    bootstrap: int,
+    models: bool,
+    reference: str | None,
 ) -> None:
-    """Descriptives, Friedman tests (Bonferroni, Kendall's W) and post-hoc tests.
+    """Descriptives, Friedman tests (Bonferroni, Kendall's W), post-hoc tests, effect sizes
+    with bootstrap intervals and the regression models.
 
     Excluded participants leave every test; so do, in the as_run view, participants with a
     deviation from the plan; a participant without a value in every condition leaves that
@@ -192,8 +249,9 @@ def analyze_command(
         if note:
             click.echo(f"Note: {note}.", err=True)
         row_name, first_row = "line", 2  # a CSV file's data start on its second line
+        suggestions = read_suggestions_beside(scores_path) if models else None
     else:
-        spec, rows = database_score_rows(study_id, include_rehearsal)
+        spec, rows, suggestions = database_score_rows(study_id, include_rehearsal)
         row_name, first_row = "row", 1
     click.echo(
         analysis_output(
@@ -208,14 +266,17 @@ def analyze_command(
             latex_layout=latex_layout,
             row_name=row_name,
             first_row=first_row,
+            bootstrap=bootstrap,
+            models=models,
+            suggestions=suggestions,
+            reference=reference,
         )
     )
 
 
-def database_score_rows(
-    study_id: int | None, include_rehearsal: bool
-) -> tuple[Study, list[dict[str, Any]]]:
-    """The study and the export's scores rows, read from the configured database."""
+def database_score_rows(study_id: int | None, include_rehearsal: bool) -> tuple[Study, Rows, Rows]:
+    """The study, the export's scores rows and the acceptance model's rows, read from the
+    configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from chameleons.backend.analysis.service import score_rows_from_database

@@ -11,6 +11,7 @@ from chameleons.cli import (
     demo_command,
     export_command,
     plan_command,
+    power_command,
     prompts_command,
     rehearse_command,
     serve_command,
@@ -33,6 +34,7 @@ cli.add_command(simulate_face_command.simulate_face)
 cli.add_command(user_commands.user)
 cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
+cli.add_command(power_command.power_command)
 cli.add_command(worker_command.worker)
 cli.add_command(analyze_command.analyze_command)
 cli.add_command(prompts_command.prompts)

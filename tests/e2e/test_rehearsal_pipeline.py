@@ -23,11 +23,12 @@ from chameleons.backend.analysis.service import study_analysis
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.export.columns import LIST_SEPARATOR
 from chameleons.backend.models import PlanRow, Session
-from chameleons.cli.analyze_command import read_scores_csv
+from chameleons.cli.analyze_command import read_scores_csv, read_suggestions_beside
 from chameleons.cli.main import cli
 from chameleons.experiment.balance import BalanceReport, balance_report
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats import analyze
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions
 from chameleons.experiment.study import load_default_study
 from chameleons.rehearsal.embedded import embedded_system
 from chameleons.rehearsal.runner import Options, Summary, rehearse
@@ -187,7 +188,15 @@ def test_twelve_rehearsals_give_a_complete_balanced_data_set_the_analysis_agrees
     assert as_run.to_dict() == planned.to_dict()
     _check_balance(as_run)
 
-    from_export = analyze(read_scores_csv(tmp_path / "export" / "scores.csv"),
-                          measures=spec.measures).to_dict()  # fmt: skip
+    scores = tmp_path / "export" / "scores.csv"
+    from_export = analyze(
+        read_scores_csv(scores),
+        measures=spec.measures,
+        bootstrap=BootstrapOptions(),
+        models=True,
+        suggestions=read_suggestions_beside(scores),
+    ).to_dict()
+    # The whole analysis, effect sizes and models included, from the files and the database.
     assert from_export == _database_analysis(settings)
+    assert from_export["models"]["acceptance"]["n_observations"] == 36 * 3
     assert "accepted" in _significant(from_export), from_export["measures"]["accepted"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from chameleons.backend.bridge import Bridge, WorkerSupervisor
-from chameleons.worker.recording import read_recording
+from chameleons.worker.recording import RecordingError, read_recording
 from tests.worker.furhat_peer import FurhatPeer
 from tests.worker.phone import Pose, SteppingPhone
 
@@ -37,6 +37,14 @@ async def _until(condition: Callable[[], object], timeout: float) -> None:
         if time.monotonic() > deadline:
             raise AssertionError("condition not met in time")
         await asyncio.sleep(0.05)
+
+
+def _has_frames(path: Path) -> bool:
+    """The recording (its journal, while it is being written) holds more than ten frames."""
+    try:
+        return len(read_recording(path)) > 10
+    except (FileNotFoundError, RecordingError):  # no file yet, or no chunk flushed yet
+        return False
 
 
 def _copying_since(robot: FurhatPeer, since: float) -> Callable[[], bool]:
@@ -69,8 +77,11 @@ def test_a_killed_worker_is_restarted_with_its_state(tmp_path: Path) -> None:
                         ("start_recording", {"interaction_id": 5, "directory": str(recordings)}),
                     ):
                         assert (await bridge.send_command(BOOTH, kind, body, timeout=5)).ok
-                    # Copying, with the recording past its first chunk (0.5 s) on disk.
+                    # Copying, with the recording past its first chunk on disk (on a busy
+                    # machine frames arrive late, so wait for the chunk, not for a time).
                     await _until(_copying_since(robot, time.monotonic() + 0.6), 10)
+                    participant = recordings / "interaction-5-participant.parquet"
+                    await _until(lambda: _has_frames(participant), 20)
 
                     assert supervisor.process is not None
                     os.kill(supervisor.process.pid, signal.SIGKILL)
@@ -91,7 +102,7 @@ def test_a_killed_worker_is_restarted_with_its_state(tmp_path: Path) -> None:
         assert files["agent"].endswith("interaction-5-part2-agent.parquet")
         assert len(read_recording(files["agent"])) > 10
         # What the killed worker had recorded was recovered from its journal.
-        assert len(read_recording(recordings / "interaction-5-participant.parquet")) > 10
+        assert _has_frames(recordings / "interaction-5-participant.parquet")
 
     with FurhatPeer() as robot:
         asyncio.run(scenario(robot))

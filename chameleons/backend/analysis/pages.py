@@ -39,6 +39,12 @@ from chameleons.experiment.stats import (
 )
 from chameleons.experiment.stats import fmt as fmt_number
 from chameleons.experiment.stats.render import posthoc_text
+from chameleons.experiment.stats.render_models import (
+    effect_sizes_latex,
+    models_latex,
+    number_text,
+    p_text,
+)
 from chameleons.experiment.stats.rounding import RULE
 
 router = APIRouter(tags=["analysis"])
@@ -55,9 +61,13 @@ def _load(
     permutations: int | None = None,
     view: View = DEFAULT_VIEW,
     wilcoxon: WilcoxonRule = DEFAULT_RULE,
+    *,
+    extended: bool = True,
 ) -> StudyAnalysis:
     try:
-        return study_analysis(db, study, include_rehearsal, permutations, view, wilcoxon)
+        return study_analysis(
+            db, study, include_rehearsal, permutations, view, wilcoxon, extended=extended
+        )
     except StudyNotFoundError as exc:
         raise HTTPException(status.HTTP_404_NOT_FOUND, str(exc)) from exc
 
@@ -99,7 +109,9 @@ def analysis_page(
     view: ViewQuery = DEFAULT_VIEW,
     wilcoxon: RuleQuery = DEFAULT_RULE,
 ) -> Response:
-    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon)
+    # The first render has the paper's analysis; the effect sizes and models (about a
+    # second for a large study) arrive from /pi/analysis/extended after it.
+    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon, extended=False)
     found = study_or_404(db, result.scores.study.id)
     query = _query(found.id, include_rehearsal, view, wilcoxon)
     context = page_context(
@@ -125,6 +137,38 @@ def analysis_page(
         rounding_rule=RULE,
     )
     return templates.TemplateResponse(request, "pi/analysis.html", context)
+
+
+@router.get("/pi/analysis/extended", response_class=HTMLResponse)
+def analysis_extended(
+    request: Request,
+    _pi: CurrentPI,
+    db: Db,
+    templates: Templates,
+    study: int | None = None,
+    include_rehearsal: bool = False,
+    permutations: Permutations = None,
+    view: ViewQuery = DEFAULT_VIEW,
+    wilcoxon: RuleQuery = DEFAULT_RULE,
+) -> Response:
+    """The page's effect-size and model sections (an HTML fragment the page fetches)."""
+    result = _load(db, study, include_rehearsal, permutations, view, wilcoxon)
+    labels = result.scores.condition_labels
+    latex = ""
+    if result.analysis:
+        tables = effect_sizes_latex(result.analysis, labels) + models_latex(result.analysis, labels)
+        latex = "\n".join(tables)
+    context = {
+        "result": result,
+        "analysis": result.analysis,
+        "measure_titles": MEASURE_TITLES,
+        "extended_latex": latex,
+        "number": number_text,
+        "p_text": p_text,
+    }
+    return templates.TemplateResponse(
+        request, "pi/analysis_extended.html", context, headers={"Cache-Control": "no-store"}
+    )
 
 
 @router.get("/pi/analysis/plots/{measure}.{fmt}")

@@ -12,7 +12,8 @@ from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.rows import interaction_rows
+from chameleons.backend.analysis.cache import analyses, digest
+from chameleons.backend.export.rows import interaction_rows, suggestion_rows
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.models import Study
@@ -30,7 +31,9 @@ from chameleons.experiment.stats import (
     render_latex,
     render_text,
 )
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
+from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import study_from_config
 
 ERROR_LABELS = {
@@ -104,13 +107,28 @@ def database_scores(
     return StudyScores(study, spec, score_rows(db, study, spec, include_rehearsal))
 
 
+def model_rows(
+    db: DbSession, scores: StudyScores, include_rehearsal: bool = False
+) -> list[dict[str, Any]]:
+    """The acceptance model's rows: the export's suggestions with their item set."""
+    study, spec = scores.study, scores.spec
+    return suggestions_with_item_set(
+        suggestion_rows(db, study, include_rehearsal),
+        interaction_rows(db, study, spec, include_rehearsal),
+    )
+
+
 def run_analysis(
     scores: StudyScores,
     permutations: int | None = None,
     seed: int = 0,
     view: View = DEFAULT_VIEW,
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
+    suggestions: list[dict[str, Any]] | None = None,
+    bootstrap: BootstrapOptions | None = None,
 ) -> Analysis:
+    """The paper's analysis plus effect sizes (``bootstrap``) and the models (the
+    acceptance model when ``suggestions`` are given)."""
     design = scores.design
     return analyze(
         scores.rows,
@@ -122,6 +140,9 @@ def run_analysis(
         permutations=permutations,
         seed=seed,
         wilcoxon_rule=wilcoxon_rule,
+        bootstrap=bootstrap,
+        models=suggestions is not None,
+        suggestions=suggestions,
     )
 
 
@@ -150,14 +171,22 @@ def study_analysis(
     permutations: int | None = None,
     view: View = DEFAULT_VIEW,
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
+    *,
+    extended: bool = True,
 ) -> StudyAnalysis:
-    """Everything the analysis page shows; an unusable data set gives a message, not a 500."""
+    """Everything the analysis page shows; an unusable data set gives a message, not a 500.
+
+    ``extended``: with the effect sizes and the models (cached per input, see
+    :mod:`.cache`); without, only the paper's analysis (the page's first render)."""
     scores = database_scores(db, study_id, include_rehearsal)
     if not scores.rows:
         errors = error_scores(db, scores, include_rehearsal)
         return StudyAnalysis(scores, None, "No counted sessions yet: nothing to analyse.", errors)
     try:
-        analysis = run_analysis(scores, permutations, view=view, wilcoxon_rule=wilcoxon_rule)
+        if extended:
+            analysis = _extended(db, scores, include_rehearsal, permutations, view, wilcoxon_rule)
+        else:
+            analysis = run_analysis(scores, permutations, view=view, wilcoxon_rule=wilcoxon_rule)
     except AnalysisError as exc:
         errors = error_scores(db, scores, include_rehearsal)
         return StudyAnalysis(scores, None, f"The analysis cannot run: {exc}", errors)
@@ -165,17 +194,42 @@ def study_analysis(
     return StudyAnalysis(scores, analysis, None, errors)
 
 
+def _extended(
+    db: DbSession,
+    scores: StudyScores,
+    include_rehearsal: bool,
+    permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
+) -> Analysis:
+    suggestions = model_rows(db, scores, include_rehearsal)
+    bootstrap = BootstrapOptions()
+    key = (
+        scores.study.id,
+        scores.study.config_hash,
+        permutations,
+        view,
+        wilcoxon_rule,
+        bootstrap,
+        digest(scores.rows, suggestions),
+    )
+    return analyses.get_or_compute(
+        key,
+        lambda: run_analysis(scores, permutations, 0, view, wilcoxon_rule, suggestions, bootstrap),
+    )
+
+
 def score_rows_from_database(
     database_url: str, study_id: int | None = None, include_rehearsal: bool = False
-) -> tuple[StudySpec, list[dict[str, Any]]]:
-    """The study and its scores table straight from a database (``chameleons analyze``
-    without a file)."""
+) -> tuple[StudySpec, list[dict[str, Any]], list[dict[str, Any]]]:
+    """The study, its scores table and the acceptance model's rows straight from a database
+    (``chameleons analyze`` without a file)."""
     from chameleons.backend.db import build_engine, build_sessionmaker
 
     engine = build_engine(database_url)
     try:
         with build_sessionmaker(engine)() as db:
             scores = database_scores(db, study_id, include_rehearsal)
-            return scores.spec, scores.rows
+            return scores.spec, scores.rows, model_rows(db, scores, include_rehearsal)
     finally:
         engine.dispose()

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from itertools import combinations
 from typing import Any
 
@@ -25,12 +25,15 @@ from chameleons.experiment.stats.descriptive import (
     describe,
     wilcoxon_pair,
 )
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions, EffectSizes, effect_sizes
 from chameleons.experiment.stats.friedman_test import (
     FriedmanResult,
     PermutationResult,
     friedman,
     permutation_p,
 )
+from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
+from chameleons.experiment.stats.numbers import finite
 from chameleons.experiment.stats.scores import (
     DEFAULT_VIEW,
     VIEW_TITLES,
@@ -47,6 +50,7 @@ from chameleons.experiment.stats.wilcoxon import DEFAULT_RULE, WilcoxonRule
 
 DEFAULT_MEASURES = ("accepted", "credibility", "likeability", "trust")
 PAPER_CONDITION_ORDER = ("natural", "copy", "still")
+PAPER_REFERENCE = "still"  # the models' default baseline: the robot without facial gestures
 __all__ = [
     "DEFAULT_MEASURES",
     "PAPER_CONDITION_ORDER",
@@ -73,6 +77,7 @@ class MeasureAnalysis:
     notes: list[str]
     # The analysed values: participant -> one value per condition (the plots draw these).
     values: dict[str, list[float]] = field(default_factory=dict, compare=False, repr=False)
+    effect_sizes: EffectSizes | None = None
 
     def to_dict(self) -> dict[str, Any]:
         test = self.friedman
@@ -99,6 +104,7 @@ class MeasureAnalysis:
             "posthoc_note": self.posthoc_note,
             "excluded_participants": self.excluded,
             "notes": self.notes,
+            "effect_sizes": finite(self.effect_sizes.to_dict()) if self.effect_sizes else None,
         }
 
 
@@ -112,6 +118,7 @@ class Analysis:
     participants: list[str] = field(default_factory=list)  # in the view (before per-measure)
     left_out: list[LeftOut] = field(default_factory=list)  # whole participants, with why
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE
+    models: Models | None = None
 
     @property
     def view_title(self) -> str:
@@ -144,6 +151,7 @@ class Analysis:
             "wilcoxon_rule": self.wilcoxon_rule,
             "measures": {m: a.to_dict() for m, a in self.measures.items()},
             "notes": self.notes,
+            "models": finite(self.models.to_dict()) if self.models else None,
         }
 
 
@@ -161,6 +169,10 @@ def analyze(
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     row_name: str = "row",
     first_row: int = 1,
+    bootstrap: BootstrapOptions | None = None,
+    models: bool = False,
+    suggestions: Iterable[Mapping[str, Any]] | None = None,
+    reference: str | None = None,
 ) -> Analysis:
     """Analyse score rows (keys ``participant``, ``condition`` and one per measure; optional
     ``planned_condition``, ``position``, ``deviation``, ``excluded``, ``exclusion_reason``,
@@ -172,7 +184,15 @@ def analyze(
     ``view``: ``as_planned`` or ``as_run`` (see :mod:`.scores`); ``permutations``: add a
     permutation p-value per measure (exact when feasible, otherwise Monte Carlo with that
     many resamples and ``seed``); ``row_name``/``first_row``: how refusals number the rows
-    (a CSV file's data start on line 2)."""
+    (a CSV file's data start on line 2).
+
+    ``bootstrap``: add effect sizes with bootstrap intervals per measure (over the
+    participants of its Friedman test). ``models``: fit the regression models
+    (:mod:`.models`) on the participants of the view, conditions as the view counts them:
+    the score models from the rows (with their ``position``), the acceptance model from
+    ``suggestions`` (per-suggestion rows), against ``reference`` (default: still, else the
+    first condition)."""
+    rows = list(rows)
     wanted = list(measures or DEFAULT_MEASURES)
     reader = Reader(wanted, conditions, scales or {}, view, row_name, first_row)
     table = reader.read(rows)
@@ -186,6 +206,21 @@ def analyze(
                             wilcoxon_rule)
         for m in chosen
     }  # fmt: skip
+    if bootstrap is not None:
+        results = {m: _with_effect_sizes(r, ordered, bootstrap) for m, r in results.items()}
+    fitted = None
+    if models:
+        baseline = reference or (PAPER_REFERENCE if PAPER_REFERENCE in ordered else None)
+        try:
+            fitted = fit_models(
+                model_score_rows(rows, table, view, chosen),
+                None if suggestions is None else model_suggestion_rows(suggestions, table, view),
+                measures=chosen,
+                conditions=ordered,
+                reference=baseline,
+            )
+        except ModelInputError as exc:
+            raise AnalysisError(str(exc)) from exc
     rule = "R < 4.6" if wilcoxon_rule == "R<4.6" else "R >= 4.6"
     notes = [
         *table.notes,
@@ -199,8 +234,66 @@ def analyze(
         "rank sum.",
     ]
     return Analysis(
-        ordered, results, alpha, notes, view, table.participants, table.left_out, wilcoxon_rule
+        ordered,
+        results,
+        alpha,
+        notes,
+        view,
+        table.participants,
+        table.left_out,
+        wilcoxon_rule,
+        fitted,
     )
+
+
+def _with_effect_sizes(
+    result: MeasureAnalysis, conditions: list[str], options: BootstrapOptions
+) -> MeasureAnalysis:
+    """The measure's effect sizes over the participants its Friedman test used."""
+    blocks = list(result.values.values())
+    effects = effect_sizes(blocks, conditions, options, key=result.measure)
+    return replace(result, effect_sizes=effects)
+
+
+def _view_condition(row: Mapping[str, Any], view: View) -> str:
+    planned = str(row.get("planned_condition") or "").strip()
+    return planned if view == "as_planned" and planned else str(row.get("condition")).strip()
+
+
+def model_score_rows(
+    rows: list[Mapping[str, Any]], table: ScoreTable, view: View, measures: Sequence[str]
+) -> list[dict[str, Any]]:
+    """The score rows the models use: the view's participants and conditions, the values
+    as the tests read them (checked and parsed), and each row's position."""
+    kept = set(table.participants)
+    result = []
+    for row in rows:
+        participant = str(row.get("participant")).strip()
+        if participant not in kept:
+            continue
+        condition = _view_condition(row, view)
+        values = table.values.get((participant, condition), {})
+        result.append(
+            {
+                "participant": participant,
+                "condition": condition,
+                **({"position": row["position"]} if "position" in row else {}),
+                **{m: values.get(m) for m in measures},
+            }
+        )
+    return result
+
+
+def model_suggestion_rows(
+    rows: Iterable[Mapping[str, Any]], table: ScoreTable, view: View
+) -> list[dict[str, Any]]:
+    """Per-suggestion rows of the view's participants, conditions as the view counts them."""
+    kept = set(table.participants)
+    return [
+        {**row, "condition": _view_condition(row, view)}
+        for row in rows
+        if str(row.get("participant")).strip() in kept
+    ]
 
 
 def order_conditions(found: Iterable[str], preferred: Sequence[str] | None = None) -> list[str]:

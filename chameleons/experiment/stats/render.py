@@ -7,6 +7,12 @@ from typing import Literal
 
 from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
 from chameleons.experiment.stats.descriptive import Descriptive, PairwiseTest
+from chameleons.experiment.stats.render_models import (
+    effect_sizes_latex,
+    effect_sizes_text,
+    models_latex,
+    models_text,
+)
 from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
 
 MEASURE_LABELS = {
@@ -47,6 +53,7 @@ def render_text(
             lines.append(f"  {measure:<12} {result.posthoc_note}")
         for test in result.posthoc:
             lines.append(f"  {measure:<12} {posthoc_text(test)}")
+    lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
@@ -85,6 +92,8 @@ def render_latex(
             *body,
             r"    \label{tab:stats}",
             r"\end{table}",
+            *effect_sizes_latex(analysis, labels),
+            *models_latex(analysis, labels),
         ]
     )
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from pathlib import Path
@@ -32,6 +33,9 @@ def test_database_mode_matches_the_exported_scores(sqlite_template: Path, tmp_pa
         )
         assert from_db.exit_code == 0, from_db.output
         assert from_db.output == from_file.output
+    # Both read the per-suggestion rows (the file mode from suggestions.csv beside scores.csv).
+    models = json.loads(runner.invoke(analyze_command, ["--format", "json"]).output)["models"]
+    assert models["acceptance"]["n_observations"] == 108
     with_rehearsal = runner.invoke(analyze_command, ["--format", "json", "--include-rehearsal"])
     assert '"n": 13' in with_rehearsal.output
     missing = runner.invoke(analyze_command, ["--study", "42"])

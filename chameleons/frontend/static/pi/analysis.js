@@ -1,3 +1,25 @@
+// The effect sizes and models arrive after the first render (they take about a second
+// for a large study); then the LaTeX copy button.
+(function () {
+  "use strict";
+  const holder = document.getElementById("extended");
+  if (!holder) return;
+  fetch(holder.dataset.src, { credentials: "same-origin", headers: { Accept: "text/html" } })
+    .then(function (response) {
+      if (!response.ok) throw new Error("HTTP " + response.status);
+      return response.text();
+    })
+    .then(function (html) {
+      holder.innerHTML = html;
+      holder.dataset.loaded = "true";
+    })
+    .catch(function (error) {
+      const status = document.getElementById("extended-status");
+      if (status) status.textContent = "The effect sizes and models could not be loaded (" + error.message + "): reload the page.";
+      holder.dataset.loaded = "error";
+    });
+})();
+
 // Copy the LaTeX table to the clipboard (falls back to selecting it for Ctrl-C).
 (function () {
   "use strict";

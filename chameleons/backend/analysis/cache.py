@@ -1,0 +1,51 @@
+"""A small in-process cache of finished analyses, keyed by what went into them.
+
+The effect sizes (bootstrap) and the models take most of a second for a large study; the
+analysis page's sections, its JSON and its LaTeX download ask for the same analysis in
+quick succession. The key holds a digest of the input rows, so new data is never served
+stale: a changed row is a different key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+MAX_ENTRIES = 16
+
+
+def digest(*parts: Any) -> str:
+    """A stable digest of JSON-able inputs (rows of numbers and strings)."""
+    text = json.dumps(parts, sort_keys=True, default=str, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class ResultCache:
+    def __init__(self, max_entries: int = MAX_ENTRIES) -> None:
+        self._entries: OrderedDict[Hashable, Any] = OrderedDict()
+        self._lock = threading.Lock()
+        self._max = max_entries
+
+    def get_or_compute(self, key: Hashable, compute: Callable[[], T]) -> T:
+        with self._lock:
+            if key in self._entries:
+                self._entries.move_to_end(key)
+                return self._entries[key]  # type: ignore[no-any-return]
+        value = compute()  # outside the lock: two requests may compute, neither waits
+        with self._lock:
+            self._entries[key] = value
+            while len(self._entries) > self._max:
+                self._entries.popitem(last=False)
+        return value
+
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+
+analyses = ResultCache()
