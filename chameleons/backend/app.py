@@ -32,6 +32,7 @@ from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
 from chameleons.backend.phone import endpoints as phone_endpoints
 from chameleons.backend.phone import pages as phone_pages
+from chameleons.backend.planning import pages as planning_pages
 from chameleons.backend.sessions import endpoints as session_endpoints
 from chameleons.backend.sessions import live as session_live
 from chameleons.backend.studies import endpoints as study_endpoints
@@ -116,6 +117,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         phone_pages.router,
         export_endpoints.router,
         analysis_pages.router,
+        planning_pages.router,
         dashboard_pages.router,
         withdrawal_endpoints.router,
         dropout_endpoints.router,

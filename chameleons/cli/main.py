@@ -12,6 +12,7 @@ from chameleons.cli import (
     export_command,
     plan_command,
     power_command,
+    prereg_command,
     prompts_command,
     rehearse_command,
     serve_command,
@@ -35,6 +36,7 @@ cli.add_command(user_commands.user)
 cli.add_command(export_command.export)
 cli.add_command(plan_command.plan_command)
 cli.add_command(power_command.power_command)
+cli.add_command(prereg_command.prereg_command)
 cli.add_command(worker_command.worker)
 cli.add_command(analyze_command.analyze_command)
 cli.add_command(prompts_command.prompts)

@@ -176,6 +176,41 @@ def test_views_and_excluded_participants(tmp_path: Path) -> None:
     assert "12 participants in the data; 1 left out" in out
 
 
+def test_analyze_json_has_effect_sizes_and_models(tmp_path: Path) -> None:
+    # Positions rotate across participants (a Latin square), so they are not the conditions.
+    rows = [{**row, "position": 1 + (i + i // 3) % 3} for i, row in enumerate(score_rows())]
+    scores = write_scores(tmp_path / "scores.csv", rows)
+    code, out, _ = run("analyze", "--scores", str(scores), "--format", "json", "--bootstrap", "300")
+    assert code == 0
+    data = json.loads(out)
+    trust = data["measures"]["trust"]["effect_sizes"]
+    assert trust["resamples"] == 300
+    assert trust["kendall_w"]["ci_low"] is not None
+    assert set(data["models"]["scores"]) == {"credibility", "likeability", "trust"}
+    # No suggestions.csv beside scores.csv: the acceptance model says what it needs.
+    assert data["models"]["acceptance"] is None
+    assert "per-suggestion rows" in data["models"]["notes"][0]
+    code, out, _ = run("analyze", "--scores", str(scores), "--format", "json", "--seed", "4",
+                       "--bootstrap", "300")  # fmt: skip
+    other = json.loads(out)["measures"]["trust"]["effect_sizes"]["kendall_w"]
+    assert other["estimate"] == trust["kendall_w"]["estimate"]
+    assert other["ci_high"] != trust["kendall_w"]["ci_high"]
+    code, out, _ = run(
+        "analyze", "--scores", str(scores), "--format", "json", "--bootstrap", "0", "--no-models"
+    )
+    data = json.loads(out)
+    assert data["models"] is None
+    assert data["measures"]["trust"]["effect_sizes"] is None
+    code, out, _ = run("analyze", "--scores", str(scores), "--bootstrap", "300")
+    assert "Effect sizes (95% bootstrap intervals" in out
+    assert "trust: trust ~ C(condition) + C(position) + (1 | participant)" in out
+    code, out, _ = run(
+        "analyze", "--scores", str(scores), "--format", "latex", "--bootstrap", "300"
+    )
+    assert r"\label{tab:effects}" in out
+    assert r"\label{tab:models}" in out
+
+
 def test_an_exported_study_config_beside_the_scores_gives_labels_ranges_and_order(
     tmp_path: Path,
 ) -> None:
@@ -212,38 +247,3 @@ def test_an_exported_study_config_beside_the_scores_gives_labels_ranges_and_orde
     code, out, err = run("analyze", "--scores", str(scores))
     assert code != 0
     assert "study_config.json" in (out + err)
-
-
-def test_analyze_json_has_effect_sizes_and_models(tmp_path: Path) -> None:
-    # Positions rotate across participants (a Latin square), so they are not the conditions.
-    rows = [{**row, "position": 1 + (i + i // 3) % 3} for i, row in enumerate(score_rows())]
-    scores = write_scores(tmp_path / "scores.csv", rows)
-    code, out, _ = run("analyze", "--scores", str(scores), "--format", "json", "--bootstrap", "300")
-    assert code == 0
-    data = json.loads(out)
-    trust = data["measures"]["trust"]["effect_sizes"]
-    assert trust["resamples"] == 300
-    assert trust["kendall_w"]["ci_low"] is not None
-    assert set(data["models"]["scores"]) == {"credibility", "likeability", "trust"}
-    # No suggestions.csv beside scores.csv: the acceptance model says what it needs.
-    assert data["models"]["acceptance"] is None
-    assert "per-suggestion rows" in data["models"]["notes"][0]
-    code, out, _ = run("analyze", "--scores", str(scores), "--format", "json", "--seed", "4",
-                       "--bootstrap", "300")  # fmt: skip
-    other = json.loads(out)["measures"]["trust"]["effect_sizes"]["kendall_w"]
-    assert other["estimate"] == trust["kendall_w"]["estimate"]
-    assert other["ci_high"] != trust["kendall_w"]["ci_high"]
-    code, out, _ = run(
-        "analyze", "--scores", str(scores), "--format", "json", "--bootstrap", "0", "--no-models"
-    )
-    data = json.loads(out)
-    assert data["models"] is None
-    assert data["measures"]["trust"]["effect_sizes"] is None
-    code, out, _ = run("analyze", "--scores", str(scores), "--bootstrap", "300")
-    assert "Effect sizes (95% bootstrap intervals" in out
-    assert "trust: trust ~ C(condition) + C(position) + (1 | participant)" in out
-    code, out, _ = run(
-        "analyze", "--scores", str(scores), "--format", "latex", "--bootstrap", "300"
-    )
-    assert r"\label{tab:effects}" in out
-    assert r"\label{tab:models}" in out

@@ -95,8 +95,7 @@ def test_an_unknown_behaviour_and_a_bad_choice_are_refused(tmp_path: Path) -> No
     document["conditions"]["natural"]["params"] = {"source": "recorded", "loop": "yes"}
     problems = refusal(tmp_path, document).problems
     assert problems == [
-        "conditions.natural.params.source: must be one of clip, yoked, synthetic, got "
-        "'recorded'",
+        "conditions.natural.params.source: must be one of clip, yoked, synthetic, got 'recorded'",
         "conditions.natural.params.loop: must be true or false, got 'yes'",
         "conditions.copy.behaviour: unknown behaviour 'mimic' (available: copy, natural, still)",
     ]

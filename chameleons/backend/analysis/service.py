@@ -13,6 +13,8 @@ from typing import Any
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.analysis.cache import analyses, digest
+from chameleons.backend.export.columns import interactions_table, scores_table, suggestions_table
+from chameleons.backend.export.frames import records, table_frame
 from chameleons.backend.export.rows import interaction_rows, suggestion_rows
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
@@ -102,9 +104,11 @@ class StudyAnalysis:
 def database_scores(
     db: DbSession, study_id: int | None = None, include_rehearsal: bool = False
 ) -> StudyScores:
+    """The export's scores table, as a typed frame's records (:mod:`..export.frames`)."""
     study = resolve_study(db, study_id)
     spec = study_from_config(study.config)
-    return StudyScores(study, spec, score_rows(db, study, spec, include_rehearsal))
+    scores = table_frame(scores_table(spec), score_rows(db, study, spec, include_rehearsal))
+    return StudyScores(study, spec, records(scores))
 
 
 def model_rows(
@@ -112,10 +116,13 @@ def model_rows(
 ) -> list[dict[str, Any]]:
     """The acceptance model's rows: the export's suggestions with their item set."""
     study, spec = scores.study, scores.spec
-    return suggestions_with_item_set(
-        suggestion_rows(db, study, include_rehearsal),
-        interaction_rows(db, study, spec, include_rehearsal),
+    suggestions = table_frame(
+        suggestions_table(spec), suggestion_rows(db, study, include_rehearsal)
     )
+    interactions = table_frame(
+        interactions_table(spec), interaction_rows(db, study, spec, include_rehearsal)
+    )
+    return suggestions_with_item_set(records(suggestions), records(interactions))
 
 
 def run_analysis(

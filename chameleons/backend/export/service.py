@@ -21,6 +21,7 @@ from sqlalchemy.orm import sessionmaker
 from chameleons import __version__
 from chameleons.backend.export import rows as table_rows
 from chameleons.backend.export import writers
+from chameleons.backend.export.analysis_r import analysis_script
 from chameleons.backend.export.columns import (
     CODEBOOK_COLUMNS,
     LIST_SEPARATOR,
@@ -28,14 +29,17 @@ from chameleons.backend.export.columns import (
     codebook_rows,
     table_specs,
 )
+from chameleons.backend.export.datapackage import datapackage
+from chameleons.backend.export.frames import table_frame
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
+from chameleons.backend.export.statfiles import StatFormat, write_statfile
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.study import study_from_config
 
-ExportFormat = Literal["csv", "parquet", "xlsx", "json"]
-FORMATS: tuple[ExportFormat, ...] = ("csv", "parquet", "xlsx", "json")
+ExportFormat = Literal["csv", "parquet", "xlsx", "json", "sav", "dta"]
+FORMATS: tuple[ExportFormat, ...] = ("csv", "parquet", "xlsx", "json", "sav", "dta")
 Row = dict[str, Any]
 
 
@@ -117,6 +121,10 @@ def plan_export(db: DbSession, request: ExportRequest) -> ExportPlan:
     )
     config = json.dumps(study.config, indent=2, sort_keys=True, ensure_ascii=False) + "\n"
     plan.parts.append(_bytes_part("study_config.json", config.encode))
+    script = analysis_script(study, spec, specs)
+    plan.parts.append(_bytes_part("analysis.R", script.encode))
+    package = json.dumps(datapackage(study, spec, specs), indent=2, ensure_ascii=False) + "\n"
+    plan.parts.append(_bytes_part("datapackage.json", package.encode))
     plan.parts.append(_bytes_part("README.md", lambda: _readme(plan, specs).encode()))
     # Last: it reports the row counts the table parts have just counted.
     metadata = _bytes_part(
@@ -145,6 +153,21 @@ def _add_table_parts(db: DbSession, plan: ExportPlan, table: TableSpec) -> None:
         plan.parts.append(
             Part(f"{table.name}.json", lambda s: writers.write_json(s, columns, source(), [0]))
         )
+    for fmt in ("sav", "dta"):
+        if fmt in plan.request.formats:
+            plan.parts.append(_statfile_part(plan, table, source, fmt))
+
+
+def _statfile_part(
+    plan: ExportPlan, table: TableSpec, source: Callable[[], Iterable[Row]], fmt: StatFormat
+) -> Part:
+    """SPSS/Stata need the whole table at once (pyreadstat writes a file)."""
+
+    def write(stream: IO[bytes]) -> Iterator[None]:
+        write_statfile(stream, table, table_frame(table, source()), plan.spec, fmt)
+        yield
+
+    return Part(f"{table.name}.{fmt}", write, needs_seek=True)
 
 
 def _xlsx_part(db: DbSession, plan: ExportPlan, specs: list[TableSpec]) -> Part:
@@ -160,13 +183,16 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
     lines = [
         f"# Export of study '{plan.study.name}' (config {plan.study.config_hash[:12]})",
         "",
-        "Tidy tables, one row per observation; codebook.csv describes every column.",
+        "Tidy tables, one row per observation; codebook.csv describes every column, and",
+        "datapackage.json (a Frictionless Data Package) gives each table's types, allowed",
+        "values and keys for tools: frictionless validate datapackage.json.",
         f"Rehearsal sessions are {'included' if plan.request.include_rehearsal else 'excluded'}.",
         "Times are ISO 8601 in UTC. Missing values are empty cells. Lists (rankings) are item",
         f"ids joined by '{LIST_SEPARATOR}', rank 1 first. Columns marked possibly_identifying",
         "in the codebook (free-text answers) must be reviewed before sharing the data.",
         "",
-        "R:      scores <- read.csv('scores.csv')",
+        "R:      Rscript analysis.R   (the whole analysis: tests, models, plots)",
+        "        scores <- read.csv('scores.csv')",
         "pandas: scores = pandas.read_csv('scores.csv')",
         "",
         *(f"- {t.name}: {t.description}" for t in specs),

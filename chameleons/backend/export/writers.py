@@ -11,14 +11,17 @@ import csv
 import io
 import json
 from collections.abc import Iterable, Iterator
-from datetime import datetime
 from itertools import islice
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from chameleons.backend.export import frames
 from chameleons.backend.export.columns import Column, TableSpec
+
+if TYPE_CHECKING:  # pandas is imported where it is used: the CLI starts faster
+    import pandas as pd
 
 Row = dict[str, Any]
 BATCH_ROWS = 1000
@@ -86,10 +89,12 @@ def arrow_schema(columns: tuple[Column, ...]) -> pa.Schema:
     return pa.schema([pa.field(c.name, _ARROW_TYPES[c.type]) for c in columns])
 
 
-def _arrow_value(column: Column, value: Any) -> Any:
-    if column.type == "datetime" and isinstance(value, str):
-        return datetime.fromisoformat(value)
-    return value
+def _arrow_array(series: pd.Series, kind: pa.DataType) -> pa.Array:
+    if pa.types.is_timestamp(kind):
+        # Naive UTC values, then the zone: pandas warns on zone-aware values to arrow.
+        naive = series.dt.tz_convert(None).to_numpy()
+        return pa.array(naive, type=pa.timestamp("ms")).cast(kind)
+    return pa.Array.from_pandas(series, type=kind)
 
 
 def write_parquet(
@@ -98,10 +103,10 @@ def write_parquet(
     schema = arrow_schema(table.columns)
     with pq.ParquetWriter(stream, schema) as writer:
         for batch in _batches(rows):
-            arrays = {
-                c.name: [_arrow_value(c, row.get(c.name)) for row in batch] for c in table.columns
-            }
-            writer.write_table(pa.table(arrays, schema=schema))
+            # The typed frame of the batch (one definition of the types, see frames.py).
+            data = frames.frame(table, batch)
+            arrays = [_arrow_array(data[f.name], f.type) for f in schema]
+            writer.write_table(pa.Table.from_arrays(arrays, schema=schema))
             counter[0] += len(batch)
             yield
         if counter[0] == 0:

@@ -22,13 +22,15 @@ import math
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 from scipy.stats import chi2 as chi2_distribution
 from scipy.stats import f as f_distribution
 from scipy.stats import norm
+
+if TYPE_CHECKING:  # pandas is imported where it is used: the CLI starts faster
+    import pandas as pd
 
 Z95 = float(norm.ppf(0.975))
 FACTOR_WORDS = {
@@ -139,6 +141,8 @@ def fit_models(
 
 
 def score_frame(rows: Iterable[Mapping[str, Any]], measures: Sequence[str]) -> pd.DataFrame:
+    import pandas as pd
+
     frame = pd.DataFrame(list(rows))
     _require(frame, ["participant", "condition"], "scores")
     frame["participant"] = frame["participant"].astype(str)
@@ -154,6 +158,8 @@ def score_frame(rows: Iterable[Mapping[str, Any]], measures: Sequence[str]) -> p
 def suggestion_frame(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
     """Per-suggestion rows: participant, condition, position, item_set, kind, accepted
     (true/false, empty when never decided)."""
+    import pandas as pd
+
     frame = pd.DataFrame(list(rows))
     _require(frame, ["participant", "condition", "position", "item_set", "kind", "accepted"],
              "suggestions")  # fmt: skip
@@ -164,6 +170,8 @@ def suggestion_frame(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
 
 
 def _require(frame: pd.DataFrame, columns: list[str], table: str) -> None:
+    import pandas as pd
+
     missing = [c for c in columns if c not in frame.columns]
     if missing and len(frame):
         raise ModelInputError(f"{table}: missing column(s) {', '.join(missing)}")
@@ -172,6 +180,8 @@ def _require(frame: pd.DataFrame, columns: list[str], table: str) -> None:
 
 
 def _numbers(column: pd.Series, name: str) -> pd.Series:
+    import pandas as pd
+
     text = column.map(lambda v: None if v is None or str(v).strip() == "" else v)
     converted = pd.to_numeric(text, errors="coerce")
     bad = converted.isna() & text.notna()
@@ -197,6 +207,8 @@ def _decision(value: object) -> float | None:
 
 def _categorical(series: pd.Series, first: str | None = None) -> pd.Series:
     """A categorical whose first category (the model's reference) is ``first``."""
+    import pandas as pd
+
     levels = sorted({str(v) for v in series}, key=_level_key)
     if first is not None and first in levels:
         levels.remove(first)

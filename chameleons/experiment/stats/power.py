@@ -41,6 +41,7 @@ from chameleons.experiment.blocks import balance_period
 from chameleons.experiment.design import plan
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats.effect_sizes import kendall_w_batch
+from chameleons.experiment.stats.numbers import finite
 
 Array = NDArray[np.float64]
 Progress = Callable[[int, int], None]
@@ -108,15 +109,19 @@ class PowerResult:
     notes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "design": self.design,
-            "assumptions": asdict(self.assumptions),
-            "settings": asdict(self.settings),
-            "tests": TEST_LABELS,
-            "rows": self.rows,
-            "needed": self.needed,
-            "notes": self.notes,
-        }
+        """JSON-safe: an estimate without replicates has power and SE ``None``."""
+        data: dict[str, Any] = finite(
+            {
+                "design": self.design,
+                "assumptions": asdict(self.assumptions),
+                "settings": asdict(self.settings),
+                "tests": TEST_LABELS,
+                "rows": self.rows,
+                "needed": self.needed,
+                "notes": self.notes,
+            }
+        )
+        return data
 
 
 def check(assumptions: Assumptions, settings: Settings, conditions: Sequence[str]) -> None:

@@ -7,6 +7,7 @@ from typing import Any
 
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats.power import TEST_LABELS, TESTS, Assumptions
+from chameleons.experiment.stats.rounding import fmt
 
 # The paper's Table I as a pilot: mean accepted suggestions 1.4 / 1.5 / 1.6 of 3, and
 # credibility 4.7 / 4.8 / 4.7 (SD about 1.0, split evenly between participants and noise).
@@ -24,8 +25,10 @@ def pilot_assumptions(study: Study) -> Assumptions | None:
     )
 
 
-def estimate_text(cell: dict[str, float]) -> str:
-    return f"{cell['power']:.2f} ± {cell['se']:.2f}"
+def estimate_text(cell: dict[str, float | None]) -> str:
+    if cell["power"] is None or cell["se"] is None:
+        return "not simulated"
+    return f"{fmt(cell['power'], 2)} ± {fmt(cell['se'], 2)}"
 
 
 def power_markdown(result: dict[str, Any], labels: dict[str, str] | None = None) -> str:

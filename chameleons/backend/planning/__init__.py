@@ -1,0 +1,1 @@
+"""Planning a study: power by simulation and the preregistration document."""
