@@ -98,19 +98,27 @@ def submit_measured(figures: Figures, console: Console, send: Send) -> Any:
     try:
         result = send(client_id)
     except ApiError as error:
-        figures.errors[f"HTTP {error.status}"] += 1
+        figures.count_error(f"HTTP {error.status} ({error.detail})")
         return None
-    figures.http.append(console.clock() - start)
+    figures.add(http=console.clock() - start, update=None)
     arrived = console.wait_for(client_id, timeout=UPDATE_TIMEOUT_S)
     if arrived is None:
-        figures.errors[f"no console update within {UPDATE_TIMEOUT_S:g} s"] += 1
+        figures.count_error(f"no console update within {UPDATE_TIMEOUT_S:g} s")
     else:
-        figures.update.append(arrived - start)
+        figures.add(http=None, update=arrived - start)
     return result
 
 
 def walk_session(phone: Phone, figures: Figures, rng: random.Random, think_max: float) -> None:
-    """The whole session as ``drive_session`` walks it, measuring each phone submission."""
+    """The whole session as ``drive_session`` walks it, measuring each phone submission; a
+    wizard action the server refuses or fails ends this phone's walk, counted as an error."""
+    try:
+        _walk(phone, figures, rng, think_max)
+    except ApiError as error:
+        figures.count_error(f"wizard action: HTTP {error.status} ({error.detail})")
+
+
+def _walk(phone: Phone, figures: Figures, rng: random.Random, think_max: float) -> None:
     wizard, participant = phone.wizard, phone.participant
     wizard.start()
     for position in range(1, wizard.snapshot["interaction_count"] + 1):
@@ -156,7 +164,7 @@ def run_real(database_url: str, phones: int, think_max: float, seed: int) -> dic
         run_threads([partial(walk_session, phone, think_figures, random.Random(seed + i),
                              think_max) for i, phone in enumerate(walkers)])  # fmt: skip
         burst = [real.new_phone() for _ in range(phones)]
-        for phone in burst:
+        for phone in burst:  # one after the other: the burst is the phones' alone
             phone.wizard.start()
             for to in ("discussion", "ranking"):
                 phone.wizard.advance(1, to)
