@@ -18,7 +18,7 @@ import {
   tickUndo,
 } from "./panels.js";
 import { PromptBoard } from "./prompts.js";
-import { Timeline } from "./timeline.js";
+import { bindFilter, Timeline } from "./timeline.js";
 
 const $ = (id) => document.getElementById(id);
 const root = $("console");
@@ -258,6 +258,7 @@ bindKeys({
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
 $("note-form").addEventListener("submit", addNote);
+bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = filter));
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 
