@@ -55,10 +55,8 @@ def text_frame(text: str) -> bytes:
     payload = text.encode()
     mask = os.urandom(4)
     n = len(payload)
-    if n < 126:
-        header = struct.pack("!BB", 0x81, 0x80 | n)
-    else:
-        header = struct.pack("!BBH", 0x81, 0x80 | 126, n)
+    short = n < 126
+    header = struct.pack("!BB", 0x81, 0x80 | n) if short else struct.pack("!BBH", 0x81, 0xFE, n)
     return header + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
 
 
@@ -171,14 +169,13 @@ def test_a_page_that_stops_reading_is_shed_and_the_other_page_gets_everything(
             if published % 50 == 0:
                 # Let the loop and the reader catch up (an event, not a pause): the reader
                 # has had everything so far.
-                done = published
-                wait_for(
-                    lambda done=done: (
-                        reader.saw(lambda m: m.get("play_id") == f"p#{done - 1}")
-                        or counters["closed.1013"] > 0
-                    ),
-                    "the reader to catch up",
-                )
+                last = f"p#{published - 1}"
+
+                def caught_up(last: str = last) -> bool:
+                    seen = reader.saw(lambda m: m.get("play_id") == last)
+                    return seen or counters["closed.1013"] > 0
+
+                wait_for(caught_up, "the reader to catch up")
             assert published < 100_000, "the stalled page was never shed"
         channel.publish(BOOTH, set_face_message("face-4"))
         wait_for(lambda: reader.saw(lambda m: m.get("face") == "face-4"), "the last update")

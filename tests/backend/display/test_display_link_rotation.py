@@ -30,6 +30,11 @@ def _links(client: TestClient) -> dict[str, str]:
     return dict(re.findall(r'<a href="[^"]*(/display/[^"/]+/[^"]+)" data-booth="([^"]+)"', page))
 
 
+def _read_until_closed(page: object) -> None:
+    while True:
+        receive(page)
+
+
 @pytest.fixture
 def pi_client(client: TestClient, engine: Engine) -> TestClient:
     add_user(engine, "pi", "a long pi password", "pi")
@@ -47,8 +52,7 @@ def test_rotating_a_link_ends_the_old_one_and_its_open_page(
         assert receive(page)["type"] == "hello"
         assert _post(pi_client, f"/display/{BOOTH}/rotate") == 303
         with pytest.raises(WebSocketDisconnect) as closed:
-            while True:
-                receive(page)
+            _read_until_closed(page)
     assert closed.value.code == 1008
     assert pi_client.get(old).status_code == 404
     new = display_path(signing_key(app), BOOTH, 1)

@@ -2,8 +2,8 @@
 
 Issue 15: a booth's display link was an HMAC of the booth id alone, valid for ever.
 
-Revision ID: 0003_i15_display_links
-Revises: 0002_i13_suggestions_natural
+Revision ID: 0004_i15_display_links
+Revises: 0003_i13_optional_items
 Create Date: 2026-11-25 00:30:00
 """
 from __future__ import annotations
@@ -12,8 +12,8 @@ import sqlalchemy as sa
 from alembic import op
 
 
-revision = '0003_i15_display_links'
-down_revision = '0002_i13_suggestions_natural'
+revision = '0004_i15_display_links'
+down_revision = '0003_i13_optional_items'
 branch_labels = None
 depends_on = None
 
