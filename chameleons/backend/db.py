@@ -12,13 +12,35 @@ from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
 
+# A write transaction on SQLite starts with BEGIN IMMEDIATE (it takes the write lock before
+# reading), so two requests changing one session run one after the other: the second reads
+# what the first committed. (SELECT ... FOR UPDATE, which serialises them on PostgreSQL, is
+# a no-op on SQLite.) Set by ``write_transaction``.
+IMMEDIATE = "chameleons_begin_immediate"
+
+
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
+    # SQLAlchemy, not the driver, begins transactions (so BEGIN IMMEDIATE can be chosen):
+    # the recipe of SQLAlchemy's SQLite dialect docs ("Serializable isolation / Savepoints").
+    dbapi_connection.isolation_level = None
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA busy_timeout=5000")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.close()
+
+
+def _sqlite_begin(connection: Any) -> None:
+    immediate = connection.get_execution_options().get(IMMEDIATE, False)
+    connection.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
+
+
+def write_transaction(db: Session) -> None:
+    """Begin ``db``'s transaction as a writer (call first, before any query): serialised
+    against every other writer on SQLite; on PostgreSQL row locks do that (``FOR UPDATE``)."""
+    if db.get_bind().dialect.name == "sqlite":
+        db.connection(execution_options={IMMEDIATE: True})
 
 
 def build_engine(url: str) -> Engine:
@@ -29,6 +51,7 @@ def build_engine(url: str) -> Engine:
             Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 5})
         event.listen(engine, "connect", _sqlite_pragmas)
+        event.listen(engine, "begin", _sqlite_begin)
         return engine
     if parsed.get_backend_name() == "postgresql" and parsed.drivername == "postgresql":
         url = parsed.set(drivername="postgresql+psycopg").render_as_string(hide_password=False)
