@@ -11,7 +11,6 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
-
 # A write transaction on SQLite starts with BEGIN IMMEDIATE (it takes the write lock before
 # reading), so two requests changing one session run one after the other: the second reads
 # what the first committed. (SELECT ... FOR UPDATE, which serialises them on PostgreSQL, is

@@ -125,9 +125,11 @@ def _check_stored(engine: Engine, session_id: int, index: int, winner: bool) -> 
 def _check_events(engine: Engine, session_id: int, trials: int) -> None:
     with DbSession(engine) as db:
         kinds = db.scalars(
-            select(Event.kind).where(
+            select(Event.kind)
+            .where(
                 Event.session_id == session_id,
                 Event.kind.in_(("suggestion.decided", "suggestion.undone")),
-            ).order_by(Event.id)
+            )
+            .order_by(Event.id)
         ).all()
     assert list(kinds) == ["suggestion.decided", "suggestion.undone"] * trials

@@ -150,9 +150,7 @@ def _add_table_parts(db: DbSession, plan: ExportPlan, table: TableSpec) -> None:
     columns = table.column_names
     text = _guarded(plan.request, [c.name for c in table.columns if c.type == "string"])
     plan.parts.append(
-        Part(
-            f"{table.name}.csv", lambda s: writers.write_csv(s, columns, source(), counter, text)
-        )
+        Part(f"{table.name}.csv", lambda s: writers.write_csv(s, columns, source(), counter, text))
     )
     if "parquet" in plan.request.formats:
         plan.parts.append(
@@ -228,7 +226,7 @@ def _formula_note(plan: ExportPlan) -> list[str]:
     return [
         "Text cells starting with = + - @ tab or CR carry a leading ' in the CSV files (OWASP",
         "CSV-injection guidance: a spreadsheet would run them as formulas); data.xlsx stores",
-        "all text as text. Strip it in R with sub(\"^'([-=+@\\t\\r])\", \"\\\\1\", x), or export",
+        'all text as text. Strip it in R with sub("^\'([-=+@\\t\\r])", "\\\\1", x), or export',
         "with --raw-csv (metadata.json: csv_formula_guard).",
     ]
 
