@@ -20,7 +20,9 @@ class QuestionnaireResponse(Base):
     __tablename__ = "questionnaire_response"
     __table_args__ = (
         UniqueConstraint("session_id", "position", "questionnaire", "item"),
-        CheckConstraint("skipped OR value IS NOT NULL OR text IS NOT NULL", name="has_answer"),
+        CheckConstraint(
+            "skipped OR value IS NOT NULL OR text IS NOT NULL", name="has_answer"
+        ),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)
