@@ -39,7 +39,8 @@ def write_transaction(db: Session) -> None:
     """Begin ``db``'s transaction as a writer (call first, before any query): serialised
     against every other writer on SQLite; on PostgreSQL row locks do that (``FOR UPDATE``)."""
     if db.get_bind().dialect.name == "sqlite":
-        db.connection(execution_options={IMMEDIATE: True})
+        options: dict[str, Any] = {IMMEDIATE: True}  # a custom option: not in the TypedDict
+        db.connection(execution_options=options)
 
 
 def build_engine(url: str) -> Engine:
