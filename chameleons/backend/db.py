@@ -11,17 +11,8 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
-# A write transaction on SQLite starts with BEGIN IMMEDIATE (it takes the write lock before
-# reading), so two requests changing one session run one after the other: the second reads
-# what the first committed. (SELECT ... FOR UPDATE, which serialises them on PostgreSQL, is
-# a no-op on SQLite.) Set by ``write_transaction``.
-IMMEDIATE = "chameleons_begin_immediate"
-
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
-    # SQLAlchemy, not the driver, begins transactions (so BEGIN IMMEDIATE can be chosen):
-    # the recipe of SQLAlchemy's SQLite dialect docs ("Serializable isolation / Savepoints").
-    dbapi_connection.isolation_level = None
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.execute("PRAGMA journal_mode=WAL")
@@ -30,17 +21,22 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
     cursor.close()
 
 
-def _sqlite_begin(connection: Any) -> None:
-    immediate = connection.get_execution_options().get(IMMEDIATE, False)
-    connection.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
-
-
 def write_transaction(db: Session) -> None:
-    """Begin ``db``'s transaction as a writer (call first, before any query): serialised
-    against every other writer on SQLite; on PostgreSQL row locks do that (``FOR UPDATE``)."""
-    if db.get_bind().dialect.name == "sqlite":
-        options: dict[str, Any] = {IMMEDIATE: True}  # a custom option: not in the TypedDict
-        db.connection(execution_options=options)
+    """Make ``db``'s transaction a writer now, before it reads the state it will change.
+
+    PostgreSQL serialises such changes with the row lock of ``SELECT ... FOR UPDATE``; on
+    SQLite that clause does nothing, so two requests could both read "pending" and both
+    decide. There the transaction takes the database's write lock first (``BEGIN
+    IMMEDIATE``; a second writer waits up to the busy timeout) and then reads what the
+    previous writer committed. Reads before this point ran outside a transaction (the
+    driver begins one only before a write), and a transaction that has written already
+    holds the lock."""
+    if db.get_bind().dialect.name != "sqlite":
+        return
+    connection = db.connection()
+    driver = connection.connection.driver_connection
+    if driver is not None and not driver.in_transaction:
+        connection.exec_driver_sql("BEGIN IMMEDIATE")
 
 
 def build_engine(url: str) -> Engine:
@@ -51,7 +47,6 @@ def build_engine(url: str) -> Engine:
             Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 5})
         event.listen(engine, "connect", _sqlite_pragmas)
-        event.listen(engine, "begin", _sqlite_begin)
         return engine
     if parsed.get_backend_name() == "postgresql" and parsed.drivername == "postgresql":
         url = parsed.set(drivername="postgresql+psycopg").render_as_string(hide_password=False)

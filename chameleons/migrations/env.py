@@ -22,9 +22,9 @@ def run_migrations_online() -> None:
             # A batch migration rebuilds a table: it copies it, then DROPs the original. With
             # foreign keys on, SQLite's DROP deletes the rows first and ON DELETE CASCADE
             # would delete every row that refers to them (a participant's sessions...).
-            # The pragma cannot change inside a transaction, and SQLAlchemy begins one for
-            # every statement (db.py): set it on the driver's connection, outside any.
-            _pragma(connection, "PRAGMA foreign_keys=OFF")
+            # The pragma cannot change inside a transaction: set it, end that one.
+            connection.exec_driver_sql("PRAGMA foreign_keys=OFF")
+            connection.commit()
         context.configure(
             connection=connection,
             target_metadata=target_metadata,
@@ -36,14 +36,9 @@ def run_migrations_online() -> None:
             if sqlite:
                 _check_foreign_keys(connection)
         if sqlite:
-            _pragma(connection, "PRAGMA foreign_keys=ON")
+            connection.exec_driver_sql("PRAGMA foreign_keys=ON")
+            connection.commit()
     engine.dispose()
-
-
-def _pragma(connection: Connection, statement: str) -> None:
-    if connection.in_transaction():
-        connection.commit()
-    connection.connection.driver_connection.execute(statement)  # type: ignore[union-attr]
 
 
 def _check_foreign_keys(connection: Connection) -> None:

@@ -19,10 +19,11 @@ from chameleons.backend.display.tokens import display_token, signing_key
 from chameleons.backend.events.guard import SocketClosed
 from chameleons.worker.frames import N_BLENDSHAPES
 from tests.backend.display.test_channel_and_relay import run
+from tests.backend.sessions.conftest import phone, pi, study_id, wizard
 from tests.reliability.conftest import BURST
 from tests.support.bots import WizardBot
 
-pytest_plugins = ["tests.backend.sessions.conftest"]
+__all__ = ["phone", "pi", "study_id", "wizard"]
 
 
 def _paths(app: FastAPI, wizard: WizardBot) -> dict[str, str]:

@@ -216,7 +216,7 @@ class BoothFlow:
 
     def _write(self, work: Callable[..., T], *args: Any) -> Awaitable[T]:
         def run() -> T:
-            with write_session(self.state.sessionmaker, self.state.live_hub, True) as db:
+            with write_session(self.state.sessionmaker, self.state.live_hub) as db:
                 return work(db, *args)
 
         return run_in_threadpool(run)

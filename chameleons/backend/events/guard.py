@@ -49,8 +49,8 @@ def slow_client(what: str) -> SocketClosed:
 @dataclass(frozen=True)
 class SocketLimits:
     queue: int = 256
-    rate: float = 20.0
-    burst: int = 100
+    rate: float = 200.0
+    burst: int = 400
     send_timeout: float = 10.0
 
 

@@ -16,7 +16,6 @@ from fastapi import Depends, Request
 from sqlalchemy import event as sa_event
 from sqlalchemy.orm import Session, sessionmaker
 
-from chameleons.backend.db import write_transaction
 from chameleons.backend.events.hub import LiveHub, session_channel
 from chameleons.backend.events.repository import OUTBOX_KEY, to_dict
 from chameleons.backend.models import Event
@@ -45,13 +44,9 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
     sa_event.listen(db, "after_rollback", after_rollback)
 
 
-def write_scope(
-    factory: sessionmaker[Session], hub: LiveHub, serialised: bool = False
-) -> Iterator[Session]:
+def write_scope(factory: sessionmaker[Session], hub: LiveHub) -> Iterator[Session]:
     db = factory()
     attach_hub(db, hub)
-    if serialised:
-        write_transaction(db)
     try:
         yield db
         db.commit()
@@ -62,18 +57,13 @@ def write_scope(
         db.close()
 
 
-def write_session(
-    factory: sessionmaker[Session], hub: LiveHub, serialised: bool = False
-) -> AbstractContextManager[Session]:
-    """``with write_session(factory, hub) as db:`` outside requests (WebSockets, scripts);
-    ``serialised`` for one that changes state (see ``db.write_transaction``)."""
-    return contextmanager(write_scope)(factory, hub, serialised)
+def write_session(factory: sessionmaker[Session], hub: LiveHub) -> AbstractContextManager[Session]:
+    """``with write_session(factory, hub) as db:`` outside requests (WebSockets, scripts)."""
+    return contextmanager(write_scope)(factory, hub)
 
 
 def get_write_db(request: Request) -> Iterator[Session]:
-    """Every request that writes is serialised with the others (a state transition reads
-    what the previous one committed)."""
-    yield from write_scope(request.app.state.sessionmaker, get_hub(request), serialised=True)
+    yield from write_scope(request.app.state.sessionmaker, get_hub(request))
 
 
 WriteDb = Annotated[Session, Depends(get_write_db, scope="function")]

@@ -70,7 +70,7 @@ def _read_state(factory: sessionmaker[Session], hub: LiveHub, token: str) -> tup
 
 
 def _log_connection(factory: sessionmaker[Session], hub: LiveHub, token: str, kind: str) -> None:
-    with write_session(factory, hub, serialised=True) as db:
+    with write_session(factory, hub) as db:
         flow = load_by_token(db, token, lock=False)
         if flow.session.state not in ("complete", "ended"):
             events.record(
