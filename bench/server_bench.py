@@ -5,7 +5,7 @@ same traffic against a bare FastAPI server (``bench.baseline_app``) measured in 
 
 The server under test is ``chameleons serve`` in a process of its own (as in a lab), on a
 fresh SQLite file, or a fresh PostgreSQL database on ``--database-url``'s server (default:
-``TEST_DATABASE_URL`` when set; ``--sqlite-only`` skips it). The load comes from this
+``TEST_DATABASE_URL`` when set; ``--only sqlite|postgresql`` runs one). The load comes from this
 process, one thread per phone:
 
 - **think**: every phone walks a whole session (its wizard drives it over the staff API, as
@@ -98,19 +98,27 @@ def submit_measured(figures: Figures, console: Console, send: Send) -> Any:
     try:
         result = send(client_id)
     except ApiError as error:
-        figures.errors[f"HTTP {error.status}"] += 1
+        figures.count_error(f"HTTP {error.status} ({error.detail})")
         return None
-    figures.http.append(console.clock() - start)
+    figures.add(http=console.clock() - start, update=None)
     arrived = console.wait_for(client_id, timeout=UPDATE_TIMEOUT_S)
     if arrived is None:
-        figures.errors[f"no console update within {UPDATE_TIMEOUT_S:g} s"] += 1
+        figures.count_error(f"no console update within {UPDATE_TIMEOUT_S:g} s")
     else:
-        figures.update.append(arrived - start)
+        figures.add(http=None, update=arrived - start)
     return result
 
 
 def walk_session(phone: Phone, figures: Figures, rng: random.Random, think_max: float) -> None:
-    """The whole session as ``drive_session`` walks it, measuring each phone submission."""
+    """The whole session as ``drive_session`` walks it, measuring each phone submission; a
+    wizard action the server refuses or fails ends this phone's walk, counted as an error."""
+    try:
+        _walk(phone, figures, rng, think_max)
+    except ApiError as error:
+        figures.count_error(f"wizard action: HTTP {error.status} ({error.detail})")
+
+
+def _walk(phone: Phone, figures: Figures, rng: random.Random, think_max: float) -> None:
     wizard, participant = phone.wizard, phone.participant
     wizard.start()
     for position in range(1, wizard.snapshot["interaction_count"] + 1):
@@ -156,7 +164,7 @@ def run_real(database_url: str, phones: int, think_max: float, seed: int) -> dic
         run_threads([partial(walk_session, phone, think_figures, random.Random(seed + i),
                              think_max) for i, phone in enumerate(walkers)])  # fmt: skip
         burst = [real.new_phone() for _ in range(phones)]
-        for phone in burst:
+        for phone in burst:  # one after the other: the burst is the phones' alone
             phone.wizard.start()
             for to in ("discussion", "ranking"):
                 phone.wizard.advance(1, to)
@@ -220,9 +228,10 @@ def _post_json(http: Any, path: str, body: dict[str, Any]) -> Any:
 @contextmanager
 def databases(args: argparse.Namespace) -> Iterator[list[tuple[str, str]]]:
     with tempfile.TemporaryDirectory(prefix="chameleons-bench-") as tmp:
-        found = [("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
+        found = [] if args.only == "postgresql" else [
+            ("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
         server_url = args.database_url or os.environ.get("TEST_DATABASE_URL")
-        if args.sqlite_only or not server_url:
+        if args.only == "sqlite" or not server_url:
             yield found
             return
         with scratch_postgres(server_url) as url:
@@ -248,7 +257,8 @@ def main() -> None:
     parser.add_argument("--think-max", type=float, default=3.0, help="Seconds (uniform 0..T).")
     parser.add_argument("--quick", action="store_true", help="10 phones, 0.5 s think time.")
     parser.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
-    parser.add_argument("--sqlite-only", action="store_true")
+    parser.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
+                        help="Run one database only.")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="Also write the figures here.")
     args = parser.parse_args()

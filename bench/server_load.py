@@ -49,6 +49,17 @@ class Figures:
     errors: Counter[str] = field(default_factory=Counter)
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
+    def add(self, *, http: float | None, update: float | None) -> None:
+        with self._lock:
+            if http is not None:
+                self.http.append(http)
+            if update is not None:
+                self.update.append(update)
+
+    def count_error(self, what: str) -> None:
+        with self._lock:
+            self.errors[what] += 1
+
     def summary(self) -> dict[str, Any]:
         with self._lock:
             ms = {f"{name}_{label}_ms": round(percentile(values, q) * 1000, 2)
