@@ -311,7 +311,8 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 "value",
                 "integer",
                 "Raw answer on the questionnaire's scale (1 = left anchor / strongly"
-                " disagree); empty for open questions.",
+                " disagree); for a robot item the position of the robot named; empty for"
+                " open questions and choices (their option id is in text).",
                 "1..7",
             ),
             Column(
