@@ -136,6 +136,6 @@ def test_manipulation_check_is_exported_by_condition_and_counted_on_the_analysis
         assert robot["counts"][condition] == named.count(condition)
     assert robot["answered"] + robot["skipped"] == 3
     assert sum(checks["noticed_imitation"]["counts"].values()) == 3
-    page = client.get("/pi/analysis", params={"study": study_id}).text
-    assert 'data-item="imitating_robot"' in page
-    assert '<tr data-answer="copy"><td>Copy' in page
+    html = client.get("/pi/analysis", params={"study": study_id}).text
+    assert 'data-item="imitating_robot"' in html
+    assert '<tr data-answer="copy"><td>Copy' in html
