@@ -30,6 +30,7 @@ VALUES = {
 # Well-formed bodies, so the token check (not validation) is what answers.
 BODIES = {
     "/api/phone/{token}/ranking": {"client_id": "c" * 16, "position": 1, "ranking": ["water"]},
+    "/api/phone/{token}/consent": {"client_id": "c" * 16, "agree": True},
     "/api/phone/{token}/questionnaire": {
         "client_id": "c" * 16, "position": 1, "questionnaire": "trust", "answers": {"x": 1},
     },

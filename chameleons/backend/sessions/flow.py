@@ -147,7 +147,10 @@ def undo_deadline(suggestion: Suggestion) -> datetime | None:
 def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
     state = flow.session.state
     if state == "pending":
-        return [{"action": "start"}]
+        from chameleons.backend.sessions.consent import waiting_before_start
+
+        waiting = waiting_before_start(flow)
+        return [{"action": "wait", "for": waiting}] if waiting else [{"action": "start"}]
     if state == "final_questionnaire":
         return [{"action": "wait", "for": "final_questionnaire"}]
     if state == "complete":
