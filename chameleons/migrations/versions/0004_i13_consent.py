@@ -15,7 +15,7 @@ from alembic import op
 
 
 revision = '0004_i13_consent'
-down_revision = '0003_i13_optional_items'
+down_revision = '0004_i15_display_links'
 branch_labels = None
 depends_on = None
 
