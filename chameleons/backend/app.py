@@ -46,6 +46,7 @@ from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import pages as wizard_pages
+from chameleons.backend.wizard import typed_speech
 from chameleons.experiment.stats.rounding import fmt, fmt_p
 from chameleons.settings import Settings
 
@@ -140,6 +141,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wizard_pages.router,
         wizard_endpoints.router,
         wizard_live.router,
+        typed_speech.router,
     ):
         app.include_router(router)
     return app
