@@ -10,13 +10,13 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+from typing import Any
 from urllib.parse import urlsplit
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.auth import repository
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.db import session_scope
 from chameleons.backend.display import links
 from chameleons.backend.display.channel import DisplayChannel, Subscription, get_display_channel
@@ -61,10 +61,9 @@ async def display_socket(websocket: WebSocket, booth: str, token: str | None = N
 async def _authorised(websocket: WebSocket, booth: str, token: str | None) -> bool:
     if token is not None:
         return await run_in_threadpool(_token_works, websocket, booth, token)
-    staff_id = websocket.session.get(SESSION_USER_KEY)
-    if not isinstance(staff_id, int) or not _same_origin(websocket):
+    if not _same_origin(websocket):
         return False
-    return await run_in_threadpool(_active_staff, websocket, staff_id)
+    return await run_in_threadpool(_active_staff, websocket, dict(websocket.session))
 
 
 def _same_origin(websocket: WebSocket) -> bool:
@@ -78,11 +77,9 @@ def _token_works(websocket: WebSocket, booth: str, token: str) -> bool:
         return links.token_works(db, websocket.app, booth, token)
 
 
-def _active_staff(websocket: WebSocket, staff_id: int) -> bool:
+def _active_staff(websocket: WebSocket, cookie: dict[str, Any]) -> bool:
     with session_scope(websocket.app.state.sessionmaker) as db:
-        user = repository.get_by_id(db, staff_id)
-        return user is not None and user.is_active
-    return False
+        return staff_sessions.staff_of(db, cookie) is not None
 
 
 async def _send_loop(websocket: WebSocket, subscription: Subscription) -> None:

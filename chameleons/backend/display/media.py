@@ -29,6 +29,8 @@ from urllib.parse import quote, unquote, urlsplit, urlunsplit
 from fastapi import APIRouter, FastAPI, HTTPException, Query, Request, status
 from fastapi.responses import FileResponse
 
+from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.db import session_scope
 from chameleons.backend.display.tokens import check_token, media_token, signing_key
 from chameleons.backend.wizard.catalogues import prompts_root
 from chameleons.settings import Settings
@@ -93,7 +95,9 @@ def _actor_file(settings: Settings, actor: str, relative: str) -> Path:
 
 
 def _staff_session(request: Request) -> bool:
-    return isinstance(request.session.get("staff_id"), int)
+    """A logged-in staff member (an open server-side session), checked only without a key."""
+    with session_scope(request.app.state.sessionmaker) as db:
+        return staff_sessions.staff_of(db, request.session) is not None
 
 
 @router.get("/media/prompts/{actor}/{relative:path}", name="prompt_media")

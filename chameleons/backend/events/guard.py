@@ -26,6 +26,8 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from chameleons.backend.logredact import redact
+
 log = logging.getLogger(__name__)
 
 UNSUPPORTED_DATA = 1003  # RFC 6455 7.4.1: a type of data the endpoint cannot accept
@@ -125,7 +127,8 @@ async def send_text(websocket: WebSocket, text: str, timeout: float | None = Non
 def _describe(websocket: WebSocket) -> str:
     client = websocket.client
     peer = f"{client.host}:{client.port}" if client else "?"
-    return f"{websocket.url.path} from {peer}"  # the path only: query strings carry tokens
+    # The path only (query strings carry tokens), with the phone's token taken out too.
+    return f"{redact(websocket.url.path)} from {peer}"
 
 
 async def close(websocket: WebSocket, error: SocketClosed) -> None:

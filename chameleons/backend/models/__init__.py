@@ -9,6 +9,7 @@ from chameleons.backend.models.plan_row import PlanRow
 from chameleons.backend.models.questionnaire_response import QuestionnaireResponse
 from chameleons.backend.models.recording import Recording
 from chameleons.backend.models.session import Session
+from chameleons.backend.models.staff_session import StaffSession
 from chameleons.backend.models.staff_user import StaffUser
 from chameleons.backend.models.study import Study
 from chameleons.backend.models.suggestion import Suggestion
@@ -23,6 +24,7 @@ __all__ = [
     "QuestionnaireResponse",
     "Recording",
     "Session",
+    "StaffSession",
     "StaffUser",
     "Study",
     "Suggestion",

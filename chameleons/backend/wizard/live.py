@@ -16,8 +16,7 @@ import anyio
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.auth import repository as staff
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.studies.errors import NotFoundError
@@ -43,9 +42,8 @@ class Sender:
             await live.send_json(self._websocket, message)
 
 
-def _is_staff(db: Any, user_id: Any) -> bool:
-    user = staff.get_by_id(db, user_id) if isinstance(user_id, int) else None
-    return user is not None and user.is_active
+def _is_staff(db: Any, cookie: dict[str, Any]) -> bool:
+    return staff_sessions.staff_of(db, cookie) is not None
 
 
 def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Message:
@@ -55,9 +53,9 @@ def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Messa
 @router.websocket("/ws/wizard/sessions/{session_id}")
 async def console_feed(websocket: WebSocket, session_id: int) -> None:
     state = websocket.app.state
-    user_id = websocket.session.get(SESSION_USER_KEY)
+    cookie = dict(websocket.session)
     if not live.same_origin(websocket) or not await run_in_threadpool(
-        read, state, _is_staff, user_id
+        read, state, _is_staff, cookie
     ):
         await websocket.close(code=UNAUTHORIZED)
         return
