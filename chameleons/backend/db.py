@@ -33,8 +33,10 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
 # threads, threads waiting for a connection could hold every thread token while the
 # requests holding the connections wait for a token (idle in transaction until the pool's
 # timeout: seen with 15 connections and 40 threads at 50 phones on PostgreSQL).
-POOL_SIZE = 10
-POOL_OVERFLOW = 30
+# Five kept open when idle (SQLAlchemy's default), the rest opened under load and closed
+# when returned.
+POOL_SIZE = 5
+POOL_OVERFLOW = 35
 
 
 def write_transaction(db: Session) -> None:
