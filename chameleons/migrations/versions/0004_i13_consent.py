@@ -15,7 +15,7 @@ from alembic import op
 
 
 revision = '0004_i13_consent'
-down_revision = '0004_i15_display_links'
+down_revision = '0005_i15_staff_sessions'
 branch_labels = None
 depends_on = None
 
