@@ -11,12 +11,18 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
+# How long a SQLite writer waits for the write lock before "database is locked". Writers
+# queue one at a time (BEGIN IMMEDIATE); 50 phones submitting at once on a loaded 2-core
+# machine needed more than the 5 s this was (bench/server_bench.py: 33 of 50 burst
+# submissions failed); a lab's request never waits that long unless the disk stalls.
+SQLITE_BUSY_TIMEOUT_S = 30
+
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.execute("PRAGMA journal_mode=WAL")
-    cursor.execute("PRAGMA busy_timeout=5000")
+    cursor.execute(f"PRAGMA busy_timeout={SQLITE_BUSY_TIMEOUT_S * 1000}")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.close()
 
@@ -57,7 +63,8 @@ def build_engine(url: str) -> Engine:
         memory = not parsed.database or parsed.database == ":memory:"
         if not memory:
             Path(parsed.database or "").parent.mkdir(parents=True, exist_ok=True)
-        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 5},
+        engine = create_engine(url, connect_args={"check_same_thread": False,
+                                                  "timeout": SQLITE_BUSY_TIMEOUT_S},
                                **({} if memory else pool))  # fmt: skip
         event.listen(engine, "connect", _sqlite_pragmas)
         return engine
