@@ -63,7 +63,8 @@ WORKER_KINDS = {
 }
 SUMMARY_FIELDS = ("instance", "restarts", "last_seen_s")
 ROBOT_KINDS = {"disconnected": "robot.disconnected", "closed": "robot.disconnected",
-               "connected": "robot.connected"}  # fmt: skip
+               "connected": "robot.connected", "auth_refused": "robot.auth_refused",
+               "auth_timeout": "robot.auth_timeout"}  # fmt: skip
 
 
 @dataclass(frozen=True)

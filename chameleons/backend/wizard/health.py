@@ -51,7 +51,9 @@ LABELS = {
     "jitter": "Jitter",
     "robot": "Robot",
     "speaking": "Speaking",
+    "face": "Robot face",
 }
+ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
 
 @dataclass
@@ -132,9 +134,39 @@ def evaluate(
         "input": Check("input", fps_ok, _fmt(fps, "fps")),
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
-        "robot": Check("robot", robot is True, "connected" if robot else "disconnected"),
+        "robot": Check("robot", robot is True, _robot_value(telemetry, robot is True)),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
+        **_face_check(telemetry),
     }
+
+
+def _robot_face(telemetry: Mapping[str, Any]) -> Mapping[str, Any]:
+    face = telemetry.get("robot_face")
+    return face if isinstance(face, Mapping) else {}
+
+
+def _robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
+    """``connected``, or why not: a refused login says so with the robot's reason."""
+    if connected:
+        return "connected"
+    state = str(telemetry.get("robot_state") or "disconnected")
+    problem = telemetry.get("robot_problem")
+    if state in ROBOT_PROBLEMS:
+        return f"{ROBOT_PROBLEMS[state]}: {problem}" if problem else ROBOT_PROBLEMS[state]
+    return "disconnected"
+
+
+def _face_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:
+    """A chip only when the robot's face needs attention: a study face id with no robot
+    face mapped (the robot got the id unchanged), or a face setting the robot refused."""
+    face = _robot_face(telemetry)
+    unmapped, refused = face.get("unmapped_face"), face.get("refused") or {}
+    problems = [f"{unmapped} not mapped to a robot face"] if unmapped else []
+    if isinstance(refused, Mapping):
+        problems += [f"{name} refused ({why})" for name, why in refused.items()]
+    if not problems:
+        return {}
+    return {"face": Check("face", False, "; ".join(problems))}
 
 
 def _fmt(value: float | None, unit: str, digits: int = 1) -> str:
@@ -170,7 +202,9 @@ class HealthTracker:
             "ok": all(check.ok is not False for check in checks.values()),
             "alarm": any(check.level == ALARM for check in checks.values()),
             "alarm_after_s": self.limits.alarm_after_s,
-            "checks": [checks[name].as_dict() for name in (*CHECKS, "speaking")],
+            "checks": [
+                checks[name].as_dict() for name in (*CHECKS, "speaking", "face") if name in checks
+            ],
             "telemetry": dict(telemetry) if telemetry is not None else None,
         }
 

@@ -39,7 +39,7 @@ const timeline = new Timeline($("timeline"), $("timeline-count"));
 const now = new NowPlaying($("now-playing"), $("now-label"), $("now-bar"), (s) =>
   board.markPlaying(["playing", "sending"].includes(s.phase) ? s.group : null),
 );
-const health = new HealthStrip($("health"));
+const health = new HealthStrip($("health"), () => perform("try the robot again", api.robotRetry));
 
 function showLink() {
   const banner = $("conn-banner");
