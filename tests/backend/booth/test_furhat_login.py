@@ -49,6 +49,8 @@ def test_a_refused_login_is_logged_shown_red_and_retried_on_the_wizards_request(
             answer = pi.post(f"/api/wizard/sessions/{wizard.session_id}/robot/retry")
             wait_for_event(wizard, "robot.connected")
             retried = wait_for_event(wizard, "robot.retry_requested")
+        # The worker's stop is logged too; wait for it, so no write is left for the teardown.
+        wait_for_event(wizard, "robot.disconnected")
     assert "refused" in event["payload"]["reason"]
     assert chip["ok"] is False
     assert chip["level"] == "alarm"
