@@ -123,7 +123,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),
         livelink_port=pick("livelink_port", "livelink_port", 11111),
         facecapturex_port=pick("facecapturex_port", "facecapturex_port", 19977),
-        livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "degrees/180"),
+        livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "radians"),
         mounting_rotation_deg=_setting(settings, "mounting_rotation_deg", 0.0),
         mirror=_setting(settings, "mirror", True),
         behaviour=options["behaviour"], behaviour_params=params, copy_delay=delay,

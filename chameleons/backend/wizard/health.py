@@ -131,13 +131,25 @@ def evaluate(
     fps_ok = fps is not None and fps >= limits.min_face_fps
     return {
         "worker": Check("worker", True, "connected"),
-        "input": Check("input", fps_ok, _fmt(fps, "fps")),
+        "input": Check("input", fps_ok, _input_value(telemetry, fps, fps_ok)),
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
         "robot": Check("robot", robot is True, _robot_value(telemetry, robot is True)),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
     }
+
+
+def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) -> str:
+    """The frame rate, or why the phone sends no faces: it sees no face, or the lab must
+    change the app's mode (e.g. MetaHuman Animator instead of ARKit streaming)."""
+    ingest = telemetry.get("ingest")
+    ingest = ingest if isinstance(ingest, Mapping) else {}
+    if not fps_ok and ingest.get("problem"):
+        return str(ingest["problem"])
+    if not fps_ok and ingest.get("no_face"):
+        return "phone sees no face"
+    return _fmt(fps, "fps")
 
 
 def _robot_face(telemetry: Mapping[str, Any]) -> Mapping[str, Any]:

@@ -33,7 +33,12 @@ from chameleons.worker.ingest.facecapturex import (
     FaceCaptureXDecoder,
     parse_facecapturex_frame,
 )
-from chameleons.worker.ingest.livelink import DEFAULT_ROTATION_FACTOR, parse_livelink_packet
+from chameleons.worker.ingest.livelink import (
+    DEFAULT_ROTATION_FACTOR,
+    METAHUMAN,
+    NO_FACE,
+    parse_livelink_packet,
+)
 from chameleons.worker.ingest.stats import CaptureStats, ClockAligner
 from chameleons.worker.ingest.transform import FrameTransform
 
@@ -182,6 +187,11 @@ class _Receiver:
         self.stats.count_frame(frame.receive_time)
 
     def _drop(self, error: IngestError) -> None:
+        if error.reason == NO_FACE:  # the phone is fine, it sees nobody: not an error
+            self.stats.count_no_face(self._clock())
+            return
+        if error.reason == METAHUMAN:  # the lab must change the app's mode: show why
+            self.stats.set_problem(error.detail)
         self.stats.count_drop(error.reason)
         log.debug("%s receiver dropped input: %s", self.kind, error)
 

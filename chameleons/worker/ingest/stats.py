@@ -17,6 +17,10 @@ class CaptureStats:
         self._lock = threading.Lock()
         self._drops: Counter[str] = Counter()
         self._times: deque[float] = deque(maxlen=1024)
+        self._no_face: deque[float] = deque(maxlen=1024)
+        self.no_face = 0  # "the phone sees no face" packets (not errors)
+        self.problem: str | None = None  # what the lab must change (e.g. the app's mode)
+        self._problem_at = -1e18
         self.frames = 0
         self.unknown_names = 0
         self.bad_fields = 0
@@ -27,6 +31,15 @@ class CaptureStats:
         with self._lock:
             self.frames += 1
             self._times.append(receive_time)
+
+    def count_no_face(self, receive_time: float) -> None:
+        with self._lock:
+            self.no_face += 1
+            self._no_face.append(receive_time)
+
+    def set_problem(self, text: str) -> None:
+        with self._lock:
+            self.problem, self._problem_at = text, self._clock()
 
     def count_drop(self, reason: str, n: int = 1) -> None:
         with self._lock:
@@ -57,9 +70,15 @@ class CaptureStats:
             return 0.0
         return (len(recent) - 1) / (recent[-1] - recent[0])
 
+    def _recent(self, times: deque[float]) -> list[float]:
+        now = self._clock()
+        return [t for t in times if now - t <= self._window]
+
     def snapshot(self) -> dict[str, Any]:
         fps, drops = self.input_fps, self.drops
         with self._lock:
+            no_face_recent = bool(self._recent(self._no_face))
+            problem_recent = self._clock() - self._problem_at <= self._window
             return {
                 "frames": self.frames,
                 "input_fps": fps,
@@ -69,6 +88,9 @@ class CaptureStats:
                 "bad_fields": self.bad_fields,
                 "connected": self.connected,
                 "connections": self.connections,
+                "no_face": self.no_face,
+                "no_face_recent": no_face_recent,  # the phone sees no face right now
+                "problem": self.problem if problem_recent else None,
             }
 
 

@@ -149,3 +149,14 @@ def test_an_unmapped_study_face_or_a_refused_face_field_gets_a_chip_of_its_own()
     assert face["label"] == "Robot face"
     assert face["ok"] is False
     assert face["value"] == "face-3 not mapped to a robot face; head_sway refused (unknown field)"
+
+
+def test_the_face_stream_chip_says_why_no_faces_arrive() -> None:
+    quiet = {**GOOD, "input_fps": 0.0}
+    assert evaluate(quiet, age=0.5)["input"].value == "0.0 fps"
+    no_face = evaluate({**quiet, "ingest": {"no_face": True, "problem": None}}, age=0.5)
+    assert (no_face["input"].ok, no_face["input"].value) == (False, "phone sees no face")
+    refused = {**quiet, "ingest": {"no_face": False, "problem": "switch the app to ARKit"}}
+    assert evaluate(refused, age=0.5)["input"].value == "switch the app to ARKit"
+    # Faces arriving: the rate, whatever else happened a moment ago.
+    assert evaluate({**GOOD, "ingest": {"no_face": True}}, age=0.5)["input"].value == "59.8 fps"
