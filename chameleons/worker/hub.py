@@ -244,7 +244,7 @@ class ControlHub:
             "missed_ticks": renderer.get("missed_ticks"), "input_fps": input_fps,
             "capture_to_send_ms": renderer.get("capture_to_send_ms"),
             "robot_connected": renderer.get("robot_connected", False),
-            "robot_state": renderer.get("robot_state"),
+            "robot_state": renderer.get("robot_state"), "driver": driver.get("name"),
             # Why the robot is not connected (a refused login) and face problems: the
             # wizard's health strip shows them.
             "robot_problem": driver.get("problem"),

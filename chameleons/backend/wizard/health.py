@@ -111,9 +111,12 @@ def _flag(data: Mapping[str, Any], *names: str) -> bool | None:
 
 
 def evaluate(
-    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None
+    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None,
+    display: tuple[bool, str] | None = None,
 ) -> dict[str, Check]:
-    """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds."""
+    """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds.
+    ``display``: whether the booth's robot display page is open and playing, and why not
+    (:meth:`DisplayChannel.presence`); for the virtual robot that *is* the robot."""
     limits = limits or Thresholds()
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
         why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
@@ -134,7 +137,7 @@ def evaluate(
         "input": Check("input", fps_ok, _input_value(telemetry, fps, fps_ok)),
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
-        "robot": Check("robot", robot is True, _robot_value(telemetry, robot is True)),
+        "robot": _robot_check(telemetry, robot is True, display),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
     }
@@ -155,6 +158,17 @@ def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) 
 def _robot_face(telemetry: Mapping[str, Any]) -> Mapping[str, Any]:
     face = telemetry.get("robot_face")
     return face if isinstance(face, Mapping) else {}
+
+
+def _robot_check(
+    telemetry: Mapping[str, Any], connected: bool, display: tuple[bool, str] | None
+) -> Check:
+    """The virtual robot is connected when a display page of the booth is open and
+    playing, not merely when the worker runs; any other robot by its driver's state."""
+    if telemetry.get("driver") == "virtual" and display is not None:
+        open_and_playing, why = display
+        return Check("robot", open_and_playing, why)
+    return Check("robot", connected, _robot_value(telemetry, connected))
 
 
 def _robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
@@ -198,9 +212,10 @@ class HealthTracker:
         telemetry: Mapping[str, Any] | None,
         age: float | None,
         now: float | None = None,
+        display: tuple[bool, str] | None = None,
     ) -> dict[str, Any]:
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age, self.limits)
+        checks = evaluate(telemetry, age, self.limits, display)
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:

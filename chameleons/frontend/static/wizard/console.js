@@ -120,9 +120,11 @@ async function apply(next) {
 }
 
 function playedCounts(current) {
+  // A play no robot voiced gets no tick: the participant never heard it.
+  const silent = new Set(current.events.filter((e) => e.kind === "prompt.not_voiced").map((e) => e.payload.play_event_id));
   const counts = new Map();
   for (const event of current.events) {
-    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position) {
+    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position && !silent.has(event.id)) {
       counts.set(event.payload.group, (counts.get(event.payload.group) || 0) + 1);
     }
   }
