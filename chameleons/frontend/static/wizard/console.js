@@ -18,7 +18,7 @@ import {
   tickUndo,
 } from "./panels.js";
 import { PromptBoard } from "./prompts.js";
-import { Timeline } from "./timeline.js";
+import { bindFilter, Timeline } from "./timeline.js";
 
 const $ = (id) => document.getElementById(id);
 const root = $("console");
@@ -112,11 +112,24 @@ async function apply(next) {
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
-  $("end-open").disabled = ["complete", "ended"].includes(state.session.state);
+  markStep(state);
+  const over = ["complete", "ended"].includes(state.session.state);
+  $("end-open").disabled = over;
+  board.setDisabled(over);
   board.highlight(state.suggestion_prompts);
   board.markPlayed(playedCounts(state));
   timeline.sync(state.events, itemNames(state));
   if (!sendingGroup) now.show(playState(state.events));
+}
+
+/** The step and phone as attributes of the console: the layout follows them (console.css
+ * puts the replies and the live ranking first during the negotiation). */
+function markStep(current) {
+  const session = current.session;
+  const interaction = session.interactions.find((i) => i.position === current.prompt_position);
+  const node = $("console");
+  node.dataset.step = session.state === "running" && interaction ? interaction.state : session.state;
+  node.dataset.phone = session.phone.connected ? "connected" : "absent";
 }
 
 function playedCounts(current) {
@@ -132,6 +145,10 @@ function playedCounts(current) {
 }
 
 async function play(group) {
+  if (board.disabled) {
+    flash("The session is over: prompts are off.", "warn");
+    return;
+  }
   const button = board.find(group);
   sendingGroup = group;
   now.sending(button ? button.text : group, group);
@@ -155,9 +172,19 @@ function act(what) {
     perform(`${what} suggestion ${decide.index}`, () => api.decide(decide.position, decide.index, what === "accept"));
   } else if (what === "undo" && undo && Date.parse(undo.until) > Date.now()) {
     perform(`undo suggestion ${undo.index}`, () => api.undo(undo.position, undo.index));
+  } else if (what === "undo" && undo) {
+    flash(`Too late to undo suggestion ${undo.index}: its undo window has passed.`, "warn");
   } else {
-    flash(`Cannot ${what} now. ${state.session.allowed_sentence}`, "warn");
+    flash(`Cannot ${what} now. ${allowedNow(state, undo)}`, "warn");
   }
+}
+
+/** The server's "Allowed now: …" without an undo whose window has passed since. */
+function allowedNow(state, undo) {
+  const sentence = state.session.allowed_sentence;
+  if (!undo || Date.parse(undo.until) > Date.now()) return sentence;
+  const clause = `undo the decision on suggestion ${undo.index} of interaction ${undo.position}`;
+  return sentence.replace(`; or ${clause}`, "").replace(`${clause}; or `, "");
 }
 
 function confirmDialog(text, then) {
@@ -260,6 +287,7 @@ bindKeys({
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
 $("note-form").addEventListener("submit", addNote);
+bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = filter));
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 

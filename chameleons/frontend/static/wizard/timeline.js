@@ -6,6 +6,19 @@ function rankingText(ranking, names) {
   return (ranking || []).map((id, i) => `${i + 1}. ${names.get(id) || id}`).join("  ");
 }
 
+function count(list, noun) {
+  const n = Array.isArray(list) ? list.length : 0;
+  return `${n} ${noun}${n === 1 ? "" : "s"}`;
+}
+
+/** A kind without a sentence yet: its short values, never whole paths or nested data. */
+function summary(payload) {
+  const parts = Object.entries(payload)
+    .filter(([, v]) => ["string", "number", "boolean"].includes(typeof v))
+    .map(([k, v]) => `${k} ${typeof v === "string" && v.includes("/") ? v.split("/").pop() : v}`);
+  return parts.length ? ` (${parts.join(", ")})` : "";
+}
+
 export function describe(event, names) {
   const p = event.payload || {};
   const item = (id) => names.get(id) || id;
@@ -32,6 +45,21 @@ export function describe(event, names) {
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
     case "wizard.note": return `Note: ${p.text}`;
+    case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
+    case "recording.stopped": return `Recording of interaction ${p.position} saved (${count(p.recordings, "file")})`;
+    case "recording.indexed": return `Recording of interaction ${p.position}: ${count(p.recordings, "more file")} saved`;
+    case "recording.not_started": return `RECORDING NOT STARTED (interaction ${p.position}): ${p.detail || p.reason}`;
+    case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
+    case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
+    case "robot.disconnected": return `ROBOT DISCONNECTED (${p.booth || "booth"})`;
+    case "worker.connected": return `Worker of ${p.booth || "the booth"} connected`;
+    case "worker.lost": return `WORKER LOST (${p.booth || "booth"})${p.last_seen_s != null ? `: silent for ${p.last_seen_s} s` : ""}`;
+    case "worker.restarted": return `Worker of ${p.booth || "the booth"} restarted (restart ${p.restarts ?? "?"})`;
+    case "prompt.not_voiced": return `NOT VOICED: ${p.detail || p.reason || p.prompt_id}`;
+    case "prompt.not_played": return `NOT PLAYED: ${p.detail || p.reason || p.prompt_id}`;
+    case "behaviour.natural_source": return `Natural movement replays ${p.source === "clip" ? `clip ${p.clip}` : p.source === "yoked" ? `participant ${p.from_participant}, interaction ${p.from_position} (${p.from_condition})` : `a synthetic face (seed ${p.seed})`}`;
+    case "session.rehearsal_marked": return "Marked as a rehearsal";
+    case "session.rehearsal_unmarked": return "No longer marked as a rehearsal";
     case "phone.connected": return "Phone connected";
     case "phone.disconnected": return "Phone disconnected";
     case "session.final_questionnaire": return "Final questionnaire started";
@@ -40,14 +68,49 @@ export function describe(event, names) {
     case "participant.excluded": return `PI excluded the participant from the analysis: ${p.reason}`;
     case "participant.included": return "PI included the participant in the analysis again";
     case "plan_row.handed_on": return `PI gave plan row ${p.row_number} to a replacement participant`;
-    default: return `${event.kind} ${JSON.stringify(p)}`;
+    default: return `${event.kind}${summary(p)}`;
   }
+}
+
+const DEVIATIONS = new Set(["plan.deviation", "condition.switched", "session.ended_early",
+  "participant.excluded", "plan_row.handed_on", "prompt.not_voiced"]);
+
+/** The filter an event belongs to: prompts, phone, robot, deviations or notes. */
+export function category(kind, source) {
+  if (kind === "wizard.note") return "notes";
+  if (DEVIATIONS.has(kind) || kind.endsWith(".deviation")) return "deviations";
+  if (kind.startsWith("prompt.") || kind.startsWith("wizard.prompt")) return "prompts";
+  if (source === "participant" || kind.startsWith("phone.")) return "phone";
+  if (kind.startsWith("robot.") || kind.startsWith("worker.") || kind.startsWith("recording.")
+      || source === "worker" || source === "robot") return "robot";
+  return "session";
+}
+
+/** Show only ``filter``'s rows ("all": every row) of a list whose rows carry data-category. */
+export function applyFilter(list, filter) {
+  for (const row of list.children) {
+    row.hidden = filter !== "all" && row.dataset.category !== filter;
+  }
+}
+
+/** Buttons with data-filter in ``group`` switch the filter of ``list`` (aria-pressed shows it). */
+export function bindFilter(group, list, onChange = () => {}) {
+  group.addEventListener("click", (event) => {
+    const button = event.target.closest("button[data-filter]");
+    if (!button) return;
+    for (const other of group.querySelectorAll("button[data-filter]")) {
+      other.setAttribute("aria-pressed", String(other === button));
+    }
+    applyFilter(list, button.dataset.filter);
+    onChange(button.dataset.filter);
+  });
 }
 
 export class Timeline {
   constructor(list, counter) {
     this.list = list;
     this.counter = counter;
+    this.filter = "all";
     this.lastId = 0;
     this.rows = new Map(); // event id -> row
     this.count = 0;
@@ -74,7 +137,7 @@ export class Timeline {
     const worker = event.worker_time != null ? el("span", { class: "tl-worker", text: `worker ${event.worker_time.toFixed(3)}` }) : null;
     const row = el(
       "li",
-      { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id) } },
+      { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id), category: category(event.kind, event.source) } },
       el("time", { datetime: event.server_time, text: clock(event.server_time) }),
       el("span", { class: "tl-source", text: event.source }),
       el("span", { class: "tl-text", text: describe(event, names) }),
@@ -82,6 +145,7 @@ export class Timeline {
       el("span", { class: "tl-latency" }),
     );
     this.rows.set(event.id, row);
+    row.hidden = this.filter !== "all" && row.dataset.category !== this.filter;
     this.list.prepend(row);
     this.counter.textContent = `(${this.count})`;
     this.attachLatency(event);
