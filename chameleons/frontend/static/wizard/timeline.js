@@ -40,7 +40,6 @@ export function describe(event, names) {
     case "prompt.speech_end":
       if (p.reason) return `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})`;
       return p.outcome && p.outcome !== "played" ? `Speech ${p.outcome} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
-    case "prompt.not_voiced": return `NOT VOICED: ${p.detail} (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
@@ -52,6 +51,9 @@ export function describe(event, names) {
     case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
     case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
     case "robot.disconnected": return `ROBOT DISCONNECTED (${p.booth || "booth"})`;
+    case "robot.auth_refused": return `ROBOT REFUSED THE LOGIN (${p.booth || "booth"}): ${p.reason || "wrong or missing key"}`;
+    case "robot.auth_timeout": return `ROBOT DID NOT ANSWER THE LOGIN (${p.booth || "booth"})`;
+    case "robot.retry_requested": return `Asked the worker to try the robot again (${p.booth || "booth"})`;
     case "worker.connected": return `Worker of ${p.booth || "the booth"} connected`;
     case "worker.lost": return `WORKER LOST (${p.booth || "booth"})${p.last_seen_s != null ? `: silent for ${p.last_seen_s} s` : ""}`;
     case "worker.restarted": return `Worker of ${p.booth || "the booth"} restarted (restart ${p.restarts ?? "?"})`;
