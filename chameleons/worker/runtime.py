@@ -185,8 +185,10 @@ class Worker:
         fps = max((s.get("input_fps", 0.0) for s in snapshots.values()), default=0.0)
         no_face = any(s.get("no_face_recent") for s in snapshots.values())
         problem = next((s["problem"] for s in snapshots.values() if s.get("problem")), None)
+        heads = [s["head_range"] for s in snapshots.values() if s.get("head_range")]
+        head_range = max(heads, key=lambda h: h["frames"]) if heads else None
         return {"input_fps": fps, "drops": drops, "receivers": snapshots,
-                "no_face": no_face, "problem": problem}  # fmt: skip
+                "no_face": no_face, "problem": problem, "head_range": head_range}  # fmt: skip
 
     def stop(self, timeout: float = 5.0) -> None:
         self.stop_event.set()

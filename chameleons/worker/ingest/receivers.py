@@ -182,6 +182,9 @@ class _Receiver:
         if self._aligner is not None:
             frame.capture_time = self._aligner.align(frame.capture_time, frame.receive_time)
         frame = self.transform.apply(frame)
+        # The participant's own head turn (mirroring undone) for the booth check.
+        yaw = -float(frame.head[0]) if self.transform.mirror else float(frame.head[0])
+        self.stats.note_head(frame.receive_time, yaw, float(frame.head[1]))
         assert self._publisher is not None
         self._publisher.publish(frame)
         self.stats.count_frame(frame.receive_time)

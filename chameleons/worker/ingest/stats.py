@@ -8,6 +8,8 @@ from collections import Counter, deque
 from collections.abc import Callable
 from typing import Any
 
+HEAD_WINDOW_SECONDS = 8.0
+
 
 class CaptureStats:
     """Thread-safe counters a receiver updates and telemetry reads (:meth:`snapshot`)."""
@@ -18,6 +20,9 @@ class CaptureStats:
         self._drops: Counter[str] = Counter()
         self._times: deque[float] = deque(maxlen=1024)
         self._no_face: deque[float] = deque(maxlen=1024)
+        # (receive time, yaw, pitch) of the participant's head, for the booth check's
+        # "turn your head left, then nod" step (degrees, the participant's own frame).
+        self._heads: deque[tuple[float, float, float]] = deque(maxlen=1024)
         self.no_face = 0  # "the phone sees no face" packets (not errors)
         self.problem: str | None = None  # what the lab must change (e.g. the app's mode)
         self._problem_at = -1e18
@@ -36,6 +41,22 @@ class CaptureStats:
         with self._lock:
             self.no_face += 1
             self._no_face.append(receive_time)
+
+    def note_head(self, receive_time: float, yaw: float, pitch: float) -> None:
+        with self._lock:
+            self._heads.append((receive_time, yaw, pitch))
+
+    def head_range(self, seconds: float = HEAD_WINDOW_SECONDS) -> dict[str, float] | None:
+        """Extremes of yaw and pitch over the last ``seconds`` (None: no frames)."""
+        now = self._clock()
+        with self._lock:
+            recent = [(y, p) for t, y, p in self._heads if now - t <= seconds]
+        if not recent:
+            return None
+        yaws, pitches = [y for y, _ in recent], [p for _, p in recent]
+        return {"yaw_min": round(min(yaws), 1), "yaw_max": round(max(yaws), 1),
+                "pitch_min": round(min(pitches), 1), "pitch_max": round(max(pitches), 1),
+                "frames": len(recent)}  # fmt: skip
 
     def set_problem(self, text: str) -> None:
         with self._lock:
@@ -75,7 +96,7 @@ class CaptureStats:
         return [t for t in times if now - t <= self._window]
 
     def snapshot(self) -> dict[str, Any]:
-        fps, drops = self.input_fps, self.drops
+        fps, drops, heads = self.input_fps, self.drops, self.head_range()
         with self._lock:
             no_face_recent = bool(self._recent(self._no_face))
             problem_recent = self._clock() - self._problem_at <= self._window
@@ -91,6 +112,7 @@ class CaptureStats:
                 "no_face": self.no_face,
                 "no_face_recent": no_face_recent,  # the phone sees no face right now
                 "problem": self.problem if problem_recent else None,
+                "head_range": heads,
             }
 
 
