@@ -40,6 +40,14 @@ class Settings(BaseSettings):
         default=None, description="Base URL phones use (QR codes); default http://host:port"
     )
     session_cookie_secure: bool = False
+    # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
+    # incoming messages per second (sustained, and at once), and how long one send may wait
+    # for a client that is not reading before it is disconnected.
+    ws_queue_limit: int = Field(default=256, ge=8)
+    # (A page sends ~1 a second; a rehearsal's display bot answers every prompt at once.)
+    ws_message_rate: float = Field(default=200.0, gt=0)
+    ws_message_burst: int = Field(default=400, ge=1)
+    ws_send_timeout_s: float = Field(default=10.0, gt=0)
     login_max_failures: int = Field(default=5, ge=1)
     login_lockout_seconds: float = Field(default=30.0, ge=0)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import secrets
+from collections import Counter
 from collections.abc import AsyncIterator
 from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
@@ -44,6 +45,7 @@ from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import pages as wizard_pages
+from chameleons.backend.wizard import typed_speech
 from chameleons.experiment.stats.rounding import fmt, fmt_p
 from chameleons.settings import Settings
 
@@ -83,6 +85,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.sessionmaker = build_sessionmaker(engine)
     app.state.templates = build_templates()
     app.state.live_hub = LiveHub()
+    app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code
     app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
@@ -135,6 +138,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wizard_pages.router,
         wizard_endpoints.router,
         wizard_live.router,
+        typed_speech.router,
         booth_check.router,
     ):
         app.include_router(router)

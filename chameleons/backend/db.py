@@ -31,6 +31,24 @@ POOL_SIZE = 10
 POOL_OVERFLOW = 30
 
 
+def write_transaction(db: Session) -> None:
+    """Make ``db``'s transaction a writer now, before it reads the state it will change.
+
+    PostgreSQL serialises such changes with the row lock of ``SELECT ... FOR UPDATE``; on
+    SQLite that clause does nothing, so two requests could both read "pending" and both
+    decide. There the transaction takes the database's write lock first (``BEGIN
+    IMMEDIATE``; a second writer waits up to the busy timeout) and then reads what the
+    previous writer committed. Reads before this point ran outside a transaction (the
+    driver begins one only before a write), and a transaction that has written already
+    holds the lock."""
+    if db.get_bind().dialect.name != "sqlite":
+        return
+    connection = db.connection()
+    driver = connection.connection.driver_connection
+    if driver is not None and not driver.in_transaction:
+        connection.exec_driver_sql("BEGIN IMMEDIATE")
+
+
 def build_engine(url: str) -> Engine:
     """Create an engine; for SQLite make the directory and set WAL, foreign keys, timeout."""
     parsed = make_url(url)

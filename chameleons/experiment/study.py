@@ -210,9 +210,7 @@ def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> 
     default = LEGACY_SUGGESTION_RULE if snapshot else SUGGESTION_RULES[0]
     rule = top.get("suggestion_rule", default)
     if rule not in SUGGESTION_RULES:
-        reader.problem(
-            "suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}"
-        )
+        reader.problem("suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}")
         return default
     return str(rule)
 

@@ -58,7 +58,12 @@ def test_upgrading_sqlite_keeps_every_row(tmp_path: Path) -> None:
     with engine.begin() as connection:
         for statement in ROWS_AT_0001:
             connection.exec_driver_sql(statement)
-    tables = [table.name for table in Base.metadata.sorted_tables if table.name != "staff_user"]
+    at_0001 = set(inspect(engine).get_table_names())  # later tables cannot have old rows
+    tables = [
+        table.name
+        for table in Base.metadata.sorted_tables
+        if table.name != "staff_user" and table.name in at_0001
+    ]
     with engine.connect() as connection:
         before = {
             t: connection.exec_driver_sql(f'SELECT COUNT(*) FROM "{t}"').scalar() for t in tables

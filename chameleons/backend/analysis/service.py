@@ -74,7 +74,6 @@ class StudyScores:
     def measures(self) -> tuple[str, ...]:
         return self.spec.measures
 
-
     @property
     def participant_count(self) -> int:
         return len({row["participant"] for row in self.rows})

@@ -40,6 +40,7 @@ MEDIA_TYPES: Final = {
     ".flac": "audio/flac", ".csv": "text/csv; charset=utf-8",
 }  # fmt: skip
 TRANSCODE_SOURCES: Final = (".mp3", ".ogg", ".opus", ".flac")
+_TYPED_URL = re.compile(r"^/media/typed/(?P<digest>[0-9a-f]+)\.wav$")
 _AUDIO_URL = re.compile(r"^/media/prompts/(?P<actor>[^/]+)/audio/(?P<stem>[^/]+)\.\w+$")
 
 
@@ -67,6 +68,10 @@ def lipsync_url_for(settings: Settings, audio_url: str) -> str | None:
     """The lip-sync CSV URL of a prompt audio URL built here, by the assets' convention
     (``audio/<id>.<ext>`` beside ``lipsync/<id>.csv``), when that file exists."""
     parts = urlsplit(audio_url)
+    typed = _TYPED_URL.match(unquote(parts.path))
+    if typed is not None:  # a typed sentence's curve lies beside its WAV
+        origin = urlunsplit((parts.scheme, parts.netloc, "", "", ""))
+        return f"{origin}/media/typed/{typed.group('digest')}.csv?{parts.query}"
     match = _AUDIO_URL.match(unquote(parts.path))
     if match is None:
         return None

@@ -250,8 +250,7 @@ def suggestions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "to_rank",
                 "integer",
-                "Rank the robot proposed (above from_rank, or below it under the best-move "
-                "rule).",
+                "Rank the robot proposed (above from_rank, or below it under the best-move rule).",
             ),
             Column(
                 "kind",

@@ -18,7 +18,7 @@ from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import repository as staff
 from chameleons.backend.auth.dependencies import SESSION_USER_KEY
-from chameleons.backend.events import live
+from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import health, worker_link
@@ -97,12 +97,16 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
             asyncio.create_task(_answer_pings(websocket, sender)),
         ]
         try:
-            await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+            async with guard.guarded(websocket):
+                done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                guard.raise_closed(done)
         finally:
             for task in tasks:
                 task.cancel()
             for task in tasks:
-                with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                with contextlib.suppress(
+                    asyncio.CancelledError, WebSocketDisconnect, RuntimeError, guard.SocketClosed
+                ):
                     await task
             with anyio.CancelScope(shield=True):  # even when the server cancels the handler
                 await asyncio.gather(*reads, return_exceptions=True)
@@ -110,10 +114,11 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
 
 async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:
     """Reply to the console's pings (it measures the link); return when it disconnects."""
+    inbound = guard.Inbound(websocket)
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             try:
-                message = json.loads(await websocket.receive_text())
+                message = json.loads(await inbound.text())
             except ValueError:
                 continue
             if isinstance(message, dict) and message.get("type") == "ping":
