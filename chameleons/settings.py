@@ -85,11 +85,11 @@ class Settings(BaseSettings):
     livelink_port: int = Field(default=11111, ge=0, le=65535)  # 0: any free port
     facecapturex_port: int = Field(default=19977, ge=0, le=65535)
     capture_bind_host: str = "0.0.0.0"  # the iPhone is on the LAN by design
-    # Unit of Live Link head/eye rotations on the wire: "degrees/180" (value * 180), "radians",
-    # "degrees", or a plain factor. Calibrate: turn the head ~45 deg; the raw HeadYaw reads
-    # ~0.25 for "degrees/180" and ~0.79 for "radians" (see chameleons.worker.ingest.livelink).
+    # Unit of Live Link head/eye rotations on the wire and in take CSVs: "radians" (what the
+    # Live Link Face app sends; evidence in docs/livelink.md), "degrees/180" (an Unreal app's
+    # own publisher), "degrees", or a plain factor. The booth check's head-turn step shows it.
     livelink_rotation_scale: str = Field(
-        default="degrees/180",
+        default="radians",
         pattern=r"^(degrees/180|radians|degrees|[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)$",
     )
     # Rotation of the phone about its viewing axis (degrees, counter-clockwise seen from the

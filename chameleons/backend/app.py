@@ -24,6 +24,7 @@ from chameleons.backend.auth import staff_pages
 from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
+from chameleons.backend.booth import check_endpoints as booth_check
 from chameleons.backend.bridge.wiring import worker_link
 from chameleons.backend.dashboard import monitor as dashboard_monitor
 from chameleons.backend.dashboard import pages as dashboard_pages
@@ -142,6 +143,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wizard_endpoints.router,
         wizard_live.router,
         typed_speech.router,
+        booth_check.router,
     ):
         app.include_router(router)
     return app

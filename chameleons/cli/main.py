@@ -16,6 +16,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "analyze": ("analyze_command", "analyze_command",
                 "Descriptives, Friedman tests (Bonferroni, Kendall's W), post-hoc tests, "
                 "effect sizes with bootstrap intervals and the regression models."),
+    "booth-check": ("booth_check_command", "booth_check",
+                    "Check a booth before a participant: face stream, head turn and nod, robot, "
+                    "copy delay and disk space."),
     "db": ("db_commands", "db", "Database schema: apply and inspect migrations."),
     "demo": ("demo_command", "demo",
              "Start the whole system on its embedded default: the server on SQLite with the "

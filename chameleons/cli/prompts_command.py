@@ -33,9 +33,9 @@ def prompts() -> None:
               help="CSV with columns take,prompt_id[,wav]: import every take listed.")  # fmt: skip
 @click.option("--natural", "natural_name",
               help="Import TAKE as natural/<NAME>.npz for the 'natural' behaviour.")  # fmt: skip
-@click.option("--rotation-scale", default="degrees/180", show_default=True,
-              help="Unit of the take's head/eye columns: degrees/180, radians, degrees or a "
-              "factor (see CHAMELEONS_LIVELINK_ROTATION_SCALE).")  # fmt: skip
+@click.option("--rotation-scale", default="radians", show_default=True,
+              help="Unit of the take's head/eye columns: radians (the Live Link Face app), "
+              "degrees/180, degrees or a factor (see docs/livelink.md).")  # fmt: skip
 @click.option("--audio-offset", type=float, default=0.0, show_default=True,
               help="Seconds the audio starts after the CSV's first row.")  # fmt: skip
 @click.option("--silence-db", type=float, default=-35.0, show_default=True,

@@ -13,6 +13,7 @@ from chameleons.cli.common import load_settings
 from chameleons.settings import Settings
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
 from chameleons.worker.drivers import DRIVER_NAMES
+from chameleons.worker.drivers.furhat_check import run_check
 from chameleons.worker.renderer import RenderConfig
 from chameleons.worker.runtime import WorkerConfig, run_worker
 
@@ -46,13 +47,16 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 @click.option("--telemetry", default=None, help="Server telemetry endpoint (SUB) to connect to.")
 @click.option("--tick-rate", type=float, default=None, help="Renderer rate in Hz. [125]")
 @click.option("--face-rate", type=float, default=None, help="Face parameter rate in Hz. [25]")
+@click.option("--check", is_flag=True,
+              help="Log in to the Furhat, list the face mapping against the robot's faces "
+                   "and exit (1 when something is wrong).")  # fmt: skip
 @click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
     livelink_port: int | None,
     facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
-    tick_rate: float | None, face_rate: float | None, verbose: bool,
+    tick_rate: float | None, face_rate: float | None, check: bool, verbose: bool,
 ) -> None:  # fmt: skip
     """Run the realtime worker of one booth (capture -> behaviour -> renderer -> robot).
 
@@ -69,6 +73,11 @@ def worker(
         natural_path=natural_path, control=control, telemetry=telemetry, tick_rate=tick_rate,
         face_rate=face_rate,
     )  # fmt: skip
+    if check:
+        report = run_check(config.robot_url, config.robot_key, config.furhat_faces)
+        for line in report.lines():
+            click.echo(line)
+        raise SystemExit(0 if report.ok else 1)
     try:
         code = run_worker(config, echo=click.echo)
     except (OSError, RuntimeError, ValueError) as exc:
@@ -114,7 +123,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),
         livelink_port=pick("livelink_port", "livelink_port", 11111),
         facecapturex_port=pick("facecapturex_port", "facecapturex_port", 19977),
-        livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "degrees/180"),
+        livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "radians"),
         mounting_rotation_deg=_setting(settings, "mounting_rotation_deg", 0.0),
         mirror=_setting(settings, "mirror", True),
         behaviour=options["behaviour"], behaviour_params=params, copy_delay=delay,

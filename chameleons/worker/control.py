@@ -40,6 +40,7 @@ START_RECORDING: Final = "start_recording"
 STOP_RECORDING: Final = "stop_recording"
 STATUS: Final = "status"
 SPEECH_EVENT: Final = "speech_event"
+RETRY_ROBOT: Final = "retry_robot"  # try the robot again after a refused login
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -55,6 +56,7 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     START_RECORDING: {"interaction_id": ((str, int), True), "directory": ((str,), True)},
     STOP_RECORDING: {"interaction_id": ((str, int), False)},
     STATUS: {},
+    RETRY_ROBOT: {},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
                    "time": (_NUMBER, False)},
 }  # fmt: skip

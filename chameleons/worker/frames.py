@@ -60,6 +60,13 @@ def _lookup_key(name: str) -> str:
 
 
 _LOOKUP: dict[str, str] = {_lookup_key(n): n for n in BLENDSHAPE_NAMES}
+# Categories that are not blendshapes and are dropped by name, not counted as unknown:
+# MediaPipe Face Landmarker's category 0 is "_neutral" (protocols.md section 5).
+IGNORED_NAMES = frozenset({"_neutral"})
+
+
+def ignored_name(raw: str) -> bool:
+    return raw.strip() in IGNORED_NAMES
 
 
 def canonical_name(raw: str) -> str | None:

@@ -29,6 +29,7 @@ import zmq
 from chameleons import __version__
 from chameleons.worker.control import (
     PLAY_PROMPT,
+    RETRY_ROBOT,
     SET_BEHAVIOUR,
     SET_FACE,
     SPEECH_EVENT,
@@ -60,8 +61,9 @@ log = logging.getLogger(__name__)
 ROUTES: dict[str, str] = {
     SET_BEHAVIOUR: "behaviour", PLAY_PROMPT: "playback", STOP_PROMPT: "playback",
     SET_FACE: "playback", SPEECH_EVENT: "playback", START_RECORDING: "recorder",
-    STOP_RECORDING: "recorder",
+    STOP_RECORDING: "recorder", RETRY_ROBOT: "playback",
 }  # fmt: skip
+ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
 StatsSource = Callable[[], Mapping[str, Any]]
 STAGE_WAIT = 2.0  # seconds a command waits for its stage to connect
 RETRY_INTERVAL = 0.01
@@ -242,7 +244,11 @@ class ControlHub:
             "missed_ticks": renderer.get("missed_ticks"), "input_fps": input_fps,
             "capture_to_send_ms": renderer.get("capture_to_send_ms"),
             "robot_connected": renderer.get("robot_connected", False),
-            "robot_state": renderer.get("robot_state"),
+            "robot_state": renderer.get("robot_state"), "driver": driver.get("name"),
+            # Why the robot is not connected (a refused login) and face problems: the
+            # wizard's health strip shows them.
+            "robot_problem": driver.get("problem"),
+            "robot_face": {k: driver.get(k) for k in ROBOT_FACE_FIELDS if k in driver},
             "speaking": renderer.get("speaking", False), "prompt_id": renderer.get("prompt_id"),
             "recording": self._stage("recorder"),
             "drops": {"ingest": ingest.get("drops", {}), "behaviour": behaviour.get("errors", {}),

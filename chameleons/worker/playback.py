@@ -22,6 +22,7 @@ import zmq
 
 from chameleons.worker.control import (
     PLAY_PROMPT,
+    RETRY_ROBOT,
     SET_FACE,
     SPEECH_EVENT,
     STOP_PROMPT,
@@ -72,7 +73,7 @@ class PlaybackStage:
         self._pub.setsockopt(zmq.LINGER, 0)
         self._pub.bind(self.endpoints.playback)
         handlers = {PLAY_PROMPT: self._play, STOP_PROMPT: self._stop, SET_FACE: self._face,
-                    SPEECH_EVENT: self._speech}  # fmt: skip
+                    SPEECH_EVENT: self._speech, RETRY_ROBOT: self._retry}  # fmt: skip
         port = CommandPort(self.context, self.endpoints.stage_control, self.name, handlers)
         try:
             while not stop.is_set():
@@ -108,6 +109,10 @@ class PlaybackStage:
     def _face(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
         self._publish(Message("playback.face", "face", 0, self.name, body=dict(body)))
         return {"face_id": body["face_id"]}
+
+    def _retry(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
+        self._publish(Message("playback.retry", "retry", 0, self.name))
+        return {}
 
     def _speech(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
         self._publish(Message("playback.speech", "speech", 0, self.name, body=dict(body)))

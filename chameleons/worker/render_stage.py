@@ -131,6 +131,8 @@ class RendererStage:
                                     lipsync_from_message(message)))  # fmt: skip
             elif message.topic == "playback.stop":
                 self._requests.put(("stop",))
+            elif message.topic == "playback.retry":
+                self._requests.put(("retry",))
             elif message.topic == "playback.face":
                 self._requests.put(("face", str(message.body["face_id"])))
             elif message.topic == "playback.speech":
@@ -180,19 +182,23 @@ class RendererStage:
             kind = request[0]
             if kind == "prompt":
                 _, prompt_id, url, curve = request
-                if self.speaking is not None:
+                if self.speaking is not None:  # cut short by the new prompt: not "played"
                     self.driver.stop_audio()
-                    self._speech_event(SPEECH_END, time.monotonic(), self.speaking)
+                    self._speech_event(SPEECH_END, time.monotonic(), self.speaking,
+                                       outcome="interrupted")  # fmt: skip
                 self.core.lipsync.load(prompt_id, curve)
                 self.driver.play_audio(prompt_id, url)
             elif kind == "stop":
                 self.driver.stop_audio()
                 if self.speaking is not None and not self.driver.reports_speech_end:
-                    self._speech_event(SPEECH_END, time.monotonic(), self.speaking)
+                    self._speech_event(SPEECH_END, time.monotonic(), self.speaking,
+                                       outcome="stopped")  # fmt: skip
             elif kind == "face":
                 self.driver.set_face(request[1])
             elif kind == "speech":
                 self.driver.remote_speech(request[1], request[2])
+            elif kind == "retry":
+                self.driver.retry()
 
     def _handle_driver_events(self) -> None:
         assert self.core is not None
@@ -208,6 +214,12 @@ class RendererStage:
                     self.core.lipsync.finish(self.core.lipsync.curve_end())
             elif event.kind == SPEECH_END:
                 prompt = event.body.get("prompt_id") or self.speaking
+                if prompt not in (self.speaking, self.core.lipsync.prompt_id):
+                    # A replaced prompt's end (skipped): report it, keep the current one.
+                    body = {k: v for k, v in event.body.items() if k != "prompt_id"}
+                    self._publish_event("event.speech", SPEECH_END, event.time,
+                                        prompt_id=prompt, **body)  # fmt: skip
+                    continue
                 self._speech_event(SPEECH_END, event.time, prompt, **event.body)
             elif event.kind == ROBOT_STATE:
                 self._publish_event("event.robot", ROBOT_STATE, event.time, **event.body)

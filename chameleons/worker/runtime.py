@@ -65,7 +65,7 @@ class WorkerConfig:
     capture_host: str = "0.0.0.0"
     livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
     facecapturex_port: int | None = 19977
-    livelink_rotation_scale: str = "degrees/180"
+    livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
     behaviour: str = "still"
@@ -183,7 +183,12 @@ class Worker:
             for reason, count in snap.get("drops", {}).items():
                 drops[f"{name}.{reason}"] = count
         fps = max((s.get("input_fps", 0.0) for s in snapshots.values()), default=0.0)
-        return {"input_fps": fps, "drops": drops, "receivers": snapshots}
+        no_face = any(s.get("no_face_recent") for s in snapshots.values())
+        problem = next((s["problem"] for s in snapshots.values() if s.get("problem")), None)
+        heads = [s["head_range"] for s in snapshots.values() if s.get("head_range")]
+        head_range = max(heads, key=lambda h: h["frames"]) if heads else None
+        return {"input_fps": fps, "drops": drops, "receivers": snapshots,
+                "no_face": no_face, "problem": problem, "head_range": head_range}  # fmt: skip
 
     def stop(self, timeout: float = 5.0) -> None:
         self.stop_event.set()

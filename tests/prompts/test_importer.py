@@ -75,7 +75,7 @@ def write_take(
             values = {"JawOpen": jaw(t), "BrowInnerUp": 0.3, "EyeBlinkLeft": 0.5 * (k % 2)}
             row = [timecode(start + t), "61"]
             row += [f"{values.get(name, 0.0):.4f}" for name in shapes]
-            row += ["0.1", "-0.05", "0", "0", "0", "0", "0", "0", "0"]  # x180 = degrees
+            row += ["0.3141593", "-0.1570796", "0", "0", "0", "0", "0", "0", "0"]  # radians
             if row_hook:
                 row_hook(k, row)
             writer.writerow(row)

@@ -1,16 +1,31 @@
-"""A WebSocket test peer that speaks the subset of the Furhat Realtime API the worker uses.
+"""A WebSocket test peer that speaks the part of the Furhat Realtime API the worker uses.
 
-It answers ``request.auth`` with ``response.auth``, answers ``request.speak.audio`` with
-``response.speak.start`` and (after ``speech_seconds``) ``response.speak.end``, and
-records every message it receives, in order, with its arrival time.
+Modelled on Furhat's own client (PyPI ``furhat-realtime-api`` 0.1.3, ``AsyncFurhatClient``
+and ``events.py``) and the Realtime API documentation it links (docs.furhat.io), not on
+this project's driver:
+
+- ``request.auth`` is answered ``response.auth`` with ``access`` and ``scope``; the client
+  counts only ``access: true`` as a login. ``access`` False refuses, None never answers.
+- Replies echo the request's ``request_id`` (the client's ``send_event_and_wait`` matches
+  replies by it); ``echo_request_id=False`` models a robot that does not.
+- Speech is a queue, as on the robot: a ``request.speak.audio`` that arrives while one plays
+  waits for it, unless it has ``abort: true``; ``request.speak.stop`` stops the current one
+  and drops the queue. Each play answers ``response.speak.start`` after ``start_latency``
+  seconds and ``response.speak.end`` after ``speech_seconds`` more (or when stopped, with
+  ``aborted: true``).
+- ``request.face.status`` answers ``face_id`` and ``face_list``.
+- ``refuse_fields``: face-config fields this robot does not know. The refusal's form is not
+  documented; the peer answers ``{"type": "response.error", "request_id", "error"}``.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -29,10 +44,57 @@ class Received:
         return str(self.message.get("type"))
 
 
+class _Voice:
+    """One connection's speech queue (the robot plays one audio at a time)."""
+
+    def __init__(self, peer: FurhatPeer, ws: ServerConnection) -> None:
+        self.peer, self.ws = peer, ws
+        self.queue: deque[dict[str, Any]] = deque()
+        self.task: asyncio.Task[None] | None = None
+        self.playing: dict[str, Any] | None = None
+
+    async def speak(self, message: dict[str, Any]) -> None:
+        if message.get("abort"):
+            await self.stop()
+        self.queue.append(message)
+        if self.task is None or self.task.done():
+            self.task = asyncio.create_task(self._run())
+
+    async def stop(self) -> None:
+        self.queue.clear()
+        if self.task is not None and not self.task.done():
+            self.task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self.task
+        if self.playing is not None:
+            playing, self.playing = self.playing, None
+            await self.peer.reply(self.ws, "response.speak.end", playing, aborted=True)
+
+    async def _run(self) -> None:
+        while self.queue:
+            message = self.queue.popleft()
+            self.playing = message
+            await asyncio.sleep(self.peer.start_latency)
+            await self.peer.reply(self.ws, "response.speak.start", message)
+            self.peer.spoken.append(str(message.get("url")))
+            await asyncio.sleep(self.peer.speech_seconds)
+            self.playing = None
+            await self.peer.reply(self.ws, "response.speak.end", message)
+
+
 class FurhatPeer:
-    def __init__(self, *, speech_seconds: float = 0.2) -> None:
-        self.speech_seconds = speech_seconds
+    def __init__(
+        self, *, speech_seconds: float = 0.2, start_latency: float = 0.0,
+        access: bool | None = True, echo_request_id: bool = True,
+        faces: tuple[str, ...] = ("adult - Alex", "Isabel", "Marty"),
+        refuse_fields: frozenset[str] = frozenset(),
+    ) -> None:  # fmt: skip
+        self.speech_seconds, self.start_latency = speech_seconds, start_latency
+        self.access, self.echo_request_id = access, echo_request_id
+        self.faces, self.refuse_fields = faces, refuse_fields
         self.received: list[Received] = []
+        self.sent: list[dict[str, Any]] = []
+        self.spoken: list[str] = []  # audio URLs whose speech started, in order
         self.connections = 0
         self._cond = threading.Condition()
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -69,6 +131,7 @@ class FurhatPeer:
 
     async def _handle(self, ws: ServerConnection) -> None:
         self._live.add(ws)
+        voice = _Voice(self, ws)
         with self._cond:
             self.connections += 1
             self._cond.notify_all()
@@ -78,22 +141,43 @@ class FurhatPeer:
                 with self._cond:
                     self.received.append(Received(time.monotonic(), message))
                     self._cond.notify_all()
-                await self._answer(ws, message)
+                await self._answer(ws, voice, message)
         except ConnectionClosed:
             pass
         finally:
+            if voice.task is not None:
+                voice.task.cancel()
             self._live.discard(ws)
 
-    async def _answer(self, ws: ServerConnection, message: dict[str, Any]) -> None:
+    async def reply(self, ws: ServerConnection, kind: str, request: dict[str, Any],
+                    **fields: Any) -> None:  # fmt: skip
+        message: dict[str, Any] = {"type": kind, **fields}
+        if self.echo_request_id and "request_id" in request:
+            message["request_id"] = request["request_id"]
+        with self._cond:
+            self.sent.append(message)
+            self._cond.notify_all()
+        with contextlib.suppress(ConnectionClosed):
+            await ws.send(json.dumps(message))
+
+    async def _answer(self, ws: ServerConnection, voice: _Voice, message: dict[str, Any]) -> None:
         kind = message.get("type")
         if kind == "request.auth":
-            await ws.send(json.dumps({"type": "response.auth", "access": True}))
+            if self.access is not None:
+                await self.reply(ws, "response.auth", message, access=self.access,
+                                 scope="local_network" if self.access else None)  # fmt: skip
         elif kind == "request.speak.audio":
-            await ws.send(json.dumps({"type": "response.speak.start"}))
-            asyncio.get_running_loop().call_later(
-                self.speech_seconds,
-                lambda: asyncio.ensure_future(ws.send(json.dumps({"type": "response.speak.end"}))),
-            )
+            await voice.speak(message)
+        elif kind == "request.speak.stop":
+            await voice.stop()
+        elif kind == "request.face.status":
+            await self.reply(ws, "response.face.status", message, face_id=self.faces[0],
+                             face_list=list(self.faces))  # fmt: skip
+        elif kind == "request.face.config":
+            unknown = sorted(set(message) & self.refuse_fields)
+            if unknown:
+                await self.reply(ws, "response.error", message,
+                                 error=f"unknown field {unknown[0]}")  # fmt: skip
 
     def drop_connections(self) -> None:
         """Close every live connection from the robot's side (the driver must reconnect)."""
@@ -104,6 +188,10 @@ class FurhatPeer:
     def of_type(self, kind: str) -> list[Received]:
         with self._cond:
             return [r for r in self.received if r.type == kind]
+
+    def sent_of_type(self, kind: str) -> list[dict[str, Any]]:
+        with self._cond:
+            return [m for m in self.sent if m.get("type") == kind]
 
     def wait_for(self, predicate: Callable[[FurhatPeer], bool], timeout: float = 5.0) -> None:
         with self._cond:

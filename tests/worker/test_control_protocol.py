@@ -29,6 +29,7 @@ VALID = {
     "stop_recording": {"interaction_id": "12"},
     "status": {},
     "speech_event": {"event": "start", "prompt_id": "p1"},
+    "retry_robot": {},
 }
 
 

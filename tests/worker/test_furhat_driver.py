@@ -46,10 +46,15 @@ def test_handshake_configures_the_face_with_idle_behaviour_off(peer: FurhatPeer)
         peer.wait_for(lambda p: bool(p.of_type("request.face.config")))
         first, config = peer.received[0].message, peer.of_type("request.face.config")[0].message
         assert first == {"type": "request.auth", "key": "secret"}
-        assert config["microexpressions"] is False
-        assert config["blinking"] is False
-        assert config["head_sway"] is False
-        assert config["face_id"] == "adult-01"
+        # Only the fields Furhat's own client sends; the face is never mixed with others.
+        assert config == {"type": "request.face.config", "face_id": "adult-01",
+                          "visibility": True, "microexpressions": False}  # fmt: skip
+        peer.wait_for(lambda p: len(p.of_type("request.face.config")) >= 3)
+        separate = [r.message for r in peer.of_type("request.face.config")[1:]]
+        assert [sorted(set(m) - {"type", "request_id"}) for m in separate] == [
+            ["blinking"], ["head_sway"],
+        ]  # fmt: skip
+        assert all(m[next(iter(set(m) - {"type", "request_id"}))] is False for m in separate)
     finally:
         driver.close()
 
@@ -96,7 +101,9 @@ def test_speak_audio_by_url_with_lipsync_off_reports_start_and_end(peer: FurhatP
         driver.close()
     speak = peer.of_type("request.speak.audio")[0].message
     assert speak == {"type": "request.speak.audio", "url": "http://server/prompts/p1.wav",
-                     "lipsync": False}  # fmt: skip
+                     "lipsync": False, "abort": False,
+                     "request_id": speak["request_id"]}  # fmt: skip
+    assert speak["request_id"]
     assert kinds.index(SPEECH_START) < kinds.index(SPEECH_END)
 
 
@@ -148,7 +155,7 @@ def test_study_face_ids_are_sent_as_the_mapped_robot_faces(peer: FurhatPeer) -> 
     try:
         _wait_connected(driver, events)
         driver.set_face("face-2")
-        assert _face_configs(peer, 2) == ["Isabel", "Marty"]
+        assert _face_configs(peer, 4) == ["Isabel", None, None, "Marty"]
         stats = driver.stats()
     finally:
         driver.close()
@@ -169,14 +176,14 @@ def test_an_unmapped_face_is_sent_unchanged_warned_once_and_reported(
         with caplog.at_level(logging.WARNING, logger="chameleons.worker.drivers.furhat"):
             driver.set_face("face-3")
             driver.set_face("face-3")
-            sent = _face_configs(peer, 3)
+            sent = _face_configs(peer, 5)
         unmapped = driver.stats()["unmapped_face"]
         driver.set_face("face-1")
-        assert _face_configs(peer, 4)[-1] == "Isabel"
+        assert _face_configs(peer, 6)[-1] == "Isabel"
         assert driver.stats()["unmapped_face"] is None
     finally:
         driver.close()
-    assert sent == [None, "face-3", "face-3"]  # no face at the handshake: the robot's own
+    assert sent == [None, None, None, "face-3", "face-3"]  # handshake: the robot's own face
     assert unmapped == "face-3"
     warnings = [r for r in caplog.records if "face-3" in r.getMessage()]
     assert len(warnings) == 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import socket
 from collections.abc import Iterator
 from pathlib import Path
@@ -144,7 +145,8 @@ def test_cli_replays_a_take_with_the_ingest_rotation_scale(
 ) -> None:
     from tests.worker.test_takes import HEADER, row, timecode
 
-    rows = [row(timecode(2 * i), {"HeadYaw": 0.05 * i, "JawOpen": 0.1 * i}) for i in range(8)]
+    step = math.radians(9.0)
+    rows = [row(timecode(2 * i), {"HeadYaw": step * i, "JawOpen": 0.1 * i}) for i in range(8)]
     take = tmp_path / "take.csv"
     take.write_text("\n".join(",".join(r) for r in [HEADER, *rows]) + "\n")
     receiver = LiveLinkReceiver(host=HOST, port=0, publish_endpoint=subscriber.endpoint,
@@ -162,7 +164,7 @@ def test_cli_replays_a_take_with_the_ingest_rotation_scale(
     finally:
         receiver.stop()
         probe.close()
-    # HeadYaw 0.05 per row in the take's unit (degrees/180) arrives as 9 degrees per row
+    # HeadYaw 9 degrees per row in the take's unit (radians) arrives as 9 degrees per row
     np.testing.assert_allclose([f.head[0] for f in got], [9.0 * i for i in range(8)], atol=1e-3)
     np.testing.assert_allclose(
         [f.blendshapes[BLENDSHAPE_INDEX["jawOpen"]] for f in got], [0.1 * i for i in range(8)],

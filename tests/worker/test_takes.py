@@ -54,10 +54,11 @@ def write(path: Path, header: list[str], rows: list[list[str]]) -> Path:
 def test_reads_a_take_by_header_name(tmp_path: Path) -> None:
     rows = [
         row(
-            timecode(0), {"JawRight": 0.25, "MouthPucker": 0.5, "MouthLeft": 0.125, "HeadYaw": 0.25}
+            timecode(0),
+            {"JawRight": 0.25, "MouthPucker": 0.5, "MouthLeft": 0.125, "HeadYaw": 0.7853982},
         ),
         row(timecode(1, "500"), {"JawOpen": 0.75, "TongueOut": 1.5, "BrowInnerUp": -0.001}),
-        row(timecode(3), {"LeftEyePitch": -0.05, "HeadRoll": -0.1}),
+        row(timecode(3), {"LeftEyePitch": -0.1570796, "HeadRoll": -0.3141593}),
     ]
     take = read_take(write(tmp_path / "take.csv", HEADER, rows))
     assert len(take) == 3
@@ -73,7 +74,7 @@ def test_reads_a_take_by_header_name(tmp_path: Path) -> None:
     assert b[1, BLENDSHAPE_INDEX["jawOpen"]] == 0.75
     assert b[1, BLENDSHAPE_INDEX["tongueOut"]] == 1.0  # clamped
     assert b[1, BLENDSHAPE_INDEX["browInnerUp"]] == 0.0
-    np.testing.assert_allclose(take.head[0], [45.0, 0, 0], atol=1e-4)  # degrees/180 default
+    np.testing.assert_allclose(take.head[0], [45.0, 0, 0], atol=1e-4)  # radians, the default
     np.testing.assert_allclose(take.head[2], [0, 0, -18.0], atol=1e-4)
     np.testing.assert_allclose(take.eyes[2], [0, -9.0, 0, 0, 0, 0], atol=1e-4)
     assert take.duration == pytest.approx(0.05)
@@ -181,3 +182,54 @@ def test_unreadable_files(tmp_path: Path) -> None:
 )  # fmt: skip
 def test_parse_timecode(text: str, seconds: float) -> None:
     assert parse_timecode(text) == pytest.approx(seconds)
+
+
+def based_timecode(frame: int, base: int, sep: str = ":") -> str:
+    seconds, ff = divmod(frame, base)
+    return f"10:00:{seconds:02d}{sep}{ff:02d}.000"
+
+
+@pytest.mark.parametrize("base", [24, 25, 30, 50, 60])
+def test_takes_on_every_timecode_base_are_timed_by_it(tmp_path: Path, base: int) -> None:
+    rows = [row(based_timecode(f, base), {}) for f in range(2 * base + 3)]  # past a second
+    take = read_take(write(tmp_path / "t.csv", HEADER, rows))
+    assert take.timecode_fps == base
+    np.testing.assert_allclose(np.diff(take.times), 1 / base, atol=1e-9)
+    assert take.duration == pytest.approx((2 * base + 2) / base)
+
+
+def test_a_drop_frame_take_is_29_97(tmp_path: Path) -> None:
+    # 29.97 drop-frame: after 00:00:59;29 comes 00:01:00;02 (0 and 1 are skipped).
+    rows = [row("10:00:59;28.000", {}), row("10:00:59;29.000", {}), row("10:01:00;02.000", {})]
+    take = read_take(write(tmp_path / "t.csv", HEADER, rows))
+    assert take.timecode_fps == pytest.approx(29.97, abs=0.001)
+    np.testing.assert_allclose(np.diff(take.times), 1001 / 30000, atol=1e-9)
+
+
+def test_an_explicit_base_wins_and_a_short_take_keeps_60(tmp_path: Path) -> None:
+    rows = [row(based_timecode(f, 30), {}) for f in range(10)]  # less than a second
+    path = write(tmp_path / "t.csv", HEADER, rows)
+    assert read_take(path).timecode_fps == 60.0
+    assert read_take(path, fps=30).timecode_fps == 30.0
+    np.testing.assert_allclose(np.diff(read_take(path, fps=30).times), 1 / 30, atol=1e-9)
+
+
+def test_parse_timecode_at_25_and_drop_frame() -> None:
+    assert parse_timecode("00:00:01:12.500", 25) == pytest.approx(1 + 12.5 / 25)
+    # 10 minutes of drop-frame is exactly 17982 frames.
+    assert parse_timecode("00:10:00;00.000", 30000 / 1001) == pytest.approx(17982 * 1001 / 30000)
+    with pytest.raises(ValueError, match="out of range"):
+        parse_timecode("00:00:00:25.000", 25)
+
+
+def test_all_zero_head_columns_are_reported(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    rows = [row(timecode(f), {"JawOpen": 0.5, "LeftEyeYaw": 0.1}) for f in range(5)]
+    with caplog.at_level("WARNING", logger="chameleons.worker.takes"):
+        take = read_take(write(tmp_path / "off.csv", HEADER, rows))
+    assert take.notes == ("head streaming was off in this take (HeadYaw, HeadPitch, HeadRoll "
+                          "all zero)",)  # fmt: skip
+    assert "off.csv: head streaming was off" in caplog.text
+    moving = [row(timecode(f), {"HeadPitch": 0.01 * f}) for f in range(5)]
+    assert read_take(write(tmp_path / "on.csv", HEADER, moving)).notes == ()

@@ -63,7 +63,9 @@ WORKER_KINDS = {
 }
 SUMMARY_FIELDS = ("instance", "restarts", "last_seen_s")
 ROBOT_KINDS = {"disconnected": "robot.disconnected", "closed": "robot.disconnected",
-               "connected": "robot.connected"}  # fmt: skip
+               "connected": "robot.connected", "auth_refused": "robot.auth_refused",
+               "auth_timeout": "robot.auth_timeout"}  # fmt: skip
+AUTH_STATES = frozenset({"auth_refused", "auth_timeout"})
 
 
 @dataclass(frozen=True)
@@ -118,6 +120,7 @@ class BoothFlow:
         if bridge is not None:
             bridge.add_listener("worker.", self._on_worker)
             bridge.add_listener("event.", self._on_worker_event)
+            bridge.add_listener("telemetry.", self._on_telemetry)
         return self
 
     async def stop(self, drain_seconds: float = 0.0) -> None:
@@ -178,6 +181,17 @@ class BoothFlow:
                               partial(self._log_outage, booth, kind, payload, when))  # fmt: skip
         elif message.type == "recording_stopped":
             self._enqueue(f"booth:{booth}", partial(self._route_reported, dict(body)))
+
+    def _on_telemetry(self, message: Message) -> None:
+        """A refused login is reported once, possibly before the server's subscription took:
+        the 1 Hz heartbeat repeats the robot's state, so it is never lost."""
+        booth = message.topic.partition(".")[2]
+        state = str(message.body.get("robot_state"))
+        kind = ROBOT_KINDS.get(state) if state in AUTH_STATES else None
+        if kind is not None and self._robot_kinds.get(booth) != kind:
+            self._robot_kinds[booth] = kind
+            payload = {"booth": booth, "state": state, "reason": message.body.get("robot_problem")}
+            self._enqueue(f"booth:{booth}", partial(self._log_outage, booth, kind, payload, None))
 
     # --- lanes ---------------------------------------------------------------------------------
     def _enqueue(self, key: str, job: Job) -> None:

@@ -29,6 +29,7 @@ from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.models import Interaction, Participant, Session, Study
 from chameleons.backend.sessions.snapshot import phone_presence_key
 from chameleons.backend.wizard import health, worker_link
+from chameleons.backend.wizard.live import display_presence
 
 router = APIRouter(tags=["dashboard"])
 OPEN_STATES = ("pending", "running")
@@ -81,7 +82,7 @@ def monitor_state(db: DbSessionType, state: Any, study: Study) -> dict[str, Any]
     booths = []
     for booth in sorted(set(sessions) | set(workers)):
         telemetry, age = worker_link.latest_telemetry(bridge, booth)
-        robot = tracker.snapshot(booth, telemetry, age)
+        robot = tracker.snapshot(booth, telemetry, age, display=display_presence(state, booth))
         session = sessions.get(booth)
         view = _session_view(db, session, hub) if session is not None else None
         running = bool(view and view["state"] == "running")

@@ -18,6 +18,7 @@ import contextlib
 import inspect
 import logging
 import threading
+import time
 from collections import Counter, deque
 from collections.abc import Awaitable, Callable, Iterator
 from contextlib import contextmanager
@@ -32,6 +33,7 @@ log = logging.getLogger(__name__)
 
 Listener = Callable[[str, Message], Awaitable[None] | None]
 DEFAULT_QUEUE_LIMIT = 256
+PRESENCE_STALE_SECONDS = 3.5  # the page reports once a second
 
 
 class _Entry:
@@ -126,6 +128,8 @@ class DisplayChannel:
         self._faces: dict[str, str] = {}
         self._last_frames: dict[str, Message] = {}
         self._telemetry: dict[str, Message] = {}
+        self._telemetry_at: dict[str, float] = {}
+        self._sound_blocked: dict[str, bool] = {}
         self._listeners: list[Listener] = []
 
     # -- downstream ---------------------------------------------------------------------
@@ -204,6 +208,10 @@ class DisplayChannel:
         if message.get("type") == "telemetry":
             with self._lock:
                 self._telemetry[booth] = message
+                self._telemetry_at[booth] = time.monotonic()
+        elif message.get("type") == "speech":
+            with self._lock:  # sound plays once the page had its click; say when it did not
+                self._sound_blocked[booth] = message.get("reason") == "autoplay_blocked"
         self.counters[f"reported.{message.get('type')}"] += 1
         for listener in list(self._listeners):
             try:
@@ -212,6 +220,23 @@ class DisplayChannel:
                     await result
             except Exception:  # a listener's bug must not cut the display off
                 log.exception("display listener failed for booth %s", booth)
+
+    def presence(self, booth: str) -> tuple[bool, str]:
+        """Whether a display page of ``booth`` is open and playing (the virtual robot is
+        "connected"), and if not, why: no page, a page that stopped reporting (a closed lid,
+        a background tab), or one that needs a click before it plays sound."""
+        with self._lock:
+            pages = len(self._subscriptions.get(booth, ()))
+            age = time.monotonic() - self._telemetry_at.get(booth, -1e18)
+            fps = (self._telemetry.get(booth) or {}).get("fps")
+            blocked = self._sound_blocked.get(booth, False)
+        if pages == 0:
+            return False, "no robot display open"
+        if age > PRESENCE_STALE_SECONDS or (isinstance(fps, int | float) and fps <= 0):
+            return False, "robot display not playing"
+        if blocked:
+            return False, "robot display needs a click to enable sound"
+        return True, "display open"
 
     def telemetry(self, booth: str) -> Message | None:
         """The latest telemetry report of the booth's display page, if any."""

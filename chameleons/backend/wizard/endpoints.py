@@ -143,3 +143,10 @@ async def apply_to_robot(session_id: int, request: Request, _user: CurrentStaff)
     logged as ``robot.applied`` or, with the reasons, ``robot.not_applied``."""
     with http_errors():
         return await robot.apply(request.app.state, session_id)
+
+
+@router.post("/sessions/{session_id}/robot/retry", dependencies=WRITE)
+async def retry_robot(session_id: int, request: Request, _user: CurrentStaff) -> dict[str, Any]:
+    """Ask the booth's worker to try the robot again after a refused or unanswered login."""
+    with http_errors():
+        return await robot.retry(request.app.state, session_id)

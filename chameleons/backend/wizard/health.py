@@ -51,7 +51,9 @@ LABELS = {
     "jitter": "Jitter",
     "robot": "Robot",
     "speaking": "Speaking",
+    "face": "Robot face",
 }
+ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
 
 @dataclass
@@ -109,9 +111,12 @@ def _flag(data: Mapping[str, Any], *names: str) -> bool | None:
 
 
 def evaluate(
-    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None
+    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None,
+    display: tuple[bool, str] | None = None,
 ) -> dict[str, Check]:
-    """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds."""
+    """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds.
+    ``display``: whether the booth's robot display page is open and playing, and why not
+    (:meth:`DisplayChannel.presence`); for the virtual robot that *is* the robot."""
     limits = limits or Thresholds()
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
         why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
@@ -129,12 +134,65 @@ def evaluate(
     fps_ok = fps is not None and fps >= limits.min_face_fps
     return {
         "worker": Check("worker", True, "connected"),
-        "input": Check("input", fps_ok, _fmt(fps, "fps")),
+        "input": Check("input", fps_ok, _input_value(telemetry, fps, fps_ok)),
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
-        "robot": Check("robot", robot is True, "connected" if robot else "disconnected"),
+        "robot": _robot_check(telemetry, robot is True, display),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
+        **_face_check(telemetry),
     }
+
+
+def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) -> str:
+    """The frame rate, or why the phone sends no faces: it sees no face, or the lab must
+    change the app's mode (e.g. MetaHuman Animator instead of ARKit streaming)."""
+    ingest = telemetry.get("ingest")
+    ingest = ingest if isinstance(ingest, Mapping) else {}
+    if not fps_ok and ingest.get("problem"):
+        return str(ingest["problem"])
+    if not fps_ok and ingest.get("no_face"):
+        return "phone sees no face"
+    return _fmt(fps, "fps")
+
+
+def _robot_face(telemetry: Mapping[str, Any]) -> Mapping[str, Any]:
+    face = telemetry.get("robot_face")
+    return face if isinstance(face, Mapping) else {}
+
+
+def _robot_check(
+    telemetry: Mapping[str, Any], connected: bool, display: tuple[bool, str] | None
+) -> Check:
+    """The virtual robot is connected when a display page of the booth is open and
+    playing, not merely when the worker runs; any other robot by its driver's state."""
+    if telemetry.get("driver") == "virtual" and display is not None:
+        open_and_playing, why = display
+        return Check("robot", open_and_playing, why)
+    return Check("robot", connected, _robot_value(telemetry, connected))
+
+
+def _robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
+    """``connected``, or why not: a refused login says so with the robot's reason."""
+    if connected:
+        return "connected"
+    state = str(telemetry.get("robot_state") or "disconnected")
+    problem = telemetry.get("robot_problem")
+    if state in ROBOT_PROBLEMS:
+        return f"{ROBOT_PROBLEMS[state]}: {problem}" if problem else ROBOT_PROBLEMS[state]
+    return "disconnected"
+
+
+def _face_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:
+    """A chip only when the robot's face needs attention: a study face id with no robot
+    face mapped (the robot got the id unchanged), or a face setting the robot refused."""
+    face = _robot_face(telemetry)
+    unmapped, refused = face.get("unmapped_face"), face.get("refused") or {}
+    problems = [f"{unmapped} not mapped to a robot face"] if unmapped else []
+    if isinstance(refused, Mapping):
+        problems += [f"{name} refused ({why})" for name, why in refused.items()]
+    if not problems:
+        return {}
+    return {"face": Check("face", False, "; ".join(problems))}
 
 
 def _fmt(value: float | None, unit: str, digits: int = 1) -> str:
@@ -154,9 +212,10 @@ class HealthTracker:
         telemetry: Mapping[str, Any] | None,
         age: float | None,
         now: float | None = None,
+        display: tuple[bool, str] | None = None,
     ) -> dict[str, Any]:
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age, self.limits)
+        checks = evaluate(telemetry, age, self.limits, display)
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:
@@ -170,7 +229,9 @@ class HealthTracker:
             "ok": all(check.ok is not False for check in checks.values()),
             "alarm": any(check.level == ALARM for check in checks.values()),
             "alarm_after_s": self.limits.alarm_after_s,
-            "checks": [checks[name].as_dict() for name in (*CHECKS, "speaking")],
+            "checks": [
+                checks[name].as_dict() for name in (*CHECKS, "speaking", "face") if name in checks
+            ],
             "telemetry": dict(telemetry) if telemetry is not None else None,
         }
 

@@ -123,13 +123,20 @@ async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:
                 await sender.send({"type": "pong"})
 
 
+def display_presence(state: Any, booth: str) -> tuple[bool, str] | None:
+    channel = getattr(state, "display_channel", None)
+    presence = getattr(channel, "presence", None)
+    return presence(booth) if callable(presence) else (False, "no robot display open")
+
+
 async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
     tracker = health.tracker_of(state)
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             bridge = worker_link.bridge_of(state)
             telemetry, age = worker_link.latest_telemetry(bridge, booth)
-            snapshot = tracker.snapshot(booth, telemetry, age)
+            display = display_presence(state, booth)
+            snapshot = tracker.snapshot(booth, telemetry, age, display=display)
             snapshot["bridge"] = bridge is not None
             await sender.send(snapshot)
             await asyncio.sleep(HEALTH_INTERVAL_SECONDS)

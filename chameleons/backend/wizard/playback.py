@@ -72,7 +72,8 @@ async def _deliver(state: Any, cue: Cue, body: dict[str, Any]) -> dict[str, Any]
     acked_at = utcnow()
     event = await run_in_threadpool(write, state, service.record_outcome, cue, outcome, acked_at)
     if outcome.sent and events is not None:
-        _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue)))
+        _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue),
+                                   _not_voiced_logger(state, cue, display)))  # fmt: skip
         if display is not None:
             _spawn(state, display.wait(_failure_logger(state, cue)))
     else:
@@ -116,12 +117,35 @@ def _driver(state: Any, booth: str) -> str | None:
 
 
 def _logger(state: Any, cue: Cue) -> speech.OnSpeech:
-    async def log_speech(started: bool, worker_time: float | None) -> None:
+    async def log_speech(started: bool, worker_time: float | None, outcome: str | None) -> None:
         await run_in_threadpool(
-            write, state, service.record_speech, cue, started, utcnow(), worker_time
+            write, state, service.record_speech, cue, started, utcnow(), worker_time, outcome
         )
 
     return log_speech
+
+
+def _not_voiced_logger(
+    state: Any, cue: Cue, display: speech.DisplayWatch | None
+) -> speech.OnNotVoiced:
+    async def log_not_voiced(detail: str) -> None:
+        if display is not None and display.said_why():
+            return  # the display said why already (e.g. it needs a click for sound)
+        why = _virtual_robot_absence(state, cue.booth) or detail
+        await run_in_threadpool(write, state, service.record_not_voiced, cue, why, utcnow())
+
+    return log_not_voiced
+
+
+def _virtual_robot_absence(state: Any, booth: str) -> str | None:
+    """Why the virtual robot could not voice it: no display page of the booth open."""
+    if _driver(state, booth) != "virtual":
+        return None
+    channel = getattr(state, "display_channel", None)
+    connected = getattr(channel, "connected", None)
+    if callable(connected) and connected(booth) > 0:
+        return None
+    return f"no robot display open for {booth}"
 
 
 def _failure_logger(state: Any, cue: Cue) -> speech.OnFailure:

@@ -27,10 +27,11 @@ from chameleons.backend.studies.errors import ConflictError, NotFoundError
 from chameleons.backend.wizard import repository, worker_link
 from chameleons.backend.wizard.playback import write
 from chameleons.backend.wizard.service import Outcome
-from chameleons.worker.control import SET_BEHAVIOUR, SET_FACE
+from chameleons.worker.control import RETRY_ROBOT, SET_BEHAVIOUR, SET_FACE
 
 APPLIED = "robot.applied"
 NOT_APPLIED = "robot.not_applied"
+RETRY = "robot.retry_requested"
 
 
 @dataclass(frozen=True)
@@ -56,11 +57,15 @@ class Target:
 Finder = Callable[[Session], Target]
 
 
-def target_of(db: Session, session_id: int) -> Target:
+def _session_view(db: Session, session_id: int) -> repository.SessionView:
     try:
-        view = repository.load_session(db, session_id)
+        return repository.load_session(db, session_id)
     except repository.SessionNotFoundError as exc:
         raise NotFoundError(str(exc)) from None
+
+
+def target_of(db: Session, session_id: int) -> Target:
+    view = _session_view(db, session_id)
     interaction = view.current
     if interaction is None or view.session.state in ("complete", "ended"):
         raise ConflictError("There is no interaction to set the robot up for.")
@@ -133,6 +138,24 @@ async def apply_with(
         return None
     event = await run_in_threadpool(write, state, record, target, behaviour, face, source)
     return {"event_id": event.id, "kind": event.kind, **event.payload}
+
+
+async def retry(state: Any, session_id: int) -> dict[str, Any]:
+    """The wizard asks the worker to try the robot again (after a refused or unanswered
+    login the driver waits for this); logged as ``robot.retry_requested``."""
+    view = await run_in_threadpool(write, state, _session_view, session_id)
+    booth, current = view.session.booth, view.current
+    outcome = await worker_link.send_command(worker_link.bridge_of(state), booth,
+                                             RETRY_ROBOT, {})  # fmt: skip
+
+    def log(db: Session) -> Event:
+        return events.record(db, RETRY, source="wizard", study_id=view.session.study_id,
+                             session_id=session_id,
+                             interaction_id=current.id if current else None,
+                             payload={"booth": booth, **_result(outcome)})  # fmt: skip
+
+    event = await run_in_threadpool(write, state, log)
+    return {"event_id": event.id, **_result(outcome)}
 
 
 def _unchanged(outcome: Outcome) -> bool:

@@ -28,6 +28,7 @@ ACKED = "prompt.acked"
 NOT_SENT = "prompt.not_sent"
 SPEECH_START = "prompt.speech_start"
 SPEECH_END = "prompt.speech_end"
+NOT_VOICED = "prompt.not_voiced"  # sent, acknowledged, and no robot voiced it
 STOPPED = "prompt.stopped"
 
 
@@ -137,14 +138,24 @@ def record_outcome(db: Session, cue: Cue, outcome: Outcome, acked_at: datetime) 
 
 
 def record_speech(
-    db: Session, cue: Cue, started: bool, received_at: datetime, worker_time: float | None
-) -> Event:
-    """Log a speech start/end the worker reported for this play."""
+    db: Session, cue: Cue, started: bool, received_at: datetime, worker_time: float | None,
+    outcome: str | None = None,
+) -> Event:  # fmt: skip
+    """Log a speech start/end the worker reported for this play; an end says how it ended
+    (``played``, ``interrupted`` by the next prompt, ``stopped`` by the wizard)."""
     payload: dict[str, Any] = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id}
     if started:
         payload["click_to_speech_ms"] = _ms_between(cue.clicked_at, received_at)
+    elif outcome:
+        payload["outcome"] = outcome
     kind = SPEECH_START if started else SPEECH_END
     return _log(db, cue, kind, "worker", payload, at=received_at, worker_time=worker_time)
+
+
+def record_not_voiced(db: Session, cue: Cue, detail: str, received_at: datetime) -> Event:
+    """Log that no robot voiced this play (NOT VOICED; a data-quality flag)."""
+    payload = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id, "detail": detail}
+    return _log(db, cue, NOT_VOICED, "server", payload, at=received_at)
 
 
 def record_display_failure(

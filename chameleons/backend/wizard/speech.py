@@ -4,6 +4,12 @@ The subscription to the booth's events is opened before the command goes out, so
 that starts speaking at once is not missed. Events are ``event.<booth>`` messages of type
 ``speech_start``/``speech_end`` whose body carries ``prompt_id`` and ``worker_time``.
 
+A play that no robot voices is not voiced: no speech start within
+:data:`START_TIMEOUT_SECONDS`, or an end before any start (the robot skipped it, or was not
+connected). :func:`watch` reports it through ``on_not_voiced`` with the reason; the play
+is then logged ``prompt.not_voiced``, shown NOT VOICED on the console and counted in the
+dashboard's data-quality flags.
+
 The virtual robot's page also says why a play never started (``autoplay_blocked``: the
 browser wants one click before it plays sound). That reason does not travel through the
 worker, so :class:`DisplayWatch` hears it on the server's display channel, where the page
@@ -26,8 +32,11 @@ END_MARGIN_SECONDS = 10.0
 
 DISPLAY_FAILURES = {"autoplay_blocked": "robot display needs a click to enable sound"}
 
-# (started, worker_time) -> logged
-OnSpeech = Callable[[bool, float | None], Awaitable[None]]
+# (started, worker_time, outcome) -> logged; outcome "played", "interrupted", "stopped"...
+OnSpeech = Callable[[bool, float | None, str | None], Awaitable[None]]
+# why it was not voiced -> logged
+OnNotVoiced = Callable[[str], Awaitable[None]]
+NOT_STARTED = "the robot never started speaking it"
 # reason -> logged
 OnFailure = Callable[[str], Awaitable[None]]
 
@@ -48,6 +57,11 @@ class DisplayWatch:
                 and message.get("prompt_id") == self.prompt_id
                 and not self.failed.done()):  # fmt: skip
             self.failed.set_result(str(reason))
+
+    def said_why(self) -> bool:
+        """The page reported why this play could not start (waiting may have cancelled the
+        future: that is not a report)."""
+        return self.failed.done() and not self.failed.cancelled()
 
     def close(self) -> None:
         with contextlib.suppress(ValueError):
@@ -93,24 +107,55 @@ def close(subscription: Any | None) -> None:
             subscription.close()
 
 
-async def _next(subscription: Any, kind: str, prompt_id: str) -> float | None:
-    """The worker time of the next ``kind`` event of ``prompt_id``."""
+async def _next(subscription: Any, prompt_id: str) -> tuple[str, dict[str, Any]]:
+    """The next speech event (type, body) of ``prompt_id``."""
     async for message in subscription:
         body = getattr(message, "body", {}) or {}
-        if getattr(message, "type", None) == kind and body.get("prompt_id") == prompt_id:
-            moment = body.get("worker_time")
-            return float(moment) if isinstance(moment, int | float) else None
+        kind = getattr(message, "type", None)
+        if kind in (SPEECH_START, SPEECH_END) and body.get("prompt_id") == prompt_id:
+            return str(kind), dict(body)
     raise TimeoutError("the event subscription closed")
 
 
-async def watch(subscription: Any, prompt_id: str, duration: float, on_speech: OnSpeech) -> None:
-    """Report speech start, then end, of ``prompt_id``; give up quietly on a timeout."""
+def _time(body: dict[str, Any]) -> float | None:
+    moment = body.get("worker_time")
+    return float(moment) if isinstance(moment, int | float) else None
+
+
+def _why_silent(body: dict[str, Any]) -> str:
+    """Why a play ended before it started, from the worker's speech end."""
+    error, outcome = body.get("error"), body.get("outcome")
+    if error:
+        return str(error)
+    if outcome == "skipped":
+        return "skipped: another prompt was played before it started"
+    return "the robot ended it before it started"
+
+
+async def watch(
+    subscription: Any, prompt_id: str, duration: float, on_speech: OnSpeech,
+    on_not_voiced: OnNotVoiced | None = None,
+) -> None:  # fmt: skip
+    """Report speech start, then end, of ``prompt_id``; a play that never starts (no start
+    in time, or an end first) goes to ``on_not_voiced``; a late end is given up quietly."""
     try:
-        phases = ((True, SPEECH_START, START_TIMEOUT_SECONDS),
-                  (False, SPEECH_END, duration + END_MARGIN_SECONDS))  # fmt: skip
-        for started, kind, timeout in phases:
-            worker_time = await asyncio.wait_for(_next(subscription, kind, prompt_id), timeout)
-            await on_speech(started, worker_time)
+        try:
+            kind, body = await asyncio.wait_for(_next(subscription, prompt_id),
+                                                START_TIMEOUT_SECONDS)  # fmt: skip
+        except TimeoutError:
+            if on_not_voiced is not None:
+                await on_not_voiced(NOT_STARTED)
+            return
+        if kind == SPEECH_END:
+            if on_not_voiced is not None:
+                await on_not_voiced(_why_silent(body))
+            return
+        await on_speech(True, _time(body), None)
+        while kind != SPEECH_END:
+            kind, body = await asyncio.wait_for(_next(subscription, prompt_id),
+                                                duration + END_MARGIN_SECONDS)  # fmt: skip
+        outcome = body.get("outcome")
+        await on_speech(False, _time(body), str(outcome) if outcome else None)
     except TimeoutError:
         return
     except Exception:

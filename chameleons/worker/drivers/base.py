@@ -87,6 +87,9 @@ class Driver(ABC):
     def set_face(self, face_id: str) -> None:  # noqa: B027 - optional
         """Select the robot's face (character/mask)."""
 
+    def retry(self) -> None:  # noqa: B027 - optional
+        """Try the robot again after the driver stopped itself (a refused login)."""
+
     def remote_speech(self, event: str, prompt_id: str | None) -> None:  # noqa: B027
         """Speech start/end reported by the server (the virtual robot's page)."""
 

@@ -1,5 +1,19 @@
 """``furhat``: the Furhat Realtime API over WebSocket (protocols.md section 4a).
 
+Checked against Furhat's own client (PyPI ``furhat-realtime-api`` 0.1.3,
+``AsyncFurhatClient``; see docs/furhat.md):
+
+- **Authentication.** The login succeeds only when ``response.auth`` has ``access: true``
+  (the vendor's ``connect`` raises otherwise). A refusal or no answer within
+  ``auth_timeout`` stops the driver in state ``auth_refused``/``auth_timeout`` with the
+  reason: it sends nothing and does not retry until :meth:`retry` (the wizard's button) or
+  a new worker configuration (a restart). A robot that cannot be reached is retried.
+- **Face set-up.** ``request.face.config`` carries only the fields the vendor's client
+  sends (``face_id``, ``visibility``, ``microexpressions``). ``blinking`` and
+  ``head_sway`` are not in it: each goes in a message of its own, so a robot that refuses
+  one cannot lose the chosen face with it; a refusal is kept in ``stats()["refused"]``.
+- **Speech.** See :mod:`.furhat_speech`.
+
 The renderer's calls only append to bounded deques and wake the sender; one asyncio task in
 the driver's own thread drains them, so a slow or absent robot never blocks a tick. Face
 frames and head poses that pile up are stale: only the newest of each is sent (the rest are
@@ -27,12 +41,22 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
 from chameleons.worker.drivers.base import SPEECH_END, SPEECH_START, Driver
+from chameleons.worker.drivers.furhat_speech import Credit, SpeechTracker
 from chameleons.worker.frames import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, F32Array, upper_snake
 
 log = logging.getLogger(__name__)
 DEFAULT_URL = "ws://127.0.0.1:9000/v1/events"
 # TONGUE_OUT is not confirmed to exist on the robot's ARKit face: left out unless asked for.
 DEFAULT_EXCLUDED = ("tongueOut",)
+# Idle behaviour the project switches off, in fields the vendor's client does not send.
+UNCERTAIN_FACE_FIELDS = ("blinking", "head_sway")
+AUTH_REFUSED, AUTH_TIMEOUT = "auth_refused", "auth_timeout"
+
+
+class AuthFailedError(Exception):
+    def __init__(self, state: str, reason: str) -> None:
+        super().__init__(reason)
+        self.state, self.reason = state, reason
 
 
 class FurhatDriver(Driver):
@@ -60,7 +84,11 @@ class FurhatDriver(Driver):
         self._names = tuple(upper_snake(n) for n in kept)
         self._stream: deque[tuple[str, Any]] = deque(maxlen=queue_size)
         self._control: deque[dict[str, Any]] = deque(maxlen=64)
-        self._prompt: str | None = None
+        self.speech = SpeechTracker()
+        self.problem: str | None = None  # why the driver stopped (auth), for the wizard
+        self.refused: dict[str, str] = {}  # uncertain face field -> the robot's refusal
+        self._pending_fields: dict[str, str] = {}  # request_id -> uncertain field
+        self._retry = threading.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._wake: asyncio.Event | None = None
         self._stopping = threading.Event()
@@ -82,22 +110,38 @@ class FurhatDriver(Driver):
         self.set_state("closed")
 
     def send_face(self, blendshapes: F32Array) -> None:
+        if self.problem is not None:  # refused: nothing goes to the robot until a retry
+            return
         self._queue_stream("face", blendshapes[self._indices])
         self.faces_sent += 1
 
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
+        if self.problem is not None:
+            return
         self._queue_stream("head", (yaw, pitch, roll))
         self.heads_sent += 1
 
+    def retry(self) -> None:
+        """Try the robot again after a refused or unanswered login (the wizard asked)."""
+        self._retry.set()
+        self._notify()
+
     def play_audio(self, prompt_id: str, url: str) -> None:
         if not self.connected:  # nothing will ever answer: end the speech at once
-            self.emit(SPEECH_END, prompt_id=prompt_id, error="robot not connected")
+            self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
+                      error=self.problem or "robot not connected")  # fmt: skip
             return
-        self._prompt = prompt_id
-        self._queue_control({"type": "request.speak.audio", "url": url, "lipsync": False})
+        abort = self.speech.busy
+        play, skipped = self.speech.begin(prompt_id)
+        if abort:  # the robot would queue it behind the one that plays: stop that first
+            self._queue_control({"type": "request.speak.stop"})
+        self._queue_control({"type": "request.speak.audio", "url": url, "lipsync": False,
+                             "abort": abort, "request_id": play.request_id})  # fmt: skip
+        self._credit(skipped)
 
     def stop_audio(self) -> None:
         self._queue_control({"type": "request.speak.stop"})
+        self._credit(self.speech.stop())
 
     def set_face(self, face_id: str) -> None:
         self._select_face(face_id)
@@ -106,7 +150,17 @@ class FurhatDriver(Driver):
     def stats(self) -> dict[str, Any]:
         return {**super().stats(), "dropped": self.dropped, "connects": self.connects,
                 "face_id": self.face_id, "robot_face_id": self.robot_face_id,
-                "unmapped_face": self.unmapped_face}  # fmt: skip
+                "unmapped_face": self.unmapped_face, "problem": self.problem,
+                "refused": dict(self.refused),
+                "speech_swallowed": self.speech.swallowed}  # fmt: skip
+
+    def _credit(self, credit: Credit | None) -> None:
+        if credit is None:
+            return
+        if credit.kind == "start":
+            self.emit(SPEECH_START, prompt_id=credit.prompt_id)
+        else:
+            self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome)
 
     def _select_face(self, face_id: str | None) -> None:
         self.face_id = face_id
@@ -154,16 +208,34 @@ class FurhatDriver(Driver):
                     await self._handshake(ws)
                     delay = self.backoff_initial
                     await self._session(ws)
+            except AuthFailedError as exc:
+                await self._halt(exc)
+                delay = self.backoff_initial
+                continue
             except (OSError, TimeoutError, WebSocketException, ValueError) as exc:
                 log.info("furhat connection to %s failed: %s", self.url, exc)
-            if self._prompt is not None:  # a prompt that was playing will never report its end
-                self.emit(SPEECH_END, prompt_id=self._prompt, error="robot disconnected")
-                self._prompt = None
+            self._pending_fields.clear()
+            credit = self.speech.drop_all()  # a prompt that was playing will never end
+            if credit is not None:
+                self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome,
+                          error="robot disconnected")  # fmt: skip
             if self._stopping.is_set():
                 break
             self.set_state("disconnected", retry_in=delay)
             await self._sleep(delay)
             delay = min(delay * 2, self.backoff_max)
+
+    async def _halt(self, failure: AuthFailedError) -> None:
+        """Refused or unanswered login: report it and wait for the wizard's retry."""
+        log.warning("furhat at %s: %s; not retrying until asked", self.url, failure.reason)
+        self.problem = failure.reason
+        self._retry.clear()
+        self.set_state(failure.state, reason=failure.reason)
+        assert self._wake is not None
+        while not (self._stopping.is_set() or self._retry.is_set()):
+            self._wake.clear()
+            await self._wake.wait()
+        self._retry.clear()
 
     async def _sleep(self, seconds: float) -> None:
         assert self._wake is not None
@@ -180,30 +252,49 @@ class FurhatDriver(Driver):
 
     def _face_config(self) -> dict[str, Any]:
         config: dict[str, Any] = {"type": "request.face.config", "visibility": True,
-                                  "microexpressions": False, "blinking": False,
-                                  "head_sway": False}  # fmt: skip
+                                  "microexpressions": False}  # fmt: skip
         if self.robot_face_id:
             config["face_id"] = self.robot_face_id
         return config
+
+    def _uncertain_fields(self) -> list[dict[str, Any]]:
+        """One message per field the vendor's client does not send (not yet refused)."""
+        messages = []
+        for name in UNCERTAIN_FACE_FIELDS:
+            if name in self.refused:
+                continue
+            request_id = f"{name}-{self.connects}"
+            self._pending_fields[request_id] = name
+            messages.append({"type": "request.face.config", name: False,
+                             "request_id": request_id})  # fmt: skip
+        return messages
 
     async def _handshake(self, ws: ClientConnection) -> None:
         auth: dict[str, Any] = {"type": "request.auth"}
         if self.key:
             auth["key"] = self.key
         await ws.send(json.dumps(auth))
-        async with asyncio.timeout(self.auth_timeout):
-            while True:
-                reply = _decode(await ws.recv())
-                if reply.get("type") == "response.auth":
-                    break
-        if reply.get("error") or reply.get("success") is False or reply.get("ok") is False:
-            raise ValueError(f"robot refused authentication: {reply}")
+        try:
+            async with asyncio.timeout(self.auth_timeout):
+                while True:
+                    reply = _decode(await ws.recv())
+                    if reply.get("type") == "response.auth":
+                        break
+        except TimeoutError:
+            raise AuthFailedError(AUTH_TIMEOUT, f"the robot did not answer the login within "
+                             f"{self.auth_timeout:g} s") from None  # fmt: skip
+        if reply.get("access") is not True:  # the only success the vendor's client knows
+            detail = reply.get("message") or reply.get("error") or "wrong or missing key"
+            raise AuthFailedError(AUTH_REFUSED, f"the robot refused the login ({detail})")
+        self.problem = None
         # Whatever queued while disconnected is stale: the config below carries the current
         # face. Clear first: a set_face arriving during the send stays queued (not dropped).
         self._stream.clear()
         self._control.clear()
-        await ws.send(json.dumps(self._face_config()))
         self.connects += 1
+        await ws.send(json.dumps(self._face_config()))
+        for message in self._uncertain_fields():
+            await ws.send(json.dumps(message))
         self.set_state("connected")
 
     async def _session(self, ws: ClientConnection) -> None:
@@ -243,12 +334,20 @@ class FurhatDriver(Driver):
 
     async def _receive_loop(self, ws: ClientConnection) -> None:
         async for raw in ws:
-            kind = _decode(raw).get("type")
-            if kind == "response.speak.start":
-                self.emit(SPEECH_START, prompt_id=self._prompt)
-            elif kind == "response.speak.end":
-                self.emit(SPEECH_END, prompt_id=self._prompt)
-                self._prompt = None
+            message = _decode(raw)
+            kind = str(message.get("type", ""))
+            request_id = message.get("request_id")
+            if kind in ("response.speak.start", "response.speak.end"):
+                self._credit(self.speech.on_message(kind, request_id))
+            elif isinstance(request_id, str) and request_id in self._pending_fields:
+                self._field_answer(self._pending_fields.pop(request_id), kind, message)
+
+    def _field_answer(self, name: str, kind: str, message: dict[str, Any]) -> None:
+        """A reply to an uncertain face field: an error is a refusal, kept and shown."""
+        error = message.get("error") or message.get("message")
+        if kind.endswith("error") or message.get("success") is False or error:
+            self.refused[name] = str(error or kind)
+            log.warning("furhat refused face field %r: %s", name, self.refused[name])
 
 
 def _decode(raw: str | bytes) -> dict[str, Any]:

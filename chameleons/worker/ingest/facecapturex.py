@@ -13,8 +13,16 @@ broken value still ends its frame and the frame is dropped as non-finite).
 Head rotation is ``inverse(camera) @ face``, decomposed with the convention of
 :mod:`chameleons.worker.ingest.rotation`: yaw about +y (left/right), pitch about +x, roll
 about +z, in degrees, in the ARKit face frame (+x viewer's right, +y up, +z out of the face).
-The optional leading timestamp is the sender's clock in seconds (values above 1e11 are taken
-as Unix milliseconds); without one the capture time is the receive time.
+The optional leading timestamp: the public app (github.com/elishahung/FaceCaptureX,
+``Extensions.swift`` ``CaptureData.str``) sends none (camera ~ face ~ vertices ~
+blendshapes, one frame per ``ARSession`` update); the study's modified app added one, and
+its source is not public. So a leading field with a single number is a timestamp, read as
+seconds on the sender's clock (``ARFrame.timestamp`` or ``Date().timeIntervalSince1970``),
+or as Unix milliseconds when above 1e11 (1e11 ms is 1973, 1e11 s the year 5138, so the
+two cannot be confused). Only the differences between timestamps matter (the receiver's
+clock aligner maps them onto its own clock); a sender counting milliseconds since boot
+would be read as seconds, and the aligner then restarts on every frame, which shows as
+capture time = receive time. Without a timestamp the capture time is the receive time.
 """
 
 from __future__ import annotations
@@ -30,6 +38,7 @@ from chameleons.worker.frames import (
     N_BLENDSHAPES,
     FaceFrame,
     canonical_name,
+    ignored_name,
     zeros,
 )
 from chameleons.worker.ingest.errors import IngestError
@@ -209,7 +218,8 @@ def parse_facecapturex_frame(data: bytes | str, *, receive_time: float) -> FaceC
                 raise IngestError("non_finite", f"blendshape {name}")
             canonical = canonical_name(name)
             if canonical is None:
-                unknown.append(name)
+                if not ignored_name(name):
+                    unknown.append(name)
                 continue
             values[BLENDSHAPE_INDEX[canonical]] = value
             seen += 1

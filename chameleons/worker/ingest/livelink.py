@@ -13,18 +13,31 @@ Packet layout::
 Blendshapes are clamped to 0..1 (devices send tiny negatives and denormals); head and eye
 rotations are signed and never clamped.
 
-Rotation scale (setting ``livelink_rotation_scale``): the unit of the nine rotation values
-is not documented and differs between app versions. Unreal's plugin divides degrees by 180
-(values in -1..1); some app versions appear to send radians. The setting names the unit:
+Rotation unit (setting ``livelink_rotation_scale``; docs/livelink.md has the evidence). The
+app sends **radians**: every public recording of its stream and its CSV takes only makes
+sense that way (a head roll of 24.5 degrees and eye yaw of +-34 degrees as radians, 77 and
++-109 degrees read as degrees/180). Unreal's own ARKit plugin (``AppleARKitFaceSupport``,
+an Unreal app running on the phone, e.g. the Face AR Sample) maps degrees to -1..1 by
+dividing by 180 instead. The setting names the unit:
 
-- ``"degrees/180"`` (default): degrees = value * 180;
-- ``"radians"``: degrees = value * 180 / pi;
+- ``"radians"`` (default): degrees = value * 180 / pi (the Live Link Face app);
+- ``"degrees/180"``: degrees = value * 180 (an Unreal app's own remote publisher);
 - ``"degrees"``: the value is already degrees;
 - a number: degrees = value * that factor.
 
-Calibrating it: start ``chameleons worker`` (or any receiver), face the phone, then turn the
-head about 45 degrees to one side and read the raw HeadYaw (telemetry or a debugger). About
-0.25 means ``degrees/180``; about 0.79 means ``radians``; about 45 means ``degrees``.
+Checking it: the booth check's "turn your head left, then nod" step shows the measured yaw
+and pitch; a turn of about 45 degrees must read about 45.
+
+Packets the receiver tells apart (Unreal's receiver, ``FAppleARKitLiveLinkRemoteListener``,
+ignores a packet no longer than its minimum size and reads the values without looking at
+what follows them; the newer ``LiveLinkFace`` plugin reads the MetaHuman Animator stream):
+
+- a header that ends after the frame rate, or after a value count of 0: the phone sees
+  no face (``no_face``, not an error);
+- bytes after the 61 values: accepted, as Unreal's receiver does;
+- the MetaHuman Animator stream (little-endian ``uint16`` version and subject id length,
+  ``uint16`` control values scaled by 65535, six head-pose floats): refused with
+  :data:`METAHUMAN_MESSAGE`.
 """
 
 from __future__ import annotations
@@ -63,7 +76,13 @@ def rotation_factor(scale: str | float) -> float:
     return factor
 
 
-DEFAULT_ROTATION_FACTOR = rotation_factor("degrees/180")
+DEFAULT_ROTATION_SCALE = "radians"
+DEFAULT_ROTATION_FACTOR = rotation_factor(DEFAULT_ROTATION_SCALE)
+METAHUMAN_MESSAGE = (
+    "the phone streams MetaHuman Animator data: in Live Link Face choose the Live Link "
+    "(ARKit) mode instead of MetaHuman Animator"
+)
+NO_FACE, METAHUMAN = "no_face", "metahuman_stream"
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,22 +135,36 @@ class _Reader:
 
 
 def decode_livelink_packet(data: bytes) -> LiveLinkPacket:
-    """Decode one datagram; raises :class:`IngestError` with a specific reason."""
+    """Decode one datagram; raises :class:`IngestError` with a specific reason (``no_face``
+    for a header-only packet, ``metahuman_stream`` for the MetaHuman Animator stream)."""
     if len(data) > MAX_PACKET_BYTES:
         raise IngestError("oversized", f"{len(data)} bytes")
-    reader = _Reader(bytes(data))
+    try:
+        return _decode_arkit(bytes(data))
+    except IngestError as exc:
+        if exc.reason != NO_FACE and is_metahuman_packet(data):
+            raise IngestError(METAHUMAN, METAHUMAN_MESSAGE) from None
+        raise
+
+
+def _decode_arkit(data: bytes) -> LiveLinkPacket:
+    reader = _Reader(data)
     (version,) = reader.take(">B")
     if version != LIVELINK_VERSION:
         raise IngestError("wrong_version", f"packet version {version}")
     device_id, subject = reader.text(), reader.text()
-    frame_number, subframe, num, den, count = reader.take(">ifiiB")
+    frame_number, subframe, num, den = reader.take(">ifii")
+    if reader.pos == len(data):
+        raise IngestError(NO_FACE, "header only: the phone sees no face")
+    (count,) = reader.take(">B")
+    if count == 0 and reader.pos == len(data):
+        raise IngestError(NO_FACE, "no values: the phone sees no face")
     if count != LIVELINK_VALUE_COUNT:
         raise IngestError("bad_count", f"{count} values, expected {LIVELINK_VALUE_COUNT}")
     needed = reader.pos + 4 * LIVELINK_VALUE_COUNT
     if len(reader.data) < needed:
         raise IngestError("truncated", f"{len(reader.data)} bytes, needs {needed}")
-    if len(reader.data) > needed:
-        raise IngestError("bad_length", f"{len(reader.data) - needed} bytes after the values")
+    # Bytes after the values are ignored, as Unreal's receiver ignores them.
     values = np.frombuffer(reader.data, _BE_F32, LIVELINK_VALUE_COUNT, reader.pos)
     if not (np.all(np.isfinite(values)) and math.isfinite(float(subframe))):
         raise IngestError("non_finite", "NaN or infinity in the values")
@@ -139,6 +172,22 @@ def decode_livelink_packet(data: bytes) -> LiveLinkPacket:
         device_id, subject, int(frame_number), float(subframe), int(num), int(den),
         values.astype(np.float32),
     )  # fmt: skip
+
+
+def is_metahuman_packet(data: bytes) -> bool:
+    """Whether ``data`` is exactly one packet of the MetaHuman Animator stream (Unreal's
+    ``FLiveLinkFacePacket::Read``: ``uint16`` version, ``uint16`` subject id length and the
+    id, frame number/subframe/rate, ``uint16`` count and that many ``uint16`` control
+    values, six ``float`` head-pose values; Unreal archives are little-endian)."""
+    try:
+        _version, length = struct.unpack_from("<HH", data, 0)
+        pos = 4 + length
+        _frame, _sub, num, den, count = struct.unpack_from("<ifiiH", data, pos)
+    except struct.error:
+        return False
+    pos += struct.calcsize("<ifiiH")
+    sizes_fit = pos + 2 * int(count) + 4 * 6 == len(data)
+    return bool(0 < length <= MAX_NAME_BYTES and num > 0 and den > 0 and count > 0 and sizes_fit)
 
 
 def clamp_blendshapes(values: F32Array) -> F32Array:

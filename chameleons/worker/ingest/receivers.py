@@ -33,7 +33,12 @@ from chameleons.worker.ingest.facecapturex import (
     FaceCaptureXDecoder,
     parse_facecapturex_frame,
 )
-from chameleons.worker.ingest.livelink import DEFAULT_ROTATION_FACTOR, parse_livelink_packet
+from chameleons.worker.ingest.livelink import (
+    DEFAULT_ROTATION_FACTOR,
+    METAHUMAN,
+    NO_FACE,
+    parse_livelink_packet,
+)
 from chameleons.worker.ingest.stats import CaptureStats, ClockAligner
 from chameleons.worker.ingest.transform import FrameTransform
 
@@ -177,11 +182,19 @@ class _Receiver:
         if self._aligner is not None:
             frame.capture_time = self._aligner.align(frame.capture_time, frame.receive_time)
         frame = self.transform.apply(frame)
+        # The participant's own head turn (mirroring undone) for the booth check.
+        yaw = -float(frame.head[0]) if self.transform.mirror else float(frame.head[0])
+        self.stats.note_head(frame.receive_time, yaw, float(frame.head[1]))
         assert self._publisher is not None
         self._publisher.publish(frame)
         self.stats.count_frame(frame.receive_time)
 
     def _drop(self, error: IngestError) -> None:
+        if error.reason == NO_FACE:  # the phone is fine, it sees nobody: not an error
+            self.stats.count_no_face(self._clock())
+            return
+        if error.reason == METAHUMAN:  # the lab must change the app's mode: show why
+            self.stats.set_problem(error.detail)
         self.stats.count_drop(error.reason)
         log.debug("%s receiver dropped input: %s", self.kind, error)
 

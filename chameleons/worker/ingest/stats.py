@@ -8,6 +8,8 @@ from collections import Counter, deque
 from collections.abc import Callable
 from typing import Any
 
+HEAD_WINDOW_SECONDS = 8.0
+
 
 class CaptureStats:
     """Thread-safe counters a receiver updates and telemetry reads (:meth:`snapshot`)."""
@@ -17,6 +19,13 @@ class CaptureStats:
         self._lock = threading.Lock()
         self._drops: Counter[str] = Counter()
         self._times: deque[float] = deque(maxlen=1024)
+        self._no_face: deque[float] = deque(maxlen=1024)
+        # (receive time, yaw, pitch) of the participant's head, for the booth check's
+        # "turn your head left, then nod" step (degrees, the participant's own frame).
+        self._heads: deque[tuple[float, float, float]] = deque(maxlen=1024)
+        self.no_face = 0  # "the phone sees no face" packets (not errors)
+        self.problem: str | None = None  # what the lab must change (e.g. the app's mode)
+        self._problem_at = -1e18
         self.frames = 0
         self.unknown_names = 0
         self.bad_fields = 0
@@ -27,6 +36,31 @@ class CaptureStats:
         with self._lock:
             self.frames += 1
             self._times.append(receive_time)
+
+    def count_no_face(self, receive_time: float) -> None:
+        with self._lock:
+            self.no_face += 1
+            self._no_face.append(receive_time)
+
+    def note_head(self, receive_time: float, yaw: float, pitch: float) -> None:
+        with self._lock:
+            self._heads.append((receive_time, yaw, pitch))
+
+    def head_range(self, seconds: float = HEAD_WINDOW_SECONDS) -> dict[str, float] | None:
+        """Extremes of yaw and pitch over the last ``seconds`` (None: no frames)."""
+        now = self._clock()
+        with self._lock:
+            recent = [(y, p) for t, y, p in self._heads if now - t <= seconds]
+        if not recent:
+            return None
+        yaws, pitches = [y for y, _ in recent], [p for _, p in recent]
+        return {"yaw_min": round(min(yaws), 1), "yaw_max": round(max(yaws), 1),
+                "pitch_min": round(min(pitches), 1), "pitch_max": round(max(pitches), 1),
+                "frames": len(recent)}  # fmt: skip
+
+    def set_problem(self, text: str) -> None:
+        with self._lock:
+            self.problem, self._problem_at = text, self._clock()
 
     def count_drop(self, reason: str, n: int = 1) -> None:
         with self._lock:
@@ -57,9 +91,15 @@ class CaptureStats:
             return 0.0
         return (len(recent) - 1) / (recent[-1] - recent[0])
 
+    def _recent(self, times: deque[float]) -> list[float]:
+        now = self._clock()
+        return [t for t in times if now - t <= self._window]
+
     def snapshot(self) -> dict[str, Any]:
-        fps, drops = self.input_fps, self.drops
+        fps, drops, heads = self.input_fps, self.drops, self.head_range()
         with self._lock:
+            no_face_recent = bool(self._recent(self._no_face))
+            problem_recent = self._clock() - self._problem_at <= self._window
             return {
                 "frames": self.frames,
                 "input_fps": fps,
@@ -69,6 +109,10 @@ class CaptureStats:
                 "bad_fields": self.bad_fields,
                 "connected": self.connected,
                 "connections": self.connections,
+                "no_face": self.no_face,
+                "no_face_recent": no_face_recent,  # the phone sees no face right now
+                "problem": self.problem if problem_recent else None,
+                "head_range": heads,
             }
 
 

@@ -128,3 +128,35 @@ def test_the_limit_settings_are_read_from_the_environment(
     monkeypatch.setenv("CHAMELEONS_HEALTH_ALARM_AFTER_S", "10")
     limits = Thresholds.from_settings(Settings(data_dir=tmp_path))
     assert (limits.max_jitter_p99_ms, limits.alarm_after_s) == (7.5, 10.0)
+
+
+def test_a_refused_robot_login_shows_the_reason_on_the_robot_chip() -> None:
+    telemetry = {**GOOD, "robot_connected": False, "robot_state": "auth_refused",
+                 "robot_problem": "the robot refused the login (wrong or missing key)"}  # fmt: skip
+    robot = evaluate(telemetry, age=0.5)["robot"]
+    assert robot.ok is False
+    assert robot.value == "login refused: the robot refused the login (wrong or missing key)"
+    plain = evaluate({**GOOD, "robot_connected": False, "robot_state": "connecting"}, age=0.5)
+    assert plain["robot"].value == "disconnected"
+
+
+def test_an_unmapped_study_face_or_a_refused_face_field_gets_a_chip_of_its_own() -> None:
+    assert "face" not in evaluate({**GOOD, "robot_face": {"unmapped_face": None}}, age=0.5)
+    telemetry = {**GOOD, "robot_face": {"unmapped_face": "face-3",
+                                        "refused": {"head_sway": "unknown field"}}}  # fmt: skip
+    snapshot = HealthTracker().snapshot("b1", telemetry, 0.5, now=1.0)
+    face = next(c for c in snapshot["checks"] if c["id"] == "face")
+    assert face["label"] == "Robot face"
+    assert face["ok"] is False
+    assert face["value"] == "face-3 not mapped to a robot face; head_sway refused (unknown field)"
+
+
+def test_the_face_stream_chip_says_why_no_faces_arrive() -> None:
+    quiet = {**GOOD, "input_fps": 0.0}
+    assert evaluate(quiet, age=0.5)["input"].value == "0.0 fps"
+    no_face = evaluate({**quiet, "ingest": {"no_face": True, "problem": None}}, age=0.5)
+    assert (no_face["input"].ok, no_face["input"].value) == (False, "phone sees no face")
+    refused = {**quiet, "ingest": {"no_face": False, "problem": "switch the app to ARKit"}}
+    assert evaluate(refused, age=0.5)["input"].value == "switch the app to ARKit"
+    # Faces arriving: the rate, whatever else happened a moment ago.
+    assert evaluate({**GOOD, "ingest": {"no_face": True}}, age=0.5)["input"].value == "59.8 fps"

@@ -103,7 +103,8 @@ def test_blendshapes_by_swift_name_in_any_order_clamped() -> None:
 
 
 def test_mesh_timestamp_and_unknown_names() -> None:
-    shapes = {**SHAPES, "browFurrow_L": 0.3, "hatBrim": 0.9}
+    # MediaPipe's "_neutral" category is dropped by name, never counted as unknown.
+    shapes = {**SHAPES, "browFurrow_L": 0.3, "hatBrim": 0.9, "_neutral": 0.99}
     data = frame_text(turned_yaw(12), shapes, timestamp="1712345678.25", mesh=1220)
     assert len(data) > 30_000
     parsed = parse_facecapturex_frame(data, receive_time=3.0)

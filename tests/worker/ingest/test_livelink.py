@@ -14,6 +14,7 @@ from chameleons.worker.frames import BLENDSHAPE_INDEX
 from chameleons.worker.ingest.errors import IngestError
 from chameleons.worker.ingest.livelink import (
     decode_livelink_packet,
+    is_metahuman_packet,
     parse_livelink_packet,
     rotation_factor,
 )
@@ -57,8 +58,9 @@ def sample_values() -> list[float]:
     values[BLENDSHAPE_INDEX["mouthSmileRight"]] = 1.25  # over range: clamped
     values[BLENDSHAPE_INDEX["browInnerUp"]] = -1e-7  # tiny negative: clamped
     values[BLENDSHAPE_INDEX["cheekPuff"]] = 1e-41  # denormal: flushed
-    values[52:55] = [0.25, -0.125, 0.05]  # head, degrees/180
-    values[55:61] = [0.1, -0.1, 0.0, -0.2, 0.2, 0.01]  # eyes
+    # Head and eyes in radians, the app's unit (docs/livelink.md).
+    values[52:55] = [math.radians(d) for d in (45.0, -22.5, 9.0)]
+    values[55:61] = [math.radians(d) for d in (18, -18, 0, -36, 36, 1.8)]
     return values
 
 
@@ -72,7 +74,7 @@ def test_valid_packet_has_the_documented_size_and_values() -> None:
     assert frame.blendshapes[BLENDSHAPE_INDEX["browInnerUp"]] == 0.0
     assert frame.blendshapes[BLENDSHAPE_INDEX["cheekPuff"]] == 0.0
     np.testing.assert_allclose(frame.head, [45.0, -22.5, 9.0], rtol=1e-5)
-    np.testing.assert_allclose(frame.eyes, [18, -18, 0, -36, 36, 1.8], rtol=1e-5)
+    np.testing.assert_allclose(frame.eyes, [18, -18, 0, -36, 36, 1.8], rtol=1e-5, atol=1e-5)
     assert frame.capture_time == pytest.approx(4321.5 / 60)
     assert frame.receive_time == 10.0
     assert frame.source == "livelink"
@@ -82,7 +84,7 @@ def test_rotations_are_signed_and_never_clamped() -> None:
     values = sample_values()
     values[52:55] = [-0.9, 1.5, -2.0]
     frame = parse_livelink_packet(table_packet(values), receive_time=0.0)
-    np.testing.assert_allclose(frame.head, [-162.0, 270.0, -360.0], rtol=1e-5)
+    np.testing.assert_allclose(frame.head, np.degrees([-0.9, 1.5, -2.0]), rtol=1e-5)
 
 
 @pytest.mark.parametrize(
@@ -115,7 +117,7 @@ def test_builder_matches_the_table_byte_for_byte() -> None:
 
 def test_builder_converts_degrees_with_the_ingest_default() -> None:
     wire = livelink_values(np.zeros(52), head_deg=(45.0, 0.0, -9.0))
-    assert wire[52] == pytest.approx(0.25)
+    assert wire[52] == pytest.approx(math.pi / 4)  # radians, as the app sends
     frame = parse_livelink_packet(build_livelink_packet(wire), receive_time=0.0)
     np.testing.assert_allclose(frame.head, [45.0, 0.0, -9.0], rtol=1e-5, atol=1e-5)
 
@@ -133,10 +135,18 @@ def reason(packet: bytes) -> str:
     return info.value.reason
 
 
-def test_every_truncation_is_reported_as_truncated() -> None:
+def test_every_truncation_is_reported_as_truncated_except_the_header_only_no_face() -> None:
     packet = table_packet(sample_values())
+    header = len(packet) - 1 - 4 * 61  # up to and with the frame rate
     for cut in range(len(packet)):
-        assert reason(packet[:cut]) == "truncated", cut
+        assert reason(packet[:cut]) == ("no_face" if cut == header else "truncated"), cut
+
+
+def test_a_header_only_packet_or_a_zero_count_means_the_phone_sees_no_face() -> None:
+    packet = table_packet(sample_values())
+    header = packet[: len(packet) - 1 - 4 * 61]
+    assert reason(header) == "no_face"
+    assert reason(header + b"\x00") == "no_face"
 
 
 @pytest.mark.parametrize("version", [0, 5, 7, 255])
@@ -166,8 +176,12 @@ def test_oversized() -> None:
     assert reason(table_packet(sample_values()) + b"\0" * 4096) == "oversized"
 
 
-def test_trailing_bytes_are_a_bad_length() -> None:
-    assert reason(table_packet(sample_values()) + b"\0\0\0\0") == "bad_length"
+def test_trailing_bytes_are_accepted_as_unreals_receiver_does() -> None:
+    # FAppleARKitLiveLinkRemoteListener reads the 61 values and never looks past them.
+    packet = table_packet(sample_values())
+    plain = parse_livelink_packet(packet, receive_time=0.0)
+    padded = parse_livelink_packet(packet + b"\0\1\2\3" * 8, receive_time=0.0)
+    np.testing.assert_array_equal(plain.to_vector(), padded.to_vector())
 
 
 @pytest.mark.parametrize("length", [-1, -(2**31), 100_000])
@@ -177,7 +191,7 @@ def test_absurd_string_length(length: int) -> None:
     assert reason(broken) == "bad_length"
 
 
-@pytest.mark.parametrize("count", [0, 52, 60, 62, 255])
+@pytest.mark.parametrize("count", [0, 52, 60, 62, 255])  # 0 with values after: not no_face
 def test_bad_count(count: int) -> None:
     assert reason(table_packet(sample_values(), count=count)) == "bad_count"
 
@@ -226,3 +240,25 @@ def test_fuzz_mutated_valid_packets(data: st.DataObject) -> None:
         packet[index] = data.draw(st.integers(0, 255))
     cut = data.draw(st.integers(0, len(packet)))
     _parses_or_ingest_error(bytes(packet[:cut]))
+
+
+def metahuman_packet(controls: int = 3, subject: bytes = UUID) -> bytes:
+    """A MetaHuman Animator stream packet as Unreal's ``FLiveLinkFacePacket::Read`` reads it
+    (LiveLinkFace plugin): uint16 version, uint16 subject id length and id, frame number,
+    subframe, rate, uint16 count, count uint16 control values, six head-pose floats;
+    little-endian, as Unreal archives are."""
+    head = struct.pack("<HH", 1, len(subject)) + subject
+    timing = struct.pack("<ifiiH", 4321, 0.0, 60, 1, controls)
+    values = struct.pack(f"<{controls}H", *range(controls)) + struct.pack("<6f", *[0.0] * 6)
+    return head + timing + values
+
+
+def test_the_metahuman_animator_stream_is_refused_with_what_to_do() -> None:
+    with pytest.raises(IngestError) as info:
+        parse_livelink_packet(metahuman_packet(), receive_time=0.0)
+    assert info.value.reason == "metahuman_stream"
+    assert "Live Link (ARKit)" in info.value.detail
+    assert is_metahuman_packet(metahuman_packet(controls=250))
+    assert not is_metahuman_packet(table_packet(sample_values()))
+    assert not is_metahuman_packet(metahuman_packet()[:-1])  # not exactly one packet
+    assert reason(metahuman_packet()[:-1]) == "wrong_version"

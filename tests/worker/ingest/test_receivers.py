@@ -263,3 +263,26 @@ def test_livelink_over_ipv6_loopback(zmq_context, face_sub) -> None:
         receiver.stop()
         probe.close()
     assert frame.blendshapes[SMILE] == 0.5
+
+
+def test_no_face_packets_are_counted_apart_and_a_metahuman_stream_names_the_fix(
+    zmq_context, face_sub
+) -> None:
+    from tests.worker.ingest.test_livelink import metahuman_packet
+
+    with udp_receiver(zmq_context, face_sub) as (receiver, send):
+        sync_livelink(face_sub, send)
+        full = build_livelink_packet(livelink_values(smile()))
+        header_only = full[: len(full) - 1 - 4 * 61]  # the app's "no face" packet
+        for _ in range(5):
+            send(header_only)
+        send(metahuman_packet())
+        send(full)
+        face_sub.receive(1, accept=not_sync)
+        stats = receiver.stats.snapshot()
+    assert stats["no_face"] == 5
+    assert stats["no_face_recent"] is True
+    assert "no_face" not in stats["drops"]  # not an error
+    assert "truncated" not in stats["drops"]
+    assert stats["drops"] == {"metahuman_stream": 1}
+    assert "Live Link (ARKit)" in stats["problem"]

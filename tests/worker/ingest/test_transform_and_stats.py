@@ -57,7 +57,7 @@ def test_transform_from_settings() -> None:
     transform = FrameTransform.from_settings(Settings(mounting_rotation_deg=90, mirror=False))
     assert transform == FrameTransform(90.0, False)
     assert Settings().mirror is True  # the study mirrors the participant back
-    assert Settings().livelink_rotation_scale == "degrees/180"
+    assert Settings().livelink_rotation_scale == "radians"  # the app's unit
     with pytest.raises(ValueError, match="livelink_rotation_scale"):
         Settings(livelink_rotation_scale="furlongs")
 

@@ -45,6 +45,7 @@ export function createApi(sessionId, csrf, onReachable) {
     play: (group) => call("POST", `${wizard}/prompts/play`, { group }),
     stop: () => call("POST", `${wizard}/prompts/stop`, {}),
     robotApply: () => call("POST", `${wizard}/robot/apply`, {}),
+    robotRetry: () => call("POST", `${wizard}/robot/retry`, {}),
     start: () => call("POST", `${session}/start`, {}),
     advance: (position, to) => call("POST", `${session}/advance`, { position, to }),
     decide: (position, index, accepted) =>

@@ -39,7 +39,7 @@ const timeline = new Timeline($("timeline"), $("timeline-count"));
 const now = new NowPlaying($("now-playing"), $("now-label"), $("now-bar"), (s) =>
   board.markPlaying(["playing", "sending"].includes(s.phase) ? s.group : null),
 );
-const health = new HealthStrip($("health"));
+const health = new HealthStrip($("health"), () => perform("try the robot again", api.robotRetry));
 
 function showLink() {
   const banner = $("conn-banner");
@@ -133,9 +133,11 @@ function markStep(current) {
 }
 
 function playedCounts(current) {
+  // A play no robot voiced gets no tick: the participant never heard it.
+  const silent = new Set(current.events.filter((e) => e.kind === "prompt.not_voiced").map((e) => e.payload.play_event_id));
   const counts = new Map();
   for (const event of current.events) {
-    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position) {
+    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position && !silent.has(event.id)) {
       counts.set(event.payload.group, (counts.get(event.payload.group) || 0) + 1);
     }
   }

@@ -6,6 +6,8 @@ import { el, seconds } from "./dom.js";
 
 const SILENT_AFTER_MS = 3500;
 const STATES = { ok: "ok", unknown: "unknown", degraded: "degraded", alarm: "bad" };
+// The robot refused or never answered the login: the worker waits for the wizard's retry.
+const LOGIN_FAILED = /^login /;
 
 function stateOf(check) {
   if (check.level && STATES[check.level]) return STATES[check.level];
@@ -13,8 +15,9 @@ function stateOf(check) {
 }
 
 export class HealthStrip {
-  constructor(container) {
+  constructor(container, onRetry = null) {
     this.container = container;
+    this.onRetry = onRetry;
     this.lastAt = 0;
     this.mismatchSince = null;
     setInterval(() => this.checkSilence(), 1000);
@@ -69,6 +72,10 @@ export class HealthStrip {
     this.container.classList.toggle("failing", failing.length > 0);
     // replaceChildren would print a null as the text "null".
     const parts = [el("span", { class: "k", text: `Robot ${message.booth}` }), ...chips];
+    const robot = checks.find((check) => check.id === "robot");
+    if (this.onRetry && robot && LOGIN_FAILED.test(robot.value || "")) {
+      parts.push(el("button", { type: "button", class: "link", id: "robot-retry", onclick: this.onRetry }, "Try the robot again"));
+    }
     if (alarm) parts.push(alarm);
     this.container.replaceChildren(...parts);
   }

@@ -26,6 +26,9 @@ export function playState(events) {
   // The robot display could not play it (e.g. it needs a click to enable sound): say so.
   if (ended && ended.payload.reason) return { ...base, phase: "not-sent", notPlayed: true, reason: ended.payload.detail || ended.payload.reason };
   if (ended) return { ...base, phase: "finished" };
+  // Sent and acknowledged, but no robot voiced it (no display open, robot skipped it...).
+  const silent = related("prompt.not_voiced");
+  if (silent) return { ...base, phase: "not-sent", notVoiced: true, reason: silent.payload.detail };
   const failed = related("prompt.not_sent");
   if (failed) return { ...base, phase: "not-sent", reason: NOT_SENT[failed.payload.reason] || failed.payload.detail };
   const started = related("prompt.speech_start") || related("prompt.acked");
@@ -57,7 +60,7 @@ export class NowPlaying {
       idle: "",
       sending: "Sending… ",
       playing: "Playing: ",
-      "not-sent": `${state.notPlayed ? "NOT PLAYED" : "NOT SENT"}, ${state.reason}: `,
+      "not-sent": `${state.notVoiced ? "NOT VOICED" : state.notPlayed ? "NOT PLAYED" : "NOT SENT"}, ${state.reason}: `,
       stopped: "Stopped: ",
       finished: "Last: ",
     }[state.phase];

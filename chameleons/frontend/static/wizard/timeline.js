@@ -38,7 +38,9 @@ export function describe(event, names) {
     case "prompt.acked": return `Worker acknowledged ${p.prompt_id} after ${p.click_to_ack_ms} ms`;
     case "prompt.not_sent": return `Not sent: ${p.detail || p.reason}`;
     case "prompt.speech_start": return `Speech started ${p.click_to_speech_ms} ms after the click`;
-    case "prompt.speech_end": return p.reason ? `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
+    case "prompt.speech_end":
+      if (p.reason) return `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})`;
+      return p.outcome && p.outcome !== "played" ? `Speech ${p.outcome} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
@@ -50,6 +52,9 @@ export function describe(event, names) {
     case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
     case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
     case "robot.disconnected": return `ROBOT DISCONNECTED (${p.booth || "booth"})`;
+    case "robot.auth_refused": return `ROBOT REFUSED THE LOGIN (${p.booth || "booth"}): ${p.reason || "wrong or missing key"}`;
+    case "robot.auth_timeout": return `ROBOT DID NOT ANSWER THE LOGIN (${p.booth || "booth"})`;
+    case "robot.retry_requested": return `Asked the worker to try the robot again (${p.booth || "booth"})`;
     case "worker.connected": return `Worker of ${p.booth || "the booth"} connected`;
     case "worker.lost": return `WORKER LOST (${p.booth || "booth"})${p.last_seen_s != null ? `: silent for ${p.last_seen_s} s` : ""}`;
     case "worker.restarted": return `Worker of ${p.booth || "the booth"} restarted (restart ${p.restarts ?? "?"})`;
@@ -157,7 +162,8 @@ export class Timeline {
     if (event.kind === "prompt.acked") slot.dataset.ack = `ack ${p.click_to_ack_ms} ms`;
     if (event.kind === "prompt.speech_start") slot.dataset.speech = `speech ${p.click_to_speech_ms} ms`;
     if (event.kind === "prompt.not_sent") slot.dataset.ack = "not sent";
+    if (event.kind === "prompt.not_voiced") slot.dataset.speech = "NOT VOICED";
     slot.textContent = [slot.dataset.ack, slot.dataset.speech].filter(Boolean).join(" · ");
-    played.classList.toggle("tl-failed", event.kind === "prompt.not_sent");
+    if (event.kind === "prompt.not_sent" || event.kind === "prompt.not_voiced") played.classList.add("tl-failed");
   }
 }

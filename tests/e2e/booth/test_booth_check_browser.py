@@ -1,0 +1,86 @@
+"""In Chromium: a technician opens the booth check, runs it, and reads each step; without a
+worker on the booth it is NOT READY with the reasons, and the run is stored with the
+session (``booth.checked`` on its timeline)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import httpx
+import pytest
+from playwright.sync_api import Page, expect
+from sqlalchemy import Engine
+
+from tests.backend.test_auth import add_user
+from tests.support.bots import WizardBot, staff_api, study_with_plan
+from tests.support.live_server import LiveServer
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.fixture
+def database_url(sqlite_template: Path, tmp_path: Path) -> str:
+    path = tmp_path / "browser.sqlite3"
+    shutil.copyfile(sqlite_template, path)
+    return f"sqlite:///{path}"
+
+
+def test_the_booth_check_page_runs_the_check_and_stores_it(
+    live_server: LiveServer, page: Page, engine: Engine
+) -> None:
+    with httpx.Client(base_url=live_server.url, timeout=30) as http:
+        pi = staff_api(http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi, participants=2), booth="booth-7")
+        add_user(engine, "tech", "correct horse battery", "wizard")
+        target = f"/booths/booth-7/check?session_id={wizard.session_id}"
+        page.goto(f"{live_server.url}/login?next={target}")
+        page.get_by_label("Username").fill("tech")
+        page.get_by_label("Password").fill("correct horse battery")
+        page.get_by_role("button", name="Log in").click()
+        expect(page.get_by_role("heading", name="Booth check: booth-7")).to_be_visible()
+        expect(page.locator("#booth-check")).to_contain_text("turn your head to the left")
+
+        page.locator("#booth-check").evaluate("root => { root.dataset.wait = '0'; }")
+        page.get_by_role("button", name="Run the check").click()
+        expect(page.locator("#check-summary")).to_contain_text("NOT READY")
+        rows = page.locator("#check-steps tbody tr")
+        expect(rows).to_have_count(5)
+        face = page.locator("tr[data-step='face']")
+        expect(face).to_have_attribute("data-status", "fail")
+        expect(face).to_contain_text("no worker for this booth")
+        head = page.locator("tr[data-step='head']")
+        expect(head).to_contain_text("Turn your head left, then nod")
+        expect(page.locator("tr[data-step='disk']")).to_contain_text("GB free")
+
+        events = pi.get(f"/api/sessions/{wizard.session_id}/events")
+        stored = [e for e in events if e["kind"] == "booth.checked"]
+        assert len(stored) == 1
+        assert stored[0]["payload"]["passed"] is False
+        assert [s["id"] for s in stored[0]["payload"]["steps"]] == [
+            "face", "head", "robot", "copy", "disk",
+        ]  # fmt: skip
+
+
+def test_the_booth_check_command_runs_the_same_check(
+    live_server: LiveServer, engine: Engine
+) -> None:
+    from click.testing import CliRunner
+
+    from chameleons.cli.booth_check_command import booth_check
+
+    add_user(engine, "tech", "correct horse battery", "wizard")
+    result = CliRunner().invoke(
+        booth_check, ["booth-9", "--server", live_server.url, "--user", "tech", "--no-wait"],
+        input="correct horse battery\n",
+    )  # fmt: skip
+    assert result.exit_code == 1, result.output
+    assert "FAIL  Face stream: no worker for this booth" in result.output
+    assert "GB free" in result.output
+    assert "NOT READY" in result.output
+    wrong = CliRunner().invoke(
+        booth_check, ["booth-9", "--server", live_server.url, "--user", "tech", "--no-wait",
+                      "--password", "wrong"],
+    )  # fmt: skip
+    assert wrong.exit_code == 1
+    assert "the check could not run" in wrong.output
