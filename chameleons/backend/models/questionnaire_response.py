@@ -2,10 +2,10 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, Text, UniqueConstraint
+from sqlalchemy import CheckConstraint, ForeignKey, Identity, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 
 class QuestionnaireResponse(Base):
@@ -19,9 +19,10 @@ class QuestionnaireResponse(Base):
     __table_args__ = (
         UniqueConstraint("session_id", "position", "questionnaire", "item"),
         CheckConstraint("value IS NOT NULL OR text IS NOT NULL", name="has_answer"),
+        NEVER_REUSED_IDS,
     )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("session.id", ondelete="CASCADE"))
     interaction_id: Mapped[int | None] = mapped_column(
         ForeignKey("interaction.id", ondelete="CASCADE")

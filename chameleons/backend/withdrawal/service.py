@@ -17,6 +17,7 @@ from typing import Any
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.events.repository import announce_gone
 from chameleons.backend.models import (
     Event,
     Interaction,
@@ -92,6 +93,7 @@ def withdraw_participant(
         )
     )
     db.flush()
+    announce_gone(db, session_ids)
     return WithdrawalResult(row.row_number if row else None, len(session_ids), deleted)
 
 
