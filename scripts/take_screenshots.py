@@ -314,6 +314,14 @@ def analysis(page: Page, demo: Demo, shots: Shots, rehearsed: bool) -> None:
     shots.take_element(page.locator("section[aria-labelledby='plots-heading']"), "analysis-plots")
 
 
+def power(page: Page, demo: Demo, shots: Shots) -> None:
+    """The power page after one simulation with its default (the paper's pilot) effects."""
+    page.goto(f"{demo.base}/pi/power")
+    page.locator("#simulate").click()
+    expect(page.locator("#power-heading")).to_be_visible()
+    shots.take_element(page.locator("#power-result"), "pi-power")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "screenshots")
@@ -330,6 +338,7 @@ def main() -> None:
             pi = pi_page(browser, demo)
             dashboard(pi, shots)
             analysis(pi, demo, shots, rehearse(demo, data_dir))
+            power(pi, demo, shots)
             browser.close()
         if args.keep:
             shutil.copytree(data_dir, args.keep, dirs_exist_ok=True)

@@ -4,29 +4,36 @@ from __future__ import annotations
 
 import signal
 import sys
+from typing import IO
 from urllib.parse import urlsplit
 
 import click
 import segno
 import uvicorn
+from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons.backend.app import create_app
 from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.cli.common import load_settings
 from chameleons.cli.embedded import (
+    DataDirInUseError,
     DemoData,
     demo_settings,
+    lock_data_dir,
     prepare_demo,
     start_face_simulator,
     stop_process,
 )
+from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
+from chameleons.settings import Settings
 
 
 def _print_welcome(
-    base: str, data: DemoData, display_url: str, data_dir: str, simulate_face: bool
+    base: str, data: DemoData, display_url: str, ports: ChosenPorts, simulate_face: bool
 ) -> None:
     phone_url = f"{base}/p/{data.phone_token}"
-    click.echo(f"\nMechanical Chameleons demo — data in {data_dir} (SQLite)\n")
+    settings = ports.settings
+    click.echo(f"\nMechanical Chameleons demo — data in {settings.data_dir.resolve()} (SQLite)\n")
     click.echo("Open these in three browser windows (log in with the staff accounts below):")
     click.echo(f"  wizard console   {base}/wizard/sessions/{data.session_id}")
     click.echo(f"  robot display    {display_url}")
@@ -47,12 +54,25 @@ def _print_welcome(
     click.echo("Staff accounts:")
     for username, password in data.credentials.items():
         click.echo(f"  {username:<8} password: {password}")
+    _print_ports(ports)
     face = (
         "A simulated face stream stands in for the iPhone."
         if simulate_face
         else "Waiting for a real iPhone (Live Link Face or FaceCaptureX)."
     )
     click.echo(f"\n{face} Ctrl-C stops everything.\n")
+
+
+def _print_ports(ports: ChosenPorts) -> None:
+    settings = ports.settings
+    click.echo("Ports:")
+    click.echo(f"  web              {settings.host}:{settings.port}")
+    click.echo(f"  iPhone face      Live Link Face UDP {settings.livelink_port}, "
+               f"FaceCaptureX TCP {settings.facecapturex_port}")  # fmt: skip
+    click.echo(f"  worker link      {settings.worker_command_endpoint}, "
+               f"{settings.worker_telemetry_endpoint}")  # fmt: skip
+    for line in ports.moved:
+        click.echo(f"  ({line})")
 
 
 def _loopback(base: str) -> bool:
@@ -78,18 +98,57 @@ def _loopback(base: str) -> bool:
 def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
     study and plan, a local worker driving the virtual robot, and a simulated face."""
+    # Everything that can fail is done before the welcome is printed, so a failure is the
+    # first (and only) thing the user reads.
     settings = demo_settings(load_settings(host=host, port=port))
-    data = prepare_demo(settings)
+    lock = _lock(settings)
+    ports = _ports(settings, web_port_given=port is not None)
+    settings = ports.settings
+    data = _prepare(settings)
     app = create_app(settings)
     base = settings.effective_public_url
     display_url = base + display_path(signing_key(app), settings.embedded_worker_booth)
-    _print_welcome(base, data, display_url, str(settings.data_dir.resolve()), simulate_face)
+    _print_welcome(base, data, display_url, ports, simulate_face)
     simulator = start_face_simulator(settings) if simulate_face else None
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
     try:
-        uvicorn.run(app, host=settings.host, port=settings.port, log_level="warning")
+        server.run(sockets=[ports.web])  # the socket bound above: no second bind to fail
+    except KeyboardInterrupt:  # uvicorn re-raises Ctrl-C after its graceful shutdown
+        pass
     finally:
         if simulator is not None:
             stop_process(simulator)
+        lock.close()
+    if not server.started:  # the app's start-up failed (uvicorn has logged why)
+        sys.exit(3)
+
+
+def _lock(settings: Settings) -> IO[str]:
+    try:
+        return lock_data_dir(settings.data_dir)
+    except DataDirInUseError as exc:
+        raise click.ClickException(str(exc)) from exc
+    except OSError as exc:
+        raise click.ClickException(
+            f"Cannot use the data directory {settings.data_dir.resolve()}: {exc.strerror}."
+        ) from exc
+
+
+def _ports(settings: Settings, *, web_port_given: bool) -> ChosenPorts:
+    try:
+        return choose_ports(settings, web_port_given=web_port_given)
+    except PortError as exc:
+        raise click.ClickException(str(exc)) from exc
+
+
+def _prepare(settings: Settings) -> DemoData:
+    try:
+        return prepare_demo(settings)
+    except SQLAlchemyError as exc:
+        reason = str(getattr(exc, "orig", None) or exc).splitlines()[0]
+        raise click.ClickException(
+            f"Cannot prepare the demo database {settings.effective_database_url}: {reason}."
+        ) from exc

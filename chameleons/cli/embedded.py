@@ -11,6 +11,7 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 from pydantic import SecretStr
 from sqlalchemy import select
@@ -64,6 +65,30 @@ def _demo_secret(data_dir: Path) -> str:
         path.write_text(secrets.token_urlsafe(32))
         path.chmod(0o600)
     return path.read_text().strip()
+
+
+class DataDirInUseError(Exception):
+    """Another running demo holds the data directory."""
+
+
+def lock_data_dir(data_dir: Path) -> IO[str]:
+    """Hold the data directory for this demo until the returned file is closed: two demos
+    on one SQLite file and one booth would drive each other's participant."""
+    data_dir.mkdir(parents=True, exist_ok=True)
+    handle = (data_dir / "demo.lock").open("w")
+    try:
+        import fcntl  # POSIX only; elsewhere two demos are not detected
+    except ImportError:  # pragma: no cover
+        return handle
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        raise DataDirInUseError(
+            f"Another chameleons demo is using the data directory {data_dir.resolve()}: "
+            "stop it, or start this one with CHAMELEONS_DATA_DIR set to another folder."
+        ) from None
+    return handle
 
 
 def prepare_demo(settings: Settings) -> DemoData:

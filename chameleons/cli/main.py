@@ -1,46 +1,86 @@
-"""The ``chameleons`` command. Each sub-command lives in its own module and is added here."""
+"""The ``chameleons`` command. Each sub-command lives in its own module, imported only when
+that command runs: ``chameleons --help`` and every command's start-up stay cheap (the web
+application, SciPy and pandas are loaded by the commands that use them, not by all)."""
 
 from __future__ import annotations
+
+import importlib
 
 import click
 
 from chameleons import __version__
-from chameleons.cli import (
-    analyze_command,
-    db_commands,
-    demo_command,
-    export_command,
-    plan_command,
-    power_command,
-    prereg_command,
-    prompts_command,
-    rehearse_command,
-    serve_command,
-    simulate_face_command,
-    user_commands,
-    worker_command,
-)
+
+# name -> (module, attribute, the one-line help shown by ``chameleons --help``). A test checks
+# that each line equals the command's own short help, so the table cannot drift from it.
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    "analyze": ("analyze_command", "analyze_command",
+                "Descriptives, Friedman tests (Bonferroni, Kendall's W), post-hoc tests, "
+                "effect sizes with bootstrap intervals and the regression models."),
+    "db": ("db_commands", "db", "Database schema: apply and inspect migrations."),
+    "demo": ("demo_command", "demo",
+             "Start the whole system on its embedded default: the server on SQLite with the "
+             "demo study and plan, a local worker driving the virtual robot, and a simulated "
+             "face."),
+    "export": ("export_command", "export",
+               "Export participants, interactions, suggestions, questionnaire, scores and "
+               "events."),
+    "plan": ("plan_command", "plan_command",
+             "Print the counterbalancing plan for N participants and how balanced it is."),
+    "power": ("power_command", "power_command",
+              "Power of the Friedman tests and the models at N = 12, 24, ... and the N needed, "
+              "by simulating the planned design under assumed effects."),
+    "prereg": ("prereg_command", "prereg_command",
+               "Hypotheses, design, planned N with its power, variables and the analysis plan, "
+               "as one Markdown document to upload to OSF before data collection."),
+    "prompts": ("prompts_command", "prompts",
+                "Work with the prompt catalogue (prompts/<actor>/)."),
+    "rehearse": ("rehearse_command", "rehearse",
+                 "Run whole sessions with a scripted wizard and participant, marked as "
+                 "rehearsals."),
+    "serve": ("serve_command", "serve",
+              "Run the web server (wizard console, phone pages, PI dashboard, API)."),
+    "simulate-face": ("simulate_face_command", "simulate_face",
+                      "Send a plausible synthetic face (blinks, head sway, smiles, talking) or a "
+                      "Live Link Face take to a worker, as a phone would."),
+    "user": ("user_commands", "user", "Staff accounts (PI and wizards)."),
+    "worker": ("worker_command", "worker",
+               "Run the realtime worker of one booth (capture -> behaviour -> renderer -> "
+               "robot)."),
+}  # fmt: skip
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A group whose sub-commands are imported on first use (click's documented pattern)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in COMMANDS:
+            return None
+        module_name, attribute, _ = COMMANDS[cmd_name]
+        module = importlib.import_module(f"chameleons.cli.{module_name}")
+        command = getattr(module, attribute)
+        assert isinstance(command, click.Command)
+        return command
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        # The listing uses the table's help lines, so ``--help`` imports no command module.
+        limit = formatter.width - 6 - max(len(name) for name in COMMANDS)
+        rows = [(name, _shorten(COMMANDS[name][2], limit)) for name in sorted(COMMANDS)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+def _shorten(text: str, limit: int) -> str:
+    """The first sentence, cut at ``limit`` characters as click's own short help is."""
+    return click.Command("x", help=text).get_short_help_str(limit=limit)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="chameleons")
 def cli() -> None:
     """Mechanical Chameleons: run Wizard-of-Oz studies of robot facial mimicry."""
-
-
-cli.add_command(db_commands.db)
-cli.add_command(demo_command.demo)
-cli.add_command(serve_command.serve)
-cli.add_command(simulate_face_command.simulate_face)
-cli.add_command(user_commands.user)
-cli.add_command(export_command.export)
-cli.add_command(plan_command.plan_command)
-cli.add_command(power_command.power_command)
-cli.add_command(prereg_command.prereg_command)
-cli.add_command(worker_command.worker)
-cli.add_command(analyze_command.analyze_command)
-cli.add_command(prompts_command.prompts)
-cli.add_command(rehearse_command.rehearse)
 
 
 def main() -> None:

@@ -23,6 +23,13 @@ MEASURE_WORDS = {
     "accepted": "the number of robot suggestions the participant accepts in an interaction",
 }
 
+# How each suggestion rule picks its move, in the words of the study YAML's comments.
+SUGGESTION_RULE_WORDS = {
+    "best_move": "each the single move of one item (up or down) that most lowers the "
+    "ranking's error against the expert order",
+    "up_only": "each moving the most important item below its expert position up to it",
+}
+
 
 @dataclass(frozen=True)
 class PlanFacts:
@@ -99,9 +106,10 @@ def _design(study: Study, plan: PlanFacts, labels: dict[str, str]) -> str:
             *(f"- **{c.label}** (`{c.id}`): {c.description}" for c in study.conditions),
             "",
             f"Per interaction the participant ranks {study.item_sets.set_size} survival-task "
-            f"items; the robot then makes {study.suggestions_per_interaction} suggestions to "
-            "move an item up, each recorded as accepted or declined and as *optimal* (towards "
-            "the expert order) or *random* (when no useful move is left).",
+            f"items; the robot then makes {study.suggestions_per_interaction} suggestions, "
+            f"{SUGGESTION_RULE_WORDS[study.suggestion_rule]}, each recorded as accepted or "
+            "declined and as *optimal* or *random* (a random upward move, made only when no "
+            "move lowers the error).",
             "",
             "Counterbalancing (the software's planner, verified independently): condition "
             "orders from a Williams design (each condition equally often in each position, "

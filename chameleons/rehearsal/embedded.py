@@ -40,6 +40,7 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
+from chameleons.cli.ports import free_port
 from chameleons.experiment.study import load_default_study, study_from_config
 from chameleons.rehearsal.runner import RehearsalError, Target
 from chameleons.settings import Settings
@@ -61,16 +62,10 @@ def rehearsal_settings(settings: Settings, port: int) -> Settings:
             "embedded_worker": True,
             "worker_command_endpoint": ANY_PORT,
             "worker_telemetry_endpoint": ANY_PORT,
-            "livelink_port": free_udp_port(settings.capture_bind_host),
+            "livelink_port": free_port(settings.capture_bind_host, socket.SOCK_DGRAM),
             "facecapturex_port": 0,
         }
     )
-
-
-def free_udp_port(host: str) -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind((host, 0))
-        return int(probe.getsockname()[1])
 
 
 @dataclass(frozen=True)

@@ -116,7 +116,7 @@ def data_dir(tmp_path: Path) -> Path:
     return tmp_path / "data"
 
 
-def _start(data_dir: Path, simulate_face: bool) -> Demo:
+def _start(data_dir: Path, simulate_face: bool, **env_overrides: str) -> Demo:
     port = _free_port(socket.SOCK_STREAM)
     env = {
         **os.environ,
@@ -127,6 +127,7 @@ def _start(data_dir: Path, simulate_face: bool) -> Demo:
         "CHAMELEONS_LIVELINK_PORT": str(_free_port(socket.SOCK_DGRAM)),
         "CHAMELEONS_FACECAPTUREX_PORT": "0",
         "PYTHONUNBUFFERED": "1",
+        **env_overrides,
     }
     flag = "--simulate-face" if simulate_face else "--no-simulate-face"
     command = [sys.executable, "-m", "chameleons", "demo", "--port", str(port), flag]
@@ -226,3 +227,73 @@ def test_the_demo_serves_its_links_logs_in_stops_cleanly_and_reuses_its_data(
     assert link == {name: url.split("/", 3)[-1] for name, url in first.urls.items()}
     _check_logins(again)
     _stop(again, {"chameleons.cli.worker_command", "simulate-face"})
+
+
+def _held(kind: socket.SocketKind) -> socket.socket:
+    """A loopback port of this test's own, held (listening for TCP) so it is in use."""
+    sock = socket.socket(socket.AF_INET, kind)
+    sock.bind(("127.0.0.1", 0))
+    if kind == socket.SOCK_STREAM:
+        sock.listen()
+    return sock
+
+
+def _run_to_end(data_dir: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "CHAMELEONS_DATA_DIR": str(data_dir), "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "chameleons", "demo", "--no-simulate-face", *args]
+    return subprocess.run(command, env=env, capture_output=True, text=True, timeout=120,
+                          stdin=subprocess.DEVNULL, cwd=data_dir.parent, check=False)  # fmt: skip
+
+
+def test_a_taken_web_port_is_one_sentence_before_anything_else(data_dir: Path) -> None:
+    with _held(socket.SOCK_STREAM) as taken:
+        port = taken.getsockname()[1]
+        done = _run_to_end(data_dir, "--port", str(port))
+    assert done.returncode == 1
+    assert done.stdout == ""  # no welcome, no URLs, no passwords
+    assert done.stderr.strip().splitlines() == [
+        f"Error: Port {port} on 127.0.0.1 is in use (another chameleons demo or server?): "
+        "choose another with --port."
+    ]
+
+
+def test_taken_worker_and_capture_ports_move_and_a_shared_data_dir_is_refused(
+    data_dir: Path, demos: list[Demo]
+) -> None:
+    with _held(socket.SOCK_STREAM) as control, _held(socket.SOCK_DGRAM) as livelink, \
+            _held(socket.SOCK_STREAM) as facecapturex:  # fmt: skip
+        held = {"control": control.getsockname()[1], "livelink": livelink.getsockname()[1],
+                "facecapturex": facecapturex.getsockname()[1]}  # fmt: skip
+        demo = _start(data_dir, True, **{
+            "CHAMELEONS_WORKER_COMMAND_ENDPOINT": f"tcp://127.0.0.1:{held['control']}",
+            "CHAMELEONS_LIVELINK_PORT": str(held["livelink"]),
+            "CHAMELEONS_FACECAPTUREX_PORT": str(held["facecapturex"]),
+        })  # fmt: skip
+        demos.append(demo)
+        demo.read_welcome()
+        demo.wait_healthy()
+    text = "\n".join(demo.output)
+    moved = re.search(r"Live Link Face \(UDP\): port (\d+) in use, using (\d+)", text)
+    assert moved is not None, text
+    assert int(moved.group(1)) == held["livelink"]
+    livelink_port = moved.group(2)
+    assert f"FaceCaptureX (TCP): port {held['facecapturex']} in use, using" in text
+    assert f"worker control (ZeroMQ): tcp://127.0.0.1:{held['control']} in use, using" in text
+    # The worker listens where the welcome says, and the simulated face is sent there.
+    deadline = time.monotonic() + START_SECONDS
+    while True:
+        commands = [_command_line(pid) for pid in _children(demo.process.pid)]
+        worker = [c for c in commands if "chameleons.cli.worker_command" in c]
+        face = [c for c in commands if "simulate-face" in c]
+        if worker and face:
+            break
+        assert time.monotonic() < deadline, commands
+        threading.Event().wait(0.1)
+    assert f"--livelink-port {livelink_port} " in worker[0] + " "
+    assert f"--target 127.0.0.1:{livelink_port}" in face[0]
+    # A second demo on the same data directory would drive the same participant: refused.
+    second = _run_to_end(data_dir)
+    assert second.returncode == 1
+    assert second.stdout == ""
+    assert "Another chameleons demo is using the data directory" in second.stderr
+    _stop(demo, {"chameleons.cli.worker_command", "simulate-face"})

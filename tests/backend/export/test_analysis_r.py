@@ -121,7 +121,7 @@ def test_the_study_name_cannot_break_out_of_its_comment(db_session: DbSession) -
     assert text.splitlines()[1].startswith("#")
 
 
-@pytest.mark.skipif(RSCRIPT is None, reason="R is not installed here (CI has none)")
+@pytest.mark.skipif(RSCRIPT is None, reason="R is not installed here (.ci/run installs it)")
 def test_r_parses_and_runs_it_and_its_friedman_tests_equal_ours(
     db_session: DbSession, tmp_path: Path
 ) -> None:

@@ -1,0 +1,139 @@
+"""Ports for a local system (`chameleons demo`): the configured ones when they are free,
+otherwise free ones chosen here, so a second demo on the same machine just starts.
+
+The web port is bound here and the socket handed to uvicorn, so "port in use" is found
+before anything is printed. The other ports are only probed: the worker and the server bind
+them a moment later (a port taken in between fails there, loudly, as before).
+"""
+
+from __future__ import annotations
+
+import errno
+import socket
+from dataclasses import dataclass, field
+
+from chameleons.settings import Settings
+
+DEFAULT_WEB_PORT = 8000
+NEXT_WEB_PORTS = 10  # try 8001..8010 before any free port, so the URL stays memorable
+
+
+class PortError(Exception):
+    """A port the user asked for cannot be used (one sentence, for the CLI)."""
+
+
+@dataclass
+class ChosenPorts:
+    settings: Settings
+    web: socket.socket
+    # "what: configured -> chosen" for each port that had to move, to print.
+    moved: list[str] = field(default_factory=list)
+
+
+def choose_ports(settings: Settings, *, web_port_given: bool) -> ChosenPorts:
+    """Bind the web port and pick free worker and capture ports where the configured ones
+    are taken (or 0, "any free port")."""
+    web, moved = _bind_web(settings, web_port_given)
+    update: dict[str, object] = {"port": web.getsockname()[1]}
+    for name, label in (("worker_command_endpoint", "worker control (ZeroMQ)"),
+                        ("worker_telemetry_endpoint", "worker telemetry (ZeroMQ)")):  # fmt: skip
+        endpoint: str = getattr(settings, name)
+        chosen = _free_endpoint(endpoint)
+        if chosen != endpoint:
+            update[name] = chosen
+            moved.append(f"{label}: {endpoint} in use, using {chosen}")
+    host = settings.capture_bind_host
+    # Live Link Face streams over UDP; FaceCaptureX connects over TCP.
+    for name, label, kind in (
+        ("livelink_port", "Live Link Face (UDP)", socket.SOCK_DGRAM),
+        ("facecapturex_port", "FaceCaptureX (TCP)", socket.SOCK_STREAM),
+    ):
+        port: int = getattr(settings, name)
+        free = udp_port_free if kind == socket.SOCK_DGRAM else tcp_port_free
+        if port == 0 or not free(host, port):
+            chosen_port = free_port(host, kind)
+            update[name] = chosen_port
+            if port:
+                moved.append(f"{label}: port {port} in use, using {chosen_port}")
+    return ChosenPorts(settings.model_copy(update=update), web, moved)
+
+
+def _bind_web(settings: Settings, given: bool) -> tuple[socket.socket, list[str]]:
+    host, port = settings.host, settings.port
+    try:
+        return _listen(host, port), []
+    except OSError as exc:
+        if given or port != DEFAULT_WEB_PORT or exc.errno != errno.EADDRINUSE:
+            raise PortError(_web_error(host, port, exc)) from exc
+    for candidate in [*range(port + 1, port + 1 + NEXT_WEB_PORTS), 0]:
+        try:
+            web = _listen(host, candidate)
+        except OSError:
+            continue
+        return web, [f"web: port {port} in use, using {web.getsockname()[1]}"]
+    raise PortError(f"No free port to serve the web pages on {host}.")  # pragma: no cover
+
+
+def _web_error(host: str, port: int, exc: OSError) -> str:
+    if exc.errno == errno.EADDRINUSE:
+        return (f"Port {port} on {host} is in use (another chameleons demo or server?): "
+                "choose another with --port.")  # fmt: skip
+    if exc.errno == errno.EACCES:
+        return f"Port {port} on {host} needs administrator rights: choose one above 1023."
+    return f"Cannot serve on {host}:{port}: {exc.strerror or exc}."
+
+
+def _listen(host: str, port: int) -> socket.socket:
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        # As uvicorn sets it: a restarted demo is not refused for connections in TIME_WAIT.
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.listen(2048)
+    except OSError:
+        sock.close()
+        raise
+    sock.set_inheritable(True)
+    return sock
+
+
+def _free_endpoint(endpoint: str) -> str:
+    """A ``tcp://HOST:PORT`` endpoint, or the same host on a free port when it is taken."""
+    scheme, _, address = endpoint.partition("://")
+    host, _, port = address.rpartition(":")
+    if scheme != "tcp" or not port.isdigit():
+        return endpoint  # ipc://, inproc:// or tcp://host:* (ZeroMQ picks) need no choice
+    host = host.strip("[]")
+    if tcp_port_free(host, int(port)):
+        return endpoint
+    chosen = free_port(host, socket.SOCK_STREAM)
+    return f"tcp://[{host}]:{chosen}" if ":" in host else f"tcp://{host}:{chosen}"
+
+
+def tcp_port_free(host: str, port: int) -> bool:
+    try:
+        _listen(host, port).close()
+    except OSError:
+        return False
+    return True
+
+
+def udp_port_free(host: str, port: int) -> bool:
+    with socket.socket(_family(host), socket.SOCK_DGRAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+def free_port(host: str, kind: socket.SocketKind) -> int:
+    """A port the system calls free now (another process may still take it first)."""
+    with socket.socket(_family(host), kind) as probe:
+        probe.bind((host, 0))
+        return int(probe.getsockname()[1])
+
+
+def _family(host: str) -> socket.AddressFamily:
+    return socket.AF_INET6 if ":" in host else socket.AF_INET
