@@ -16,6 +16,7 @@ from chameleons.backend.export.service import (
     export_to_directory,
 )
 from chameleons.cli.common import load_settings
+from chameleons.prompts.locations import prompts_root
 
 
 @click.command("export")
@@ -42,8 +43,9 @@ def export(
     settings = load_settings()
     engine = build_engine(settings.effective_database_url)
     request = ExportRequest(
-        study_id=study_id, formats=("csv", *formats), include_rehearsal=include_rehearsal
-    )
+        study_id=study_id, formats=("csv", *formats), include_rehearsal=include_rehearsal,
+        prompts_dir=prompts_root(settings),
+    )  # fmt: skip
     try:
         with build_sessionmaker(engine)() as db:
             plan = export_to_directory(db, request, out)

@@ -31,12 +31,14 @@ from chameleons.backend.export.columns import (
 )
 from chameleons.backend.export.datapackage import datapackage
 from chameleons.backend.export.frames import table_frame
+from chameleons.backend.export.provenance import provenance, provenance_codebook
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.export.statfiles import StatFormat, write_statfile
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.study import study_from_config
+from chameleons.prompts.locations import REPOSITORY_PROMPTS
 
 ExportFormat = Literal["csv", "parquet", "xlsx", "json", "sav", "dta"]
 FORMATS: tuple[ExportFormat, ...] = ("csv", "parquet", "xlsx", "json", "sav", "dta")
@@ -48,6 +50,8 @@ class ExportRequest:
     study_id: int | None = None
     formats: tuple[ExportFormat, ...] = ("csv",)
     include_rehearsal: bool = False
+    # The prompts folder in use (for the catalogue versions); None: the repository's.
+    prompts_dir: Path | None = None
 
 
 @dataclass
@@ -74,6 +78,7 @@ class ExportPlan:
             "exported_at": datetime.now(UTC).isoformat(timespec="seconds"),
             "study": {"id": self.study.id, "name": self.study.name},
             "study_config_hash": self.study.config_hash,
+            **provenance(self.study, self.spec, self.request.prompts_dir or REPOSITORY_PROMPTS),
             "include_rehearsal": self.request.include_rehearsal,
             "formats": ["csv", *(f for f in self.request.formats if f != "csv")],
             "list_separator": LIST_SEPARATOR,
@@ -112,7 +117,7 @@ def plan_export(db: DbSession, request: ExportRequest) -> ExportPlan:
         _add_table_parts(db, plan, table)
     if "xlsx" in request.formats:
         plan.parts.append(_xlsx_part(db, plan, specs))
-    book = codebook_rows(specs)
+    book = codebook_rows(specs) + provenance_codebook()
     plan.parts.append(
         Part(
             "codebook.csv",
@@ -194,6 +199,12 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
         "R:      Rscript analysis.R   (the whole analysis: tests, models, plots)",
         "        scores <- read.csv('scores.csv')",
         "pandas: scores = pandas.read_csv('scores.csv')",
+        "",
+        "Provenance (metadata.json, described in codebook.csv under table metadata.json):",
+        "the study configuration's hash and how to recompute it from study_config.json,",
+        "the plan seed and planner version, the software version and git commit, and the",
+        "prompt catalogue versions. interactions.csv says per interaction which recording",
+        "the natural condition replayed (natural_source, natural_recording).",
         "",
         *(f"- {t.name}: {t.description}" for t in specs),
         "",
