@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal
 
 import click
 
-from chameleons.experiment.model import Study
+from chameleons.experiment.model import Questionnaire, Study
 from chameleons.experiment.stats import (
     DEFAULT_RULE,
     DEFAULT_VIEW,
@@ -51,6 +51,8 @@ def analysis_output(
     models: bool = True,
     suggestions: Iterable[Mapping[str, Any]] | None = None,
     reference: str | None = None,
+    questionnaires: Sequence[Questionnaire] = (),
+    answers: Iterable[Mapping[str, Any]] | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
     file, the database), checked against the study's conditions and scales (default: the
@@ -74,6 +76,8 @@ def analysis_output(
             models=models,
             suggestions=suggestions,
             reference=reference,
+            questionnaires=questionnaires,
+            answers=answers,
         )
     except AnalysisError as exc:
         raise click.ClickException(f"{exc} Nothing was analysed.") from exc
@@ -119,6 +123,15 @@ def read_suggestions_beside(scores: Path) -> Rows | None:
         read_csv_rows(suggestions, ("participant", "session", "position", "kind", "accepted")),
         read_csv_rows(interactions, ("participant", "session", "position", "item_set")),
     )
+
+
+def read_answers_beside(scores: Path) -> Rows | None:
+    """The item answers (``questionnaire.csv``) beside ``scores.csv``, for Cronbach's alpha;
+    ``None`` when the file is not there."""
+    path = scores.with_name("questionnaire.csv")
+    if not path.is_file():
+        return None
+    return read_csv_rows(path, ("participant", "session", "position", "questionnaire", "item"))
 
 
 def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | None]:
@@ -250,8 +263,9 @@ def analyze_command(
             click.echo(f"Note: {note}.", err=True)
         row_name, first_row = "line", 2  # a CSV file's data start on its second line
         suggestions = read_suggestions_beside(scores_path) if models else None
+        answers = read_answers_beside(scores_path)
     else:
-        spec, rows, suggestions = database_score_rows(study_id, include_rehearsal)
+        spec, rows, suggestions, answers = database_score_rows(study_id, include_rehearsal)
         row_name, first_row = "row", 1
     click.echo(
         analysis_output(
@@ -270,13 +284,17 @@ def analyze_command(
             models=models,
             suggestions=suggestions,
             reference=reference,
+            questionnaires=spec.questionnaires,
+            answers=answers,
         )
     )
 
 
-def database_score_rows(study_id: int | None, include_rehearsal: bool) -> tuple[Study, Rows, Rows]:
-    """The study, the export's scores rows and the acceptance model's rows, read from the
-    configured database."""
+def database_score_rows(
+    study_id: int | None, include_rehearsal: bool
+) -> tuple[Study, Rows, Rows, Rows]:
+    """The study, the export's scores rows, the acceptance model's rows and the item
+    answers, read from the configured database."""
     from sqlalchemy.exc import SQLAlchemyError
 
     from chameleons.backend.analysis.service import score_rows_from_database

@@ -17,11 +17,15 @@ from chameleons.experiment.study import StudyError, load_default_study, load_stu
 
 
 def load_study_option(path: Path | None) -> Study:
-    """The study at ``path`` (default: the built-in study), problems as a clean CLI error."""
+    """The study at ``path`` (default: the built-in study), problems as a clean CLI error;
+    the loader's warnings (e.g. wording shared between questionnaires) go to stderr."""
     try:
-        return load_default_study() if path is None else load_study(path)
+        study = load_default_study() if path is None else load_study(path)
     except StudyError as exc:
         raise click.ClickException(str(exc)) from exc
+    for warning in study.warnings:
+        click.echo(f"Warning: {warning}", err=True)
+    return study
 
 
 @click.command("plan")

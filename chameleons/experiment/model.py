@@ -136,7 +136,10 @@ class Personas:
 @dataclass(frozen=True)
 class QuestionnaireItem:
     """A question. ``differential``: anchors ``left`` (1) and ``right`` (max);
-    ``agreement``: a statement rated on the scale; ``text``: an open answer."""
+    ``agreement``: a statement rated on the scale; ``text``: an open answer.
+    ``required``: the phone refuses the page until it is answered (the loader's default:
+    rated items required, open questions optional, as ethics boards expect); a skipped
+    item is stored as skipped, never as a default value."""
 
     id: str
     type: ItemType
@@ -145,6 +148,7 @@ class QuestionnaireItem:
     right: str = ""
     reverse: bool = False
     identifying: bool = False
+    required: bool = True
 
     @property
     def numeric(self) -> bool:

@@ -302,7 +302,7 @@ def _read_questions(reader: Reader, node: object, path: str) -> tuple[Questionna
         kind = body.get("type")
         if kind in ITEM_TYPES:
             required = {"differential": ["left", "right"], "agreement": ["text"], "text": ["text"]}
-            optional = ["identifying"] + ([] if kind == "text" else ["reverse"])
+            optional = ["identifying", "required"] + ([] if kind == "text" else ["reverse"])
             optional += ["text"] if kind == "differential" else []
             reader.check_keys(body, place, ["id", "type", *required[kind]], optional)
         else:  # which other keys belong depends on the type: report only the type
@@ -316,6 +316,7 @@ def _read_questions(reader: Reader, node: object, path: str) -> tuple[Questionna
             right=_optional(reader, body, "right", place),
             reverse=reader.boolean(body, "reverse", place, default=False),
             identifying=reader.boolean(body, "identifying", place, default=kind == "text"),
+            required=reader.boolean(body, "required", place, default=kind != "text"),
         )
         if any(q.id == question.id for q in questions):
             reader.problem(join(place, "id"), f"question id {question.id!r} used twice")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Mapping
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,7 @@ from chameleons.experiment import personas, sections
 from chameleons.experiment.lines import line_index, line_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.reader import SLUG, Reader
+from chameleons.experiment.wording import duplicate_wording
 
 __all__ = [
     "Study",
@@ -88,9 +89,11 @@ def load_study(path: Path | str, behaviours: sections.Behaviours | None = None) 
     document, duplicates = _parse_yaml(text, str(path))
     lines = line_index(text)
     try:
-        return _build(document, str(path), duplicates, _registry(behaviours))
+        study = _build(document, str(path), duplicates, _registry(behaviours))
     except StudyError as exc:
         raise StudyError(exc.problems, exc.source, lines) from None
+    located = tuple(_locate(warning, str(path), lines) for warning in study.warnings)
+    return replace(study, warnings=located)
 
 
 def study_from_config(config: dict[str, Any]) -> Study:
@@ -193,7 +196,14 @@ def _build(
         raise StudyError(reader.problems, source)
     config = _config_of(parts, name_genders)
     digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
-    return Study(**parts, config=config, content_hash=digest, name_genders=name_genders)
+    warnings = tuple(duplicate_wording(parts["questionnaires"]))
+    return Study(
+        **parts,
+        config=config,
+        content_hash=digest,
+        name_genders=name_genders,
+        warnings=warnings,
+    )
 
 
 def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> str:
@@ -273,5 +283,8 @@ def _questionnaire_config(questionnaire: Any) -> dict[str, Any]:
         entry = {k: v for k, v in asdict(item).items() if v != ""}
         if not item.numeric:
             entry.pop("reverse", None)
+        if item.required == (item.type != "text"):
+            # The default is not stored, so a snapshot from before the setting keeps its hash.
+            entry.pop("required")
         items.append(entry)
     return {**data, "scale": scale, "items": items}

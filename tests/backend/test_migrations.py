@@ -108,7 +108,7 @@ def test_upgraded_sqlite_never_reuses_ids(tmp_path: Path) -> None:
         for statement in ROWS_AT_0001:
             connection.exec_driver_sql(statement)
     engine.dispose()
-    upgrade(url, "0002_i13_suggestions_natural")
+    upgrade(url, "0003_i13_optional_items")
     with engine.begin() as connection:
         connection.exec_driver_sql(SESSION_2)
     upgrade(url)
@@ -159,7 +159,7 @@ ROWS_AT_0002 = [
 def test_upgraded_postgres_continues_after_the_old_sequence(postgres_server: str) -> None:
     """SERIAL becomes an identity column that starts where the sequence was, not at
     MAX(id)+1 (which would reuse an id deleted from the top before the upgrade)."""
-    upgrade(postgres_server, "0002_i13_suggestions_natural")
+    upgrade(postgres_server, "0003_i13_optional_items")
     engine = build_engine(postgres_server)
     with engine.begin() as connection:
         for statement in ROWS_AT_0002:

@@ -23,7 +23,11 @@ from chameleons.backend.analysis.service import study_analysis
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.export.columns import LIST_SEPARATOR
 from chameleons.backend.models import PlanRow, Session
-from chameleons.cli.analyze_command import read_scores_csv, read_suggestions_beside
+from chameleons.cli.analyze_command import (
+    read_answers_beside,
+    read_scores_csv,
+    read_suggestions_beside,
+)
 from chameleons.cli.main import cli
 from chameleons.experiment.balance import BalanceReport, balance_report
 from chameleons.experiment.model import Study
@@ -195,6 +199,8 @@ def test_twelve_rehearsals_give_a_complete_balanced_data_set_the_analysis_agrees
         bootstrap=BootstrapOptions(),
         models=True,
         suggestions=read_suggestions_beside(scores),
+        questionnaires=spec.questionnaires,
+        answers=read_answers_beside(scores),
     ).to_dict()
     # The whole analysis, effect sizes and models included, from the files and the database.
     assert from_export == _database_analysis(settings)

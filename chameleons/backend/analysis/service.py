@@ -7,15 +7,20 @@ database and analysing an exported ``scores.csv`` give the same numbers.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.analysis.cache import analyses, digest
-from chameleons.backend.export.columns import interactions_table, scores_table, suggestions_table
+from chameleons.backend.export.columns import (
+    interactions_table,
+    questionnaire_table,
+    scores_table,
+    suggestions_table,
+)
 from chameleons.backend.export.frames import records, table_frame
-from chameleons.backend.export.rows import interaction_rows, suggestion_rows
+from chameleons.backend.export.rows import interaction_rows, questionnaire_rows, suggestion_rows
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.models import Study
@@ -50,6 +55,8 @@ class StudyScores:
     study: Study
     spec: StudySpec
     rows: list[dict[str, Any]]
+    # The export's questionnaire table: item answers, for Cronbach's alpha per scale.
+    answers: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def design(self) -> StudyMeasures:
@@ -108,7 +115,10 @@ def database_scores(
     study = resolve_study(db, study_id)
     spec = study_from_config(study.config)
     scores = table_frame(scores_table(spec), score_rows(db, study, spec, include_rehearsal))
-    return StudyScores(study, spec, records(scores))
+    answers = table_frame(
+        questionnaire_table(spec), questionnaire_rows(db, study, spec, include_rehearsal)
+    )
+    return StudyScores(study, spec, records(scores), records(answers))
 
 
 def model_rows(
@@ -150,6 +160,8 @@ def run_analysis(
         bootstrap=bootstrap,
         models=suggestions is not None,
         suggestions=suggestions,
+        questionnaires=scores.spec.questionnaires,
+        answers=scores.answers,
     )
 
 
@@ -218,7 +230,7 @@ def _extended(
         view,
         wilcoxon_rule,
         bootstrap,
-        digest(scores.rows, suggestions),
+        digest(scores.rows, suggestions, scores.answers),
     )
     return analyses.get_or_compute(
         key,
@@ -228,15 +240,16 @@ def _extended(
 
 def score_rows_from_database(
     database_url: str, study_id: int | None = None, include_rehearsal: bool = False
-) -> tuple[StudySpec, list[dict[str, Any]], list[dict[str, Any]]]:
-    """The study, its scores table and the acceptance model's rows straight from a database
-    (``chameleons analyze`` without a file)."""
+) -> tuple[StudySpec, list[dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
+    """The study, its scores table, the acceptance model's rows and the item answers
+    straight from a database (``chameleons analyze`` without a file)."""
     from chameleons.backend.db import build_engine, build_sessionmaker
 
     engine = build_engine(database_url)
     try:
         with build_sessionmaker(engine)() as db:
             scores = database_scores(db, study_id, include_rehearsal)
-            return scores.spec, scores.rows, model_rows(db, scores, include_rehearsal)
+            suggestions = model_rows(db, scores, include_rehearsal)
+            return scores.spec, scores.rows, suggestions, scores.answers
     finally:
         engine.dispose()

@@ -320,6 +320,12 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 " participant; review before sharing.",
                 identifying=True,
             ),
+            Column(
+                "skipped",
+                "boolean",
+                "An optional item the participant left empty: value, scored_value and text"
+                " are empty (never a default value).",
+            ),
             _time("answered_at", "When the answer was stored"),
         ),
     )

@@ -192,6 +192,7 @@ def questionnaire_rows(
             "value": answer.value,
             "scored_value": scored,
             "text": answer.text,
+            "skipped": answer.skipped,
             "answered_at": iso(answer.created_at),
         }
 

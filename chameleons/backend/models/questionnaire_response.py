@@ -2,7 +2,15 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, Identity, String, Text, UniqueConstraint
+from sqlalchemy import (
+    CheckConstraint,
+    ForeignKey,
+    Identity,
+    String,
+    Text,
+    UniqueConstraint,
+    false,
+)
 from sqlalchemy.orm import Mapped, mapped_column
 
 from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
@@ -12,13 +20,15 @@ class QuestionnaireResponse(Base):
     """One answer to one questionnaire item.
 
     ``position`` is the interaction's position (1..3) for post-interaction questionnaires
-    and 0 for the session-final one, so uniqueness holds without NULLs.
+    and 0 for the session-final one, so uniqueness holds without NULLs. ``skipped``: an
+    optional item the participant left empty (no value, no text); every other row has an
+    answer.
     """
 
     __tablename__ = "questionnaire_response"
     __table_args__ = (
         UniqueConstraint("session_id", "position", "questionnaire", "item"),
-        CheckConstraint("value IS NOT NULL OR text IS NOT NULL", name="has_answer"),
+        CheckConstraint("skipped OR value IS NOT NULL OR text IS NOT NULL", name="has_answer"),
         NEVER_REUSED_IDS,
     )
 
@@ -33,4 +43,5 @@ class QuestionnaireResponse(Base):
     item: Mapped[str] = mapped_column(String(64))
     value: Mapped[int | None]
     text: Mapped[str | None] = mapped_column(Text)
+    skipped: Mapped[bool] = mapped_column(default=False, server_default=false())
     created_at: Mapped[datetime] = mapped_column(default=utcnow)

@@ -92,6 +92,7 @@ def questionnaire_wording(questionnaire: Questionnaire) -> PhoneState:
                 "text": item.text,
                 "left": item.left,
                 "right": item.right,
+                "required": item.required,
             }
             for item in questionnaire.items
         ],

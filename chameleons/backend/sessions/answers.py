@@ -77,6 +77,8 @@ def submit_questionnaire(
         raise ConflictError("You have already answered these questions.")
     values = _validated(questionnaire, answers)
     for item_id, value in values.items():
+        # A skipped optional item is stored as skipped (empty in the export), so the
+        # data say it was shown and left out; it is never given a default value.
         flow.db.add(
             QuestionnaireResponse(
                 session_id=flow.session.id,
@@ -87,6 +89,7 @@ def submit_questionnaire(
                 item=item_id,
                 value=value if isinstance(value, int) else None,
                 text=value if isinstance(value, str) else None,
+                skipped=value is None,
             )
         )
     flow.db.flush()
@@ -100,6 +103,7 @@ def submit_questionnaire(
             "questionnaire": questionnaire.id,
             "version": questionnaire.version,
             "items": len(values),
+            "skipped": sorted(item for item, value in values.items() if value is None),
         },
     )
     if interaction is not None:
@@ -127,12 +131,15 @@ def _questionnaire_target(flow: Flow, position: int) -> Interaction | None:
     return interaction
 
 
-def _validated(questionnaire: Questionnaire, answers: dict[str, Any]) -> dict[str, int | str]:
+def _validated(
+    questionnaire: Questionnaire, answers: dict[str, Any]
+) -> dict[str, int | str | None]:
+    """item id -> answer, None for a skipped optional item."""
     known = {item.id for item in questionnaire.items}
     unknown = sorted(set(answers) - known)
     if unknown:
         raise InvalidInputError(f"Unknown question(s): {', '.join(unknown)}.")
-    values: dict[str, int | str] = {}
+    values: dict[str, int | str | None] = {}
     for number, item in enumerate(questionnaire.items, start=1):
         values[item.id] = _value(questionnaire, item, number, answers.get(item.id))
     return values
@@ -140,19 +147,21 @@ def _validated(questionnaire: Questionnaire, answers: dict[str, Any]) -> dict[st
 
 def _value(
     questionnaire: Questionnaire, item: QuestionnaireItem, number: int, raw: Any
-) -> int | str:
+) -> int | str | None:
+    if raw is None or (isinstance(raw, str) and not raw.strip()):
+        if item.required:
+            raise InvalidInputError(f"Please answer question {number}.")
+        return None
     if item.numeric:
         points = questionnaire.points
-        if raw is None or raw == "":
-            raise InvalidInputError(f"Please answer question {number}.")
         if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= points:
             raise InvalidInputError(
                 f"The answer to question {number} must be a whole number from 1 to {points}."
             )
         return int(raw)
-    text = raw.strip() if isinstance(raw, str) else ""
-    if not text:
-        raise InvalidInputError(f"Please answer question {number}.")
+    if not isinstance(raw, str):
+        raise InvalidInputError(f"The answer to question {number} must be text.")
+    text = raw.strip()
     if len(text) > MAX_TEXT_LENGTH:
         raise InvalidInputError(
             f"The answer to question {number} is longer than {MAX_TEXT_LENGTH} characters."

@@ -11,6 +11,7 @@ unsafe methods need the ``X-CSRF-Token`` header.
     POST /api/sessions/{id}/condition {condition, position?, confirm_deviation?, worker_time?}
     POST /api/sessions/{id}/end       {reason, note?, worker_time?}      -> snapshot
     POST /api/sessions/{id}/events    {kind, payload?, position?, worker_time?} -> 201 event
+    POST /api/sessions/{id}/notes     {text}                             -> 201 event
     GET  /api/sessions/{id}/events?after=&limit=                         -> [event]
     GET  /api/sessions/{id}/phone-qr.svg                                 -> image/svg+xml
     WS   /ws/sessions/{id}            (see ``live.py``)
@@ -50,6 +51,7 @@ from chameleons.backend.sessions.schemas import (
     SessionSummary,
     StartRequest,
     UndoRequest,
+    WizardNoteCreate,
 )
 from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
 from chameleons.backend.studies import service as studies
@@ -200,6 +202,16 @@ def add_note(
         flow = load(db, session_id)
         service.log_note(flow, data.kind, data.payload, data.position, data.worker_time)
         return events.to_dict(events.for_session(db, session_id, limit=1_000_000)[-1])
+
+
+@router.post("/{session_id}/notes", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
+def add_wizard_note(
+    session_id: int, data: WizardNoteCreate, _u: CurrentStaff, db: WriteDb
+) -> dict[str, object]:
+    """A wizard's note on the timeline, in any state of the session (also after its end)."""
+    with http_errors():
+        flow = load(db, session_id)
+        return events.to_dict(service.add_wizard_note(flow, data.text))
 
 
 @router.get("/{session_id}/events")

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, field_validator
 
 WorkerTime = Field(default=None, description="The worker's clock for this action, if known")
 
@@ -63,6 +63,22 @@ class NoteRequest(BaseModel):
     payload: dict[str, Any] = Field(default_factory=dict)
     position: int | None = Field(default=None, ge=1, le=100)
     worker_time: float | None = WorkerTime
+
+
+class WizardNoteCreate(BaseModel):
+    """A free-text observation the wizard stamps on the timeline ("participant laughed")."""
+
+    text: str = Field(min_length=1, max_length=2000)
+
+    @field_validator("text")
+    @classmethod
+    def _readable(cls, text: str) -> str:
+        text = text.strip()
+        if not text:
+            raise ValueError("The note is empty: write what you observed.")
+        if "\x00" in text:
+            raise ValueError("The note contains a NUL character; retype it.")
+        return text
 
 
 class SessionSummary(BaseModel):

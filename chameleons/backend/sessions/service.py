@@ -12,7 +12,7 @@ from datetime import UTC, datetime
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from chameleons.backend.models import Interaction, Participant, PlanRow
+from chameleons.backend.models import Event, Interaction, Participant, PlanRow
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions import negotiation
@@ -269,6 +269,18 @@ def _upcoming(flow: Flow) -> Interaction:
     if current.state == "done" and not flow.is_last:
         return flow.interaction(current.position + 1)
     return current
+
+
+def add_wizard_note(flow: Flow, text: str) -> Event:
+    """The wizard's observation, stamped with the interaction and step the session is in
+    (exported in the events table; shown in the console's and the PI's timelines)."""
+    position = flow.session.current_position
+    running = flow.session.state == "running" and 1 <= position <= len(flow.interactions)
+    interaction = flow.interaction(position) if running else None
+    step = interaction.state if interaction is not None else flow.session.state
+    payload: dict[str, object] = {"text": text, "position": position if running else None,
+                                  "step": step}  # fmt: skip
+    return flow.log("wizard.note", interaction=interaction, payload=payload)
 
 
 def log_note(

@@ -25,6 +25,7 @@ from chameleons.backend.studies.schemas import (
     StudyCreate,
     StudyRead,
 )
+from chameleons.backend.studies.specs import spec_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.study import StudyError, load_default_study, load_study
 
@@ -44,6 +45,7 @@ def study_read(db: Session, study: StudyRow) -> StudyRead:
         created_at=study.created_at,
         plan_rows=rows,
         participants=people,
+        warnings=list(spec_of(study).warnings),
     )
 
 

@@ -22,6 +22,8 @@ class StudyRead(BaseModel):
     created_at: datetime
     plan_rows: int
     participants: int
+    # The loader's warnings about the study file (e.g. item wording used twice).
+    warnings: list[str] = Field(default_factory=list)
 
 
 class PlanRequest(BaseModel):

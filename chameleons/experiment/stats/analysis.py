@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, field, replace
 from itertools import combinations
 from typing import Any
 
+from chameleons.experiment.model import Questionnaire
 from chameleons.experiment.stats.descriptive import (
     Descriptive,
     PairwiseTest,
@@ -34,6 +35,8 @@ from chameleons.experiment.stats.friedman_test import (
 )
 from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
 from chameleons.experiment.stats.numbers import finite
+from chameleons.experiment.stats.reliability import Reliability
+from chameleons.experiment.stats.scale_reliability import scale_reliability
 from chameleons.experiment.stats.scores import (
     DEFAULT_VIEW,
     VIEW_TITLES,
@@ -119,6 +122,8 @@ class Analysis:
     left_out: list[LeftOut] = field(default_factory=list)  # whole participants, with why
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE
     models: Models | None = None
+    # Cronbach's alpha per scored questionnaire, over the view's participants' answers.
+    reliability: list[Reliability] = field(default_factory=list)
 
     @property
     def view_title(self) -> str:
@@ -152,6 +157,7 @@ class Analysis:
             "measures": {m: a.to_dict() for m, a in self.measures.items()},
             "notes": self.notes,
             "models": finite(self.models.to_dict()) if self.models else None,
+            "reliability": [finite(r.to_dict()) for r in self.reliability],
         }
 
 
@@ -173,6 +179,8 @@ def analyze(
     models: bool = False,
     suggestions: Iterable[Mapping[str, Any]] | None = None,
     reference: str | None = None,
+    questionnaires: Sequence[Questionnaire] = (),
+    answers: Iterable[Mapping[str, Any]] | None = None,
 ) -> Analysis:
     """Analyse score rows (keys ``participant``, ``condition`` and one per measure; optional
     ``planned_condition``, ``position``, ``deviation``, ``excluded``, ``exclusion_reason``,
@@ -191,7 +199,8 @@ def analyze(
     (:mod:`.models`) on the participants of the view, conditions as the view counts them:
     the score models from the rows (with their ``position``), the acceptance model from
     ``suggestions`` (per-suggestion rows), against ``reference`` (default: still, else the
-    first condition)."""
+    first condition). ``answers`` (the export's questionnaire rows) with the study's
+    ``questionnaires``: Cronbach's alpha per scale over the view's participants."""
     rows = list(rows)
     wanted = list(measures or DEFAULT_MEASURES)
     reader = Reader(wanted, conditions, scales or {}, view, row_name, first_row)
@@ -243,6 +252,7 @@ def analyze(
         table.left_out,
         wilcoxon_rule,
         fitted,
+        [] if answers is None else scale_reliability(questionnaires, answers, table.participants),
     )
 
 

@@ -39,6 +39,15 @@ class Reliability:
     def to_dict(self) -> dict[str, object]:
         return dict(self.__dict__)
 
+    @property
+    def best_drop(self) -> tuple[str, float] | None:
+        """The item whose removal raises alpha most, with that alpha (a weak item shows)."""
+        defined = [(a, item) for item, a in self.if_deleted.items() if a is not None]
+        if not defined:
+            return None
+        value, item = max(defined)
+        return item, value
+
 
 def alpha_from_covariance(covariance: np.ndarray) -> float | None:
     """Cronbach's alpha from the items' covariance matrix (None when undefined)."""

@@ -7,6 +7,7 @@ from typing import Literal
 
 from chameleons.experiment.stats.analysis import Analysis, MeasureAnalysis
 from chameleons.experiment.stats.descriptive import Descriptive, PairwiseTest
+from chameleons.experiment.stats.reliability import Reliability
 from chameleons.experiment.stats.render_models import (
     effect_sizes_latex,
     effect_sizes_text,
@@ -54,6 +55,7 @@ def render_text(
         for test in result.posthoc:
             lines.append(f"  {measure:<12} {posthoc_text(test)}")
     lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
+    lines += reliability_text(analysis, names)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
@@ -185,3 +187,22 @@ def _tex(text: str) -> str:
     ]:  # fmt: skip
         text = text.replace(char, escaped)
     return text
+
+
+def reliability_line(result: Reliability, title: str) -> str:
+    """``title: alpha = 0.81, 95% CI [0.70, 0.89] (n = 36 ratings, 12 items)``."""
+    counts = f"n = {result.n} complete ratings, {result.items} items"
+    if result.alpha is None:
+        return f"{title}: alpha {UNDEFINED} ({result.note}; {counts})"
+    level = round(result.confidence * 100)
+    interval = f"{level}% CI [{fmt(result.ci_low, 2)}, {fmt(result.ci_high, 2)}]"
+    return f"{title}: alpha = {fmt(result.alpha, 2)}, {interval} ({counts})"
+
+
+def reliability_text(analysis: Analysis, names: Mapping[str, str]) -> list[str]:
+    if not analysis.reliability:
+        return []
+    lines = ["", "Internal consistency (Cronbach's alpha, Feldt's interval; all ratings):"]
+    return lines + [
+        "  " + reliability_line(r, names.get(r.scale, r.scale)) for r in analysis.reliability
+    ]

@@ -38,9 +38,17 @@ def test_export_round_trip_gives_the_same_numbers(
     db_session: DbSession, populated: PopulatedStudy, tmp_path: Path
 ) -> None:
     export_to_directory(db_session, ExportRequest(), tmp_path)
-    from_export = analyze(read_scores_csv(tmp_path / "scores.csv")).to_dict()
+    from_export = analyze(
+        read_scores_csv(tmp_path / "scores.csv"),
+        questionnaires=populated.spec.questionnaires,
+        answers=read(tmp_path / "questionnaire.csv"),
+    ).to_dict()
     from_database = run_analysis(database_scores(db_session)).to_dict()
     assert from_export == from_database
+    assert [r["scale"] for r in from_database["reliability"]] == [
+        "credibility", "likeability", "trust"
+    ]  # fmt: skip
+    assert all(r["n"] == 36 for r in from_database["reliability"])  # 12 people x 3 robots
     accepted = from_database["measures"]["accepted"]
     assert accepted["friedman"]["n"] == 12  # rehearsals left out
     assert set(from_database["measures"]) == {"accepted", "credibility", "likeability", "trust"}
@@ -137,6 +145,10 @@ def test_analysis_page_json_latex_and_plot_downloads(client: TestClient, engine:
         assert f"/pi/analysis/plots/{measure}.svg?study={data.study_id}" in page.text
     assert "\\begin{tabular}" in page.text
     assert 'data-column="error_change"' in page.text
+    reliability = client.get("/api/pi/analysis").json()["analysis"]["reliability"]
+    for result in reliability:  # the page shows the API's numbers, one row per scale
+        assert f'<tr data-scale="{result["scale"]}">' in page.text
+        assert f"[{result['ci_low']:.2f}, {result['ci_high']:.2f}]" in page.text
     latex = client.get("/pi/analysis/table1.tex")
     assert latex.text.startswith("% Analysed as planned")
     assert "% Friedman accepted" in latex.text

@@ -133,13 +133,9 @@ def test_bad_questionnaire_answers_are_refused(
     assert phone.state()["page"] == 1
 
 
-def test_open_answers_are_required_and_questionnaires_must_match(
+def test_questionnaires_must_match(
     at_questionnaire: dict[str, Any], phone: ParticipantBot, engine: Engine
 ) -> None:
-    blank = {"experience": "   "}
-    assert refused(lambda: phone.submit_questionnaire(1, "experience", blank), 422) == (
-        "Please answer question 1."
-    )
     final = {"differences": "None", "comments": "None"}
     assert refused(lambda: phone.submit_questionnaire(1, "final", final), 422) == (
         "These questions do not belong to this part of the study."
@@ -182,3 +178,34 @@ def test_questionnaire_pages_are_stored_once_and_finish_the_interaction(
     assert sorted(r.value or 0 for r in rows if r.questionnaire == "credibility") == sorted(
         answers.values()
     )
+
+
+def test_optional_items_are_stored_as_skipped_required_ones_are_refused(
+    at_questionnaire: dict[str, Any], phone: ParticipantBot, engine: Engine
+) -> None:
+    """Open questions are optional by default: a blank answer is stored as skipped (no
+    value, no text), never as a default; a rated item stays required."""
+    answers = _credibility(at_questionnaire)
+    missing = {k: v for k, v in answers.items() if k != "honest"}
+    assert refused(lambda: phone.submit_questionnaire(1, "credibility", missing), 422) == (
+        "Please answer question 7."
+    )
+    assert at_questionnaire["questionnaire"]["items"][0]["required"] is True
+    phone.submit_questionnaire(1, "credibility", answers)
+    for questionnaire in ("likeability", "trust"):
+        state = phone.state()["questionnaire"]
+        phone.submit_questionnaire(1, questionnaire, answers_for(state, random.Random(3)))
+    wording = phone.state()["questionnaire"]
+    assert wording["id"] == "experience"
+    assert wording["items"][0]["required"] is False
+    assert refused(lambda: phone.submit_questionnaire(1, "experience", {"experience": 4}), 422) == (
+        "The answer to question 1 must be text."
+    )
+    phone.submit_questionnaire(1, "experience", {"experience": "   "})
+    assert phone.state()["view"] == "waiting"
+    with build_sessionmaker(engine)() as db:
+        row = db.scalars(
+            select(QuestionnaireResponse).where(QuestionnaireResponse.questionnaire == "experience")
+        ).one()
+    assert (row.skipped, row.value, row.text) == (True, None, None)
+    assert _count(engine, QuestionnaireResponse, skipped=True) == 1

@@ -249,8 +249,9 @@
     form.addEventListener("submit", function (event) {
       event.preventDefault();
       var answers = collect(form, q);
-      var missing = q.items.map(function (item, i) { return answers[item.id] === undefined ? i + 1 : 0; })
-        .filter(Boolean);
+      var missing = q.items.map(function (item, i) {
+        return item.required !== false && answers[item.id] === undefined ? i + 1 : 0;
+      }).filter(Boolean);
       if (missing.length) {
         showError("Please answer question " + missing[0] + ".");
         var field = form.querySelector('[data-number="' + missing[0] + '"]');
@@ -270,18 +271,19 @@
 
   function questionField(q, item, number, saved, onChange) {
     var field = h("fieldset", { class: "question " + item.type, "data-number": number, "data-item": item.id });
+    var optional = item.required === false ? h("span", { class: "optional", text: " (optional)" }) : null;
     if (item.type === "text") {
       var area = h("textarea", { name: item.id, rows: "4", id: "answer-" + item.id });
       area.value = typeof saved === "string" ? saved : "";
       area.addEventListener("input", function () { onChange(area.value); field.classList.remove("invalid"); });
-      field.appendChild(h("legend", { text: number + ". " + item.text }));
+      field.appendChild(h("legend", { text: number + ". " + item.text }, optional));
       field.appendChild(area);
       return field;
     }
     var legend = item.type === "differential"
       ? number + ". " + item.left + " – " + item.right
       : number + ". " + item.text;
-    field.appendChild(h("legend", { text: legend }));
+    field.appendChild(h("legend", { text: legend }, optional));
     var scale = h("div", { class: "scale" });
     for (var value = 1; value <= q.points; value++) {
       var input = h("input", { type: "radio", name: item.id, value: String(value), checked: saved === value });

@@ -53,5 +53,6 @@ export function createApi(sessionId, csrf, onReachable) {
     condition: (position, condition, confirmDeviation = false) =>
       call("POST", `${session}/condition`, { position, condition, confirm_deviation: confirmDeviation }),
     end: (reason, note) => call("POST", `${session}/end`, { reason, note }),
+    note: (text) => call("POST", `${session}/notes`, { text }),
   };
 }

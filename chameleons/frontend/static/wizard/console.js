@@ -249,7 +249,26 @@ function openEndDialog() {
   $("end-reason").focus();
 }
 
+async function addNote(event) {
+  event.preventDefault();
+  const input = $("note-text");
+  const text = input.value.trim();
+  if (!text) {
+    flash("Write the note first: it is empty.", "warn");
+    return;
+  }
+  try {
+    await api.note(text);
+    input.value = ""; // kept on failure, so nothing typed is lost
+    flash("Note added to the timeline.", "ok");
+    if (!link.live) await refresh();
+  } catch (error) {
+    flash(`Note not saved: ${error.message}`);
+  }
+}
+
 bindKeys({
+  note: () => $("note-text").focus(),
   stop: () => perform("stop", () => api.stop()),
   search: () => $("prompt-search").focus(),
   help: () => $("help-dialog").showModal(),
@@ -277,6 +296,7 @@ bindKeys({
 
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
+$("note-form").addEventListener("submit", addNote);
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 

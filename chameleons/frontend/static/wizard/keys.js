@@ -16,6 +16,7 @@ export function bindKeys(handlers) {
     const target = event.target;
     if (TYPING.has(target.tagName)) {
       if (target.id === "prompt-search") searchKeys(event, handlers);
+      if (target.id === "note-text" && event.key === "Escape") target.blur();
       return;
     }
     if (event.altKey || event.metaKey) return;
@@ -41,6 +42,11 @@ export function bindKeys(handlers) {
     if (fixed) {
       event.preventDefault();
       handlers[fixed]();
+      return;
+    }
+    if (event.shiftKey && event.code === "KeyN") {
+      event.preventDefault();
+      handlers.note();
       return;
     }
     const suggestion = SUGGESTION_CODES.indexOf(event.code);

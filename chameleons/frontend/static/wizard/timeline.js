@@ -28,6 +28,7 @@ export function describe(event, names) {
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
+    case "wizard.note": return `Note: ${p.text}`;
     case "phone.connected": return "Phone connected";
     case "phone.disconnected": return "Phone disconnected";
     case "session.final_questionnaire": return "Final questionnaire started";

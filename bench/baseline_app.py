@@ -1,0 +1,48 @@
+"""The server benchmark's baseline: the least a FastAPI server can do for the same traffic.
+
+``POST /api/submit/{channel}`` answers at once and pushes ``{"client_id": ...}`` to every
+WebSocket on ``/ws/{channel}``: the shape of a phone's submission reaching the wizard's
+console, with no database, no session logic and no console state. Run by
+``bench.server_bench`` as its own uvicorn process, exactly as the real server is.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections import defaultdict
+
+from fastapi import FastAPI, WebSocket, WebSocketDisconnect
+from pydantic import BaseModel
+
+app = FastAPI()
+_listeners: defaultdict[str, set[asyncio.Queue[str]]] = defaultdict(set)
+
+
+class Submission(BaseModel):
+    client_id: str
+
+
+@app.post("/api/submit/{channel}")
+async def submit(channel: str, body: Submission) -> dict[str, bool]:
+    for queue in _listeners[channel]:
+        queue.put_nowait(body.client_id)
+    return {"ok": True}
+
+
+@app.get("/healthz")
+async def healthz() -> dict[str, str]:
+    return {"status": "ok"}
+
+
+@app.websocket("/ws/{channel}")
+async def listen(websocket: WebSocket, channel: str) -> None:
+    await websocket.accept()
+    queue: asyncio.Queue[str] = asyncio.Queue()
+    _listeners[channel].add(queue)
+    try:
+        while True:
+            await websocket.send_json({"type": "event", "client_id": await queue.get()})
+    except WebSocketDisconnect:
+        pass
+    finally:
+        _listeners[channel].discard(queue)

@@ -1,0 +1,280 @@
+"""The parts of ``bench.server_bench``: the servers in their own processes, console
+sockets that time each update's arrival, phones in threads, figures."""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import httpx
+from sqlalchemy import create_engine, text
+from sqlalchemy.engine import make_url
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+ROOT = Path(__file__).resolve().parents[1]
+START_SECONDS = 120.0
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def percentile(values: list[float], q: float) -> float:
+    """The q-quantile by nearest rank (enough for p50/p99 of hundreds of samples)."""
+    if not values:
+        return float("nan")
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, max(0, round(q * (len(ordered) - 1))))]
+
+
+@dataclass
+class Figures:
+    http: list[float] = field(default_factory=list)
+    update: list[float] = field(default_factory=list)
+    errors: Counter[str] = field(default_factory=Counter)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def add(self, *, http: float | None, update: float | None) -> None:
+        with self._lock:
+            if http is not None:
+                self.http.append(http)
+            if update is not None:
+                self.update.append(update)
+
+    def count_error(self, what: str) -> None:
+        with self._lock:
+            self.errors[what] += 1
+
+    def summary(self) -> dict[str, Any]:
+        with self._lock:
+            ms = {f"{name}_{label}_ms": round(percentile(values, q) * 1000, 2)
+                  for name, values in (("http", self.http), ("update", self.update))
+                  for label, q in (("p50", 0.5), ("p99", 0.99))}  # fmt: skip
+            return {**ms, "submissions": len(self.http) + sum(self.errors.values()),
+                    "errors": dict(self.errors)}  # fmt: skip
+
+
+class Console:
+    """A WebSocket whose reader thread notes when each client id first arrives."""
+
+    clock = staticmethod(time.perf_counter)
+
+    def __init__(self, url: str, origin: str, cookies: dict[str, str]) -> None:
+        headers = {"Origin": origin}
+        if cookies:
+            headers["Cookie"] = "; ".join(f"{k}={v}" for k, v in cookies.items())
+        self._connection = connect(url, additional_headers=headers, proxy=None,
+                                   max_size=None, open_timeout=60)  # fmt: skip
+        self._seen: dict[str, float] = {}
+        self._condition = threading.Condition()
+        self._closed = False
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+
+    @staticmethod
+    def pause(seconds: float) -> None:
+        threading.Event().wait(seconds)
+
+    def _read(self) -> None:
+        try:
+            for raw in self._connection:
+                now = self.clock()
+                client_id = _client_id(json.loads(raw))
+                if client_id:
+                    with self._condition:
+                        self._seen.setdefault(client_id, now)
+                        self._condition.notify_all()
+        except (ConnectionClosed, OSError, ValueError):
+            pass
+        finally:
+            with self._condition:
+                self._closed = True
+                self._condition.notify_all()
+
+    def wait_for(self, client_id: str, timeout: float) -> float | None:
+        with self._condition:
+            self._condition.wait_for(lambda: client_id in self._seen or self._closed, timeout)
+            return self._seen.get(client_id)
+
+    def close(self) -> None:
+        self._connection.close()
+        self._thread.join(timeout=10)
+
+
+def _client_id(message: Any) -> str | None:
+    """The submission's client id of an event message: the real console nests the event
+    (``{"type": "event", "event": {...}}``), the baseline sends it flat."""
+    if not isinstance(message, dict) or message.get("type") != "event":
+        return None
+    event = message.get("event", message)
+    found = event.get("client_id") if isinstance(event, dict) else None
+    return found if isinstance(found, str) else None
+
+
+def run_threads(jobs: list[Callable[[], Any]], *, together: bool = False) -> None:
+    """Each job in a thread of its own; with ``together`` they start at one barrier."""
+    barrier = threading.Barrier(len(jobs)) if together else None
+    failures: list[BaseException] = []
+
+    def run(job: Callable[[], Any]) -> None:
+        try:
+            if barrier is not None:
+                barrier.wait()
+            job()
+        except BaseException as error:  # reported after all threads ended
+            failures.append(error)
+
+    threads = [threading.Thread(target=run, args=(job,)) for job in jobs]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    if failures:
+        raise RuntimeError(f"{len(failures)} phone(s) failed; the first: {failures[0]!r}")
+
+
+@dataclass
+class Server:
+    """A server process on a loopback port of its own."""
+
+    process: subprocess.Popen[bytes]
+    base: str
+
+    def client(self, cookies: dict[str, str] | None = None) -> httpx.Client:
+        return httpx.Client(base_url=self.base, cookies=cookies, timeout=120.0)
+
+    def ws_url(self, path: str) -> str:
+        return "ws" + self.base.removeprefix("http") + path
+
+    def wait_ready(self) -> None:
+        deadline = time.monotonic() + START_SECONDS
+        while True:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"the server exited with {self.process.returncode}")
+            try:
+                if httpx.get(f"{self.base}/healthz", timeout=2).status_code == 200:
+                    return
+            except httpx.TransportError:
+                pass
+            if time.monotonic() > deadline:
+                raise RuntimeError("the server did not answer /healthz")
+            threading.Event().wait(0.1)
+
+    def stop(self) -> None:
+        self.process.terminate()
+        try:
+            self.process.wait(30)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+
+    @classmethod
+    @contextmanager
+    def _running(cls, command: list[str], env: dict[str, str], port: int) -> Iterator[Server]:
+        process = subprocess.Popen(command, env=env, cwd=ROOT, stdin=subprocess.DEVNULL)
+        server = cls(process, f"http://127.0.0.1:{port}")
+        try:
+            server.wait_ready()
+            yield server
+        finally:
+            server.stop()
+
+    @classmethod
+    @contextmanager
+    def baseline(cls) -> Iterator[Server]:
+        port = free_port()
+        command = [sys.executable, "-m", "uvicorn", "bench.baseline_app:app", "--host",
+                   "127.0.0.1", "--port", str(port), "--log-level", "warning"]  # fmt: skip
+        with cls._running(command, dict(os.environ), port) as server:
+            yield server
+
+    @classmethod
+    @contextmanager
+    def chameleons(
+        cls, database_url: str, sessions: int
+    ) -> Iterator[tuple[Server, dict[str, Any]]]:
+        """``chameleons serve`` on ``database_url`` (migrated, with a study whose plan has
+        room for ``sessions`` and a wizard), and a logged-in wizard's cookie and CSRF."""
+        study_id, password = _prepare(database_url, sessions)
+        port = free_port()
+        with tempfile_dir() as data_dir:
+            env = {**os.environ, "CHAMELEONS_DATABASE_URL": database_url,
+                   "CHAMELEONS_DATA_DIR": str(data_dir),
+                   "CHAMELEONS_SECRET_KEY": secrets.token_urlsafe(32),
+                   "CHAMELEONS_BRIDGE_ENABLED": "false",
+                   "CHAMELEONS_LOG_LEVEL": "warning"}  # fmt: skip
+            command = [sys.executable, "-m", "chameleons", "serve", "--host", "127.0.0.1",
+                       "--port", str(port)]  # fmt: skip
+            with cls._running(command, env, port) as server:
+                yield server, _log_in(server, password) | {"study_id": study_id}
+
+
+@contextmanager
+def tempfile_dir() -> Iterator[Path]:
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="chameleons-bench-data-") as tmp:
+        yield Path(tmp)
+
+
+def _prepare(database_url: str, sessions: int) -> tuple[int, str]:
+    from chameleons.backend.auth import service as auth
+    from chameleons.backend.auth.schemas import StaffUserCreate
+    from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
+    from chameleons.backend.migrate import upgrade
+    from chameleons.backend.studies import service as studies
+    from chameleons.experiment.study import load_default_study
+
+    upgrade(database_url)
+    password = secrets.token_urlsafe(16)
+    engine = build_engine(database_url)
+    try:
+        with session_scope(build_sessionmaker(engine)) as db:
+            auth.create_user(db, StaffUserCreate(username="bench-wizard", password=password,
+                                                 role="wizard"))  # fmt: skip
+            study = studies.create_study(db, load_default_study(), plan_seed=1)
+            studies.generate_plan(db, study, sessions)
+            return study.id, password
+    finally:
+        engine.dispose()
+
+
+def _log_in(server: Server, password: str) -> dict[str, Any]:
+    from chameleons.backend.sessions.bot import StaffApi
+
+    with server.client() as http:
+        staff = StaffApi(http).login("bench-wizard", password)
+        return {"cookies": dict(http.cookies.items()), "csrf": staff.csrf}
+
+
+@contextmanager
+def scratch_postgres(server_url: str) -> Iterator[str]:
+    """A fresh database on the PostgreSQL server of ``server_url``, dropped afterwards."""
+    url = make_url(server_url)
+    if url.drivername == "postgresql":
+        url = url.set(drivername="postgresql+psycopg")
+    name = f"chameleons_bench_{secrets.token_hex(4)}"
+    admin = create_engine(url, isolation_level="AUTOCOMMIT")
+    try:
+        with admin.connect() as conn:
+            conn.execute(text(f'CREATE DATABASE "{name}"'))
+        yield url.set(database=name).render_as_string(hide_password=False)
+        with admin.connect() as conn:
+            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+    finally:
+        admin.dispose()
