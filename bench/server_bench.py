@@ -5,7 +5,7 @@ same traffic against a bare FastAPI server (``bench.baseline_app``) measured in 
 
 The server under test is ``chameleons serve`` in a process of its own (as in a lab), on a
 fresh SQLite file, or a fresh PostgreSQL database on ``--database-url``'s server (default:
-``TEST_DATABASE_URL`` when set; ``--sqlite-only`` skips it). The load comes from this
+``TEST_DATABASE_URL`` when set; ``--only sqlite|postgresql`` runs one). The load comes from this
 process, one thread per phone:
 
 - **think**: every phone walks a whole session (its wizard drives it over the staff API, as
@@ -228,9 +228,10 @@ def _post_json(http: Any, path: str, body: dict[str, Any]) -> Any:
 @contextmanager
 def databases(args: argparse.Namespace) -> Iterator[list[tuple[str, str]]]:
     with tempfile.TemporaryDirectory(prefix="chameleons-bench-") as tmp:
-        found = [("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
+        found = [] if args.only == "postgresql" else [
+            ("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
         server_url = args.database_url or os.environ.get("TEST_DATABASE_URL")
-        if args.sqlite_only or not server_url:
+        if args.only == "sqlite" or not server_url:
             yield found
             return
         with scratch_postgres(server_url) as url:
@@ -256,7 +257,8 @@ def main() -> None:
     parser.add_argument("--think-max", type=float, default=3.0, help="Seconds (uniform 0..T).")
     parser.add_argument("--quick", action="store_true", help="10 phones, 0.5 s think time.")
     parser.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
-    parser.add_argument("--sqlite-only", action="store_true")
+    parser.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
+                        help="Run one database only.")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="Also write the figures here.")
     args = parser.parse_args()

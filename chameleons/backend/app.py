@@ -7,6 +7,7 @@ from collections.abc import AsyncIterator
 from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
 
+import anyio.to_thread
 from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -22,7 +23,7 @@ from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredE
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.bridge.wiring import worker_link
 from chameleons.backend.dashboard import pages as dashboard_pages
-from chameleons.backend.db import build_engine, build_sessionmaker
+from chameleons.backend.db import build_engine, build_sessionmaker, request_threads
 from chameleons.backend.display import endpoints as display_endpoints
 from chameleons.backend.display import media as display_media
 from chameleons.backend.display import pages as display_pages
@@ -64,6 +65,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        # Sync endpoints and dependencies run in anyio's thread pool: never more threads
+        # than database connections (see chameleons.backend.db.POOL_SIZE).
+        limiter = anyio.to_thread.current_default_thread_limiter()
+        limiter.total_tokens = min(limiter.total_tokens, request_threads(engine))
         async with AsyncExitStack() as stack:
             if settings.bridge_enabled:
                 await stack.enter_async_context(worker_link(app, settings))

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     out = tmp_path / "figures.json"
     command = [sys.executable, "-m", "bench.server_bench", "--phones", "2", "--think-max", "0",
-               "--sqlite-only", "--json", str(out)]  # fmt: skip
+               "--only", "sqlite", "--json", str(out)]  # fmt: skip
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=600,
                           check=False)  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr

@@ -80,6 +80,10 @@ def _log_connection(factory: sessionmaker[Session], hub: LiveHub, token: str, ki
                 study_id=flow.session.study_id,
                 session_id=flow.session.id,
             )
+        else:
+            # Nothing is logged after the end, but the console's phone chip must still
+            # learn that the phone came or went: a change without an event.
+            hub.publish(session_channel(flow.session.id), {"type": "presence", "kind": kind})
 
 
 @router.websocket("/ws/p/{token}")

@@ -18,7 +18,7 @@ import {
   tickUndo,
 } from "./panels.js";
 import { PromptBoard } from "./prompts.js";
-import { Timeline } from "./timeline.js";
+import { bindFilter, Timeline } from "./timeline.js";
 
 const $ = (id) => document.getElementById(id);
 const root = $("console");
@@ -149,7 +149,9 @@ async function apply(next) {
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
-  $("end-open").disabled = ["complete", "ended"].includes(state.session.state);
+  const over = ["complete", "ended"].includes(state.session.state);
+  $("end-open").disabled = over;
+  board.setDisabled(over);
   board.highlight(state.suggestion_prompts);
   board.markPlayed(playedCounts(state));
   timeline.sync(state.events, itemNames(state));
@@ -168,6 +170,10 @@ function playedCounts(current) {
 
 async function play(group) {
   if (gone) return;
+  if (board.disabled) {
+    flash("The session is over: prompts are off.", "warn");
+    return;
+  }
   const button = board.find(group);
   sendingGroup = group;
   now.sending(button ? button.text : group, group);
@@ -192,9 +198,19 @@ function act(what) {
     perform(`${what} suggestion ${decide.index}`, () => api.decide(decide.position, decide.index, what === "accept"));
   } else if (what === "undo" && undo && Date.parse(undo.until) > Date.now()) {
     perform(`undo suggestion ${undo.index}`, () => api.undo(undo.position, undo.index));
+  } else if (what === "undo" && undo) {
+    flash(`Too late to undo suggestion ${undo.index}: its undo window has passed.`, "warn");
   } else {
-    flash(`Cannot ${what} now. ${state.session.allowed_sentence}`, "warn");
+    flash(`Cannot ${what} now. ${allowedNow(state, undo)}`, "warn");
   }
+}
+
+/** The server's "Allowed now: …" without an undo whose window has passed since. */
+function allowedNow(state, undo) {
+  const sentence = state.session.allowed_sentence;
+  if (!undo || Date.parse(undo.until) > Date.now()) return sentence;
+  const clause = `undo the decision on suggestion ${undo.index} of interaction ${undo.position}`;
+  return sentence.replace(`; or ${clause}`, "").replace(`${clause}; or `, "");
 }
 
 function confirmDialog(text, then) {
@@ -297,6 +313,7 @@ bindKeys({
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
 $("note-form").addEventListener("submit", addNote);
+bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = filter));
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 

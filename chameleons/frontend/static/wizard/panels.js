@@ -50,8 +50,14 @@ export function renderBar(state) {
   qr.title = session.phone.url;
   $("phone-code").textContent = session.phone.short_code;
   const phone = $("phone-state");
-  phone.textContent = session.phone.connected ? "phone connected" : "phone not connected";
-  phone.className = `pill ${session.phone.connected ? "ok" : "bad"}`;
+  if (["complete", "ended"].includes(session.state)) {
+    // The phone link stops working when the session is over (the page says thank you).
+    phone.textContent = session.phone.connected ? "phone still on the last page" : "phone left";
+    phone.className = "pill";
+  } else {
+    phone.textContent = session.phone.connected ? "phone connected" : "phone not connected";
+    phone.className = `pill ${session.phone.connected ? "ok" : "bad"}`;
+  }
 }
 
 /** The primary (next-step) action: returns a function to run it, or null when none. */

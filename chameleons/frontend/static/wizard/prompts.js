@@ -28,6 +28,7 @@ export class PromptBoard {
     this.byShortcut.clear();
     const sections = data.sections.map((section) => this.section(section));
     this.container.replaceChildren(...sections);
+    if (this.disabled) this.setDisabled(true);
     this.filter();
   }
 
@@ -107,6 +108,12 @@ export class PromptBoard {
 
   resetExtras() {
     this.extras.clear();
+  }
+
+  /** Prompt buttons off (the session is over: the robot has nothing more to say). */
+  setDisabled(disabled) {
+    this.disabled = disabled;
+    for (const [, node] of this.all()) node.disabled = disabled;
   }
 
   *all() {

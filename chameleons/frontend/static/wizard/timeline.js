@@ -41,10 +41,45 @@ export function describe(event, names) {
   }
 }
 
+const DEVIATIONS = new Set(["plan.deviation", "condition.switched", "session.ended_early",
+  "participant.excluded", "plan_row.handed_on", "prompt.not_voiced"]);
+
+/** The filter an event belongs to: prompts, phone, robot, deviations or notes. */
+export function category(kind, source) {
+  if (kind === "wizard.note") return "notes";
+  if (DEVIATIONS.has(kind) || kind.endsWith(".deviation")) return "deviations";
+  if (kind.startsWith("prompt.") || kind.startsWith("wizard.prompt")) return "prompts";
+  if (source === "participant" || kind.startsWith("phone.")) return "phone";
+  if (kind.startsWith("robot.") || kind.startsWith("worker.") || kind.startsWith("recording.")
+      || source === "worker" || source === "robot") return "robot";
+  return "session";
+}
+
+/** Show only ``filter``'s rows ("all": every row) of a list whose rows carry data-category. */
+export function applyFilter(list, filter) {
+  for (const row of list.children) {
+    row.hidden = filter !== "all" && row.dataset.category !== filter;
+  }
+}
+
+/** Buttons with data-filter in ``group`` switch the filter of ``list`` (aria-pressed shows it). */
+export function bindFilter(group, list, onChange = () => {}) {
+  group.addEventListener("click", (event) => {
+    const button = event.target.closest("button[data-filter]");
+    if (!button) return;
+    for (const other of group.querySelectorAll("button[data-filter]")) {
+      other.setAttribute("aria-pressed", String(other === button));
+    }
+    applyFilter(list, button.dataset.filter);
+    onChange(button.dataset.filter);
+  });
+}
+
 export class Timeline {
   constructor(list, counter) {
     this.list = list;
     this.counter = counter;
+    this.filter = "all";
     this.lastId = 0;
     this.rows = new Map(); // event id -> row
     this.count = 0;
@@ -71,7 +106,7 @@ export class Timeline {
     const worker = event.worker_time != null ? el("span", { class: "tl-worker", text: `worker ${event.worker_time.toFixed(3)}` }) : null;
     const row = el(
       "li",
-      { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id) } },
+      { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id), category: category(event.kind, event.source) } },
       el("time", { datetime: event.server_time, text: clock(event.server_time) }),
       el("span", { class: "tl-source", text: event.source }),
       el("span", { class: "tl-text", text: describe(event, names) }),
@@ -79,6 +114,7 @@ export class Timeline {
       el("span", { class: "tl-latency" }),
     );
     this.rows.set(event.id, row);
+    row.hidden = this.filter !== "all" && row.dataset.category !== this.filter;
     this.list.prepend(row);
     this.counter.textContent = `(${this.count})`;
     this.attachLatency(event);

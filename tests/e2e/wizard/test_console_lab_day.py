@@ -1,0 +1,89 @@
+"""In Chromium, the console on a long lab day: a refusal never covers the primary action
+and does not contradict itself (a late undo), and a finished session turns its prompt
+buttons off and says the phone left."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from playwright.sync_api import Locator, Page, expect
+
+from tests.e2e.wizard.conftest import Console
+
+pytestmark = pytest.mark.browser
+
+
+def overlaps(a: Locator, b: Locator) -> bool:
+    one, two = a.bounding_box(), b.bounding_box()
+    assert one is not None
+    assert two is not None
+    apart_x = one["x"] + one["width"] <= two["x"] or two["x"] + two["width"] <= one["x"]
+    apart_y = one["y"] + one["height"] <= two["y"] or two["y"] + two["height"] <= one["y"]
+    return not (apart_x or apart_y)
+
+
+def into_negotiation(console: Console) -> None:
+    wizard = console.wizard
+    wizard.start()
+    wizard.advance(1, "discussion")
+    wizard.advance(1, "ranking")
+    console.phone.rank(random.Random(2))
+    wizard.advance(1, "negotiation")
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1920, 1080)])
+def test_a_refusal_shows_below_the_primary_action(console: Console, size: tuple[int, int]) -> None:
+    page = console.page
+    page.set_viewport_size({"width": size[0], "height": size[1]})
+    expect(page.locator("#primary-action")).to_contain_text("Start the session")
+    page.locator("body").click()
+    page.keyboard.press("a")  # accept: nothing to accept before the negotiation
+    flash = page.locator("#flash")
+    expect(flash).to_contain_text("Cannot accept now. Allowed now: start the session")
+    assert not overlaps(flash, page.locator("#primary-action"))
+    expect(page.locator("#primary-action")).to_be_visible()
+
+
+def test_a_late_undo_says_it_is_too_late_and_nothing_else(console: Console, page: Page) -> None:
+    into_negotiation(console)
+    expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 1")
+    page.locator("body").click()
+    page.keyboard.press("a")
+    expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 2")
+    undo = next(a for a in console.wizard.refresh()["allowed"] if a["action"] == "undo")
+    # The undo window is wall-clock time: wait until the page's clock has passed it.
+    page.wait_for_function(f"Date.now() > Date.parse({undo['until']!r})", timeout=30_000)
+    page.keyboard.press("u")
+    flash = page.locator("#flash")
+    expect(flash).to_have_text("Too late to undo suggestion 1: its undo window has passed.")
+    page.keyboard.press("d")  # decline 2: the console still works
+    expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 3")
+
+
+def test_a_finished_session_turns_prompts_off_and_the_phone_chip_says_it_left(
+    console: Console, phone_page: Page
+) -> None:
+    page = console.page
+    expect(page.locator("#phone-state")).to_have_text("phone connected")
+    wizard, phone = console.wizard, console.phone
+    wizard.start()
+    for position in range(1, wizard.snapshot["interaction_count"] + 1):
+        wizard.advance(position, "discussion")
+        wizard.advance(position, "ranking")
+        phone.rank(random.Random(position))
+        wizard.advance(position, "negotiation")
+        wizard.negotiate(position, lambda _s: True)
+        wizard.advance(position, "questionnaire")
+        phone.answer_questionnaires(position, random.Random(position))
+    phone.answer_questionnaires(0, random.Random(0))
+    expect(page.locator("#primary-action")).to_contain_text("Session complete")
+    buttons = page.locator("#prompt-sections button")
+    expect(buttons.first).to_be_disabled()
+    assert buttons.evaluate_all("(all) => all.every((b) => b.disabled)")
+    expect(phone_page.get_by_role("heading", name="Thank you!")).to_be_visible()
+    expect(page.locator("#phone-state")).to_have_text("phone left")
+    page.locator("body").click()
+    page.keyboard.press("i")  # a prompt's letter: refused, nothing sent
+    expect(page.locator("#flash")).to_have_text("The session is over: prompts are off.")
+    assert not [e for e in console.events() if e["kind"] == "prompt.played"]
