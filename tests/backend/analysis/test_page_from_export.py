@@ -21,7 +21,12 @@ from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.dropouts.service import exclude
 from chameleons.backend.export.service import ExportRequest, export_to_directory
 from chameleons.backend.models import Interaction, Session, Study
-from chameleons.cli.analyze_command import read_csv_rows, read_scores_csv, read_suggestions_beside
+from chameleons.cli.analyze_command import (
+    read_answers_beside,
+    read_csv_rows,
+    read_scores_csv,
+    read_suggestions_beside,
+)
 from chameleons.experiment.stats import AnalysisError, error_score_table
 from chameleons.experiment.stats.effect_sizes import BootstrapOptions
 from chameleons.experiment.study import canonical_json, study_from_config
@@ -68,7 +73,8 @@ def analysis_from_files(folder: Path, view: Any, extended: bool, **options: Any)
     """What ``study_analysis`` computes from the database, from the exported files."""
     study, spec = study_from_files(folder)
     scores_csv = folder / "scores.csv"
-    scores = StudyScores(study, spec, [dict(r) for r in read_scores_csv(scores_csv)])
+    answers = read_answers_beside(scores_csv) or []
+    scores = StudyScores(study, spec, [dict(r) for r in read_scores_csv(scores_csv)], answers)
     suggestions = read_suggestions_beside(scores_csv) if extended else None
     bootstrap = BootstrapOptions() if extended else None
     try:
