@@ -22,6 +22,7 @@ from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.bridge.wiring import worker_link
+from chameleons.backend.dashboard import monitor as dashboard_monitor
 from chameleons.backend.dashboard import pages as dashboard_pages
 from chameleons.backend.db import build_engine, build_sessionmaker, request_threads
 from chameleons.backend.display import endpoints as display_endpoints
@@ -124,6 +125,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         analysis_pages.router,
         planning_pages.router,
         dashboard_pages.router,
+        dashboard_monitor.router,
         withdrawal_endpoints.router,
         dropout_endpoints.router,
         display_pages.router,

@@ -87,3 +87,34 @@ def test_a_finished_session_turns_prompts_off_and_the_phone_chip_says_it_left(
     page.keyboard.press("i")  # a prompt's letter: refused, nothing sent
     expect(page.locator("#flash")).to_have_text("The session is over: prompts are off.")
     assert not [e for e in console.events() if e["kind"] == "prompt.played"]
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1920, 1080)])
+def test_the_negotiation_fits_a_laptop_screen(
+    console: Console, phone_page: Page, size: tuple[int, int]
+) -> None:
+    """What the wizard needs in the negotiation is on screen without scrolling."""
+    page = console.page
+    page.set_viewport_size({"width": size[0], "height": size[1]})
+    expect(page.locator("#phone-state")).to_have_text("phone connected")
+    into_negotiation(console)
+    expect(page.locator(".suggestion-now")).to_be_visible()
+    needed = {
+        "primary action": page.locator("#primary-action"),
+        "current suggestion": page.locator(".suggestion-now .suggestion-move"),
+        "its phrasings": page.locator("#suggestion-prompts"),
+        "accept": page.locator(".suggestion-now button.accept"),
+        "decline": page.locator(".suggestion-now button.decline"),
+        "replies": page.locator(".pb-section[data-section='replies']"),
+        "live ranking": page.locator("#live-ranking"),
+    }
+    assert page.evaluate("window.scrollY") == 0
+    for what, locator in needed.items():
+        box = locator.bounding_box()
+        assert box is not None, what
+        inside = (box["x"] >= 0 and box["y"] >= 0 and box["x"] + box["width"] <= size[0]
+                  and box["y"] + box["height"] <= size[1])  # fmt: skip
+        assert inside, f"{what} is outside the {size[0]}x{size[1]} screen: {box}"
+    # A condition without a natural source says nothing of one (not "null").
+    expect(page.locator("#condition-note")).to_contain_text("runs as planned")
+    expect(page.locator("#condition-note")).not_to_contain_text("null")

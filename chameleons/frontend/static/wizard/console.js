@@ -149,6 +149,7 @@ async function apply(next) {
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
+  markStep(state);
   const over = ["complete", "ended"].includes(state.session.state);
   $("end-open").disabled = over;
   board.setDisabled(over);
@@ -156,6 +157,16 @@ async function apply(next) {
   board.markPlayed(playedCounts(state));
   timeline.sync(state.events, itemNames(state));
   if (!sendingGroup) now.show(playState(state.events));
+}
+
+/** The step and phone as attributes of the console: the layout follows them (console.css
+ * puts the replies and the live ranking first during the negotiation). */
+function markStep(current) {
+  const session = current.session;
+  const interaction = session.interactions.find((i) => i.position === current.prompt_position);
+  const node = $("console");
+  node.dataset.step = session.state === "running" && interaction ? interaction.state : session.state;
+  node.dataset.phone = session.phone.connected ? "connected" : "absent";
 }
 
 function playedCounts(current) {

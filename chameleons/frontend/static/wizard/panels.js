@@ -112,14 +112,15 @@ export function renderCondition(state, requestSwitch, applyRobot) {
   $("condition-switch").replaceChildren(...buttons);
   const running = conditionDetails(state, interaction.condition);
   const natural = interaction.natural;
-  $("condition-note").replaceChildren(
+  // replaceChildren() would write a null as the text "null": leave the absent parts out.
+  $("condition-note").replaceChildren(...[
     interaction.deviates_from_plan
       ? `Deviation: running ${interaction.condition}, planned ${interaction.planned_condition} (logged). `
       : `Interaction ${interaction.position} runs as planned. `,
     el("span", { id: "condition-behaviour", text: `Robot: ${running.summary}. ` }),
     natural ? el("span", { id: "natural-source", text: `Natural replays ${natural.recording}. ` }) : null,
     el("button", { type: "button", class: "link", id: "robot-apply", disabled: closed, onclick: applyRobot }, "Send condition and face to the robot"),
-  );
+  ].filter((part) => part !== null));
 }
 
 export function renderNegotiation(state, board, act) {

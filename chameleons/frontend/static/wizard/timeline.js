@@ -6,6 +6,19 @@ function rankingText(ranking, names) {
   return (ranking || []).map((id, i) => `${i + 1}. ${names.get(id) || id}`).join("  ");
 }
 
+function count(list, noun) {
+  const n = Array.isArray(list) ? list.length : 0;
+  return `${n} ${noun}${n === 1 ? "" : "s"}`;
+}
+
+/** A kind without a sentence yet: its short values, never whole paths or nested data. */
+function summary(payload) {
+  const parts = Object.entries(payload)
+    .filter(([, v]) => ["string", "number", "boolean"].includes(typeof v))
+    .map(([k, v]) => `${k} ${typeof v === "string" && v.includes("/") ? v.split("/").pop() : v}`);
+  return parts.length ? ` (${parts.join(", ")})` : "";
+}
+
 export function describe(event, names) {
   const p = event.payload || {};
   const item = (id) => names.get(id) || id;
@@ -29,6 +42,21 @@ export function describe(event, names) {
     case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
     case "wizard.note": return `Note: ${p.text}`;
+    case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
+    case "recording.stopped": return `Recording of interaction ${p.position} saved (${count(p.recordings, "file")})`;
+    case "recording.indexed": return `Recording of interaction ${p.position}: ${count(p.recordings, "more file")} saved`;
+    case "recording.not_started": return `RECORDING NOT STARTED (interaction ${p.position}): ${p.detail || p.reason}`;
+    case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
+    case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
+    case "robot.disconnected": return `ROBOT DISCONNECTED (${p.booth || "booth"})`;
+    case "worker.connected": return `Worker of ${p.booth || "the booth"} connected`;
+    case "worker.lost": return `WORKER LOST (${p.booth || "booth"})${p.last_seen_s != null ? `: silent for ${p.last_seen_s} s` : ""}`;
+    case "worker.restarted": return `Worker of ${p.booth || "the booth"} restarted (restart ${p.restarts ?? "?"})`;
+    case "prompt.not_voiced": return `NOT VOICED: ${p.detail || p.reason || p.prompt_id}`;
+    case "prompt.not_played": return `NOT PLAYED: ${p.detail || p.reason || p.prompt_id}`;
+    case "behaviour.natural_source": return `Natural movement replays ${p.source === "clip" ? `clip ${p.clip}` : p.source === "yoked" ? `participant ${p.from_participant}, interaction ${p.from_position} (${p.from_condition})` : `a synthetic face (seed ${p.seed})`}`;
+    case "session.rehearsal_marked": return "Marked as a rehearsal";
+    case "session.rehearsal_unmarked": return "No longer marked as a rehearsal";
     case "phone.connected": return "Phone connected";
     case "phone.disconnected": return "Phone disconnected";
     case "session.final_questionnaire": return "Final questionnaire started";
@@ -37,7 +65,7 @@ export function describe(event, names) {
     case "participant.excluded": return `PI excluded the participant from the analysis: ${p.reason}`;
     case "participant.included": return "PI included the participant in the analysis again";
     case "plan_row.handed_on": return `PI gave plan row ${p.row_number} to a replacement participant`;
-    default: return `${event.kind} ${JSON.stringify(p)}`;
+    default: return `${event.kind}${summary(p)}`;
   }
 }
 
