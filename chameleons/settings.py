@@ -5,6 +5,8 @@ Settings are built explicitly (``Settings()`` in ``create_app``/CLI), never at i
 
 from __future__ import annotations
 
+import math
+from collections import Counter
 from pathlib import Path
 from typing import Literal
 
@@ -17,6 +19,21 @@ KNOWN_INSECURE_SECRETS = frozenset(
     {"", "change-me", "changeme", "change-me-db-password", "secret", "password", "postgres"}
 )
 DEFAULT_DATA_DIR = Path("data")
+
+
+MIN_SECRET_BITS = 128
+
+
+def estimated_bits(secret: str) -> float:
+    """An upper estimate of a key's entropy: its length times the Shannon entropy of its
+    characters. A key of one repeated character has 0 bits, however long; the README's
+    ``secrets.token_urlsafe(32)`` has about 210."""
+    if not secret:
+        return 0.0
+    counts = Counter(secret)
+    n = len(secret)
+    per_char = -sum(c / n * math.log2(c / n) for c in counts.values())
+    return n * per_char
 
 
 class InsecureSettingsError(ValueError):
@@ -39,7 +56,18 @@ class Settings(BaseSettings):
     public_url: str | None = Field(
         default=None, description="Base URL phones use (QR codes); default http://host:port"
     )
-    session_cookie_secure: bool = False
+    # None: Secure cookies exactly when CHAMELEONS_PUBLIC_URL is https (cookie_secure).
+    session_cookie_secure: bool | None = None
+    # How long a staff login lasts (server-side: logout and deactivation end it at once).
+    staff_session_hours: float = Field(default=12.0, gt=0, le=24 * 30)
+    # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
+    # incoming messages per second (sustained, and at once), and how long one send may wait
+    # for a client that is not reading before it is disconnected.
+    ws_queue_limit: int = Field(default=256, ge=8)
+    # (A page sends ~1 a second; a rehearsal's display bot answers every prompt at once.)
+    ws_message_rate: float = Field(default=200.0, gt=0)
+    ws_message_burst: int = Field(default=400, ge=1)
+    ws_send_timeout_s: float = Field(default=10.0, gt=0)
     login_max_failures: int = Field(default=5, ge=1)
     login_lockout_seconds: float = Field(default=30.0, ge=0)
 
@@ -112,6 +140,13 @@ class Settings(BaseSettings):
         return f"sqlite:///{(self.data_dir / 'chameleons.sqlite3').resolve()}"
 
     @property
+    def cookie_secure(self) -> bool:
+        """Send cookies over HTTPS only: on when the public URL is https, unless set."""
+        if self.session_cookie_secure is not None:
+            return self.session_cookie_secure
+        return bool(self.public_url and self.public_url.lower().startswith("https://"))
+
+    @property
     def effective_public_url(self) -> str:
         if self.public_url:
             return self.public_url.rstrip("/")
@@ -129,9 +164,10 @@ class Settings(BaseSettings):
                 "(from .env.example). Set a real password for PostgreSQL and in the URL."
             )
         secret = self.secret_key.get_secret_value()
-        if secret in KNOWN_INSECURE_SECRETS or len(secret) < 16:
+        if secret in KNOWN_INSECURE_SECRETS or estimated_bits(secret) < MIN_SECRET_BITS:
             raise InsecureSettingsError(
-                "CHAMELEONS_SECRET_KEY is missing, too short (< 16 characters) or an example "
+                "CHAMELEONS_SECRET_KEY is missing, guessable (under 128 bits by its length "
+                "and variety of characters) or an example "
                 "value. Generate one with: python -c 'import secrets; "
                 "print(secrets.token_urlsafe(32))' and set it in the environment or .env. "
                 "(`chameleons demo` runs without one, for trying the system out.)"

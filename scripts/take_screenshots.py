@@ -314,6 +314,13 @@ def analysis(page: Page, demo: Demo, shots: Shots, rehearsed: bool) -> None:
     shots.take_element(page.locator("section[aria-labelledby='plots-heading']"), "analysis-plots")
 
 
+def monitor(page: Page, demo: Demo, shots: Shots) -> None:
+    """The booths monitor after the session (the booth's worker and robot still reporting)."""
+    page.goto(f"{demo.base}/pi/monitor")
+    expect(page.locator(".booth .chips .chip").first).to_be_visible()
+    shots.take(page, "pi-monitor", height=520)
+
+
 def power(page: Page, demo: Demo, shots: Shots) -> None:
     """The power page after one simulation with its default (the paper's pilot) effects."""
     page.goto(f"{demo.base}/pi/power")
@@ -337,6 +344,7 @@ def main() -> None:
             run_session(browser, demo, shots)
             pi = pi_page(browser, demo)
             dashboard(pi, shots)
+            monitor(pi, demo, shots)
             analysis(pi, demo, shots, rehearse(demo, data_dir))
             power(pi, demo, shots)
             browser.close()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import secrets
+from collections import Counter
 from collections.abc import AsyncIterator
 from contextlib import AsyncExitStack, asynccontextmanager
 from pathlib import Path
@@ -15,9 +16,11 @@ from fastapi.templating import Jinja2Templates
 from starlette.middleware.sessions import SessionMiddleware
 
 from chameleons import __version__
+from chameleons.backend import logredact
 from chameleons.backend.analysis import pages as analysis_pages
 from chameleons.backend.auth import endpoints as auth_endpoints
 from chameleons.backend.auth import pages as auth_pages
+from chameleons.backend.auth import staff_pages
 from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
@@ -43,6 +46,7 @@ from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import pages as wizard_pages
+from chameleons.backend.wizard import typed_speech
 from chameleons.experiment.stats.rounding import fmt, fmt_p
 from chameleons.settings import Settings
 
@@ -62,6 +66,7 @@ def build_templates() -> Jinja2Templates:
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
     settings.require_secure()
+    logredact.install()
     engine = build_engine(settings.effective_database_url)
 
     @asynccontextmanager
@@ -82,6 +87,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.sessionmaker = build_sessionmaker(engine)
     app.state.templates = build_templates()
     app.state.live_hub = LiveHub()
+    app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code
     app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
@@ -92,8 +98,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         secret_key=settings.secret_key.get_secret_value() or secrets.token_urlsafe(32),
         session_cookie="chameleons_session",
         same_site="lax",
-        https_only=settings.session_cookie_secure,
-        max_age=12 * 3600,
+        https_only=settings.cookie_secure,
+        max_age=int(settings.staff_session_hours * 3600),
     )
 
     @app.exception_handler(PIRequiredError)
@@ -115,6 +121,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         health_endpoints.router,
         auth_pages.router,
         auth_endpoints.router,
+        staff_pages.router,
         study_endpoints.router,
         study_pages.router,
         session_endpoints.router,
@@ -134,6 +141,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wizard_pages.router,
         wizard_endpoints.router,
         wizard_live.router,
+        typed_speech.router,
     ):
         app.include_router(router)
     return app

@@ -11,6 +11,12 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
+# How long a SQLite writer waits for the write lock before "database is locked". Writers
+# queue one at a time (BEGIN IMMEDIATE); 50 phones submitting at once on a loaded 2-core
+# machine needed more than the 5 s this was (bench/server_bench.py: 33 of 50 burst
+# submissions failed); a lab's request never waits that long unless the disk stalls.
+SQLITE_BUSY_TIMEOUT_S = 30
+
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
     cursor = dbapi_connection.cursor()
@@ -18,7 +24,7 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
     # Deleted rows (a withdrawal) are overwritten with zeros, not left in free pages.
     cursor.execute("PRAGMA secure_delete=ON")
     cursor.execute("PRAGMA journal_mode=WAL")
-    cursor.execute("PRAGMA busy_timeout=5000")
+    cursor.execute(f"PRAGMA busy_timeout={SQLITE_BUSY_TIMEOUT_S * 1000}")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.close()
 
@@ -29,8 +35,28 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
 # threads, threads waiting for a connection could hold every thread token while the
 # requests holding the connections wait for a token (idle in transaction until the pool's
 # timeout: seen with 15 connections and 40 threads at 50 phones on PostgreSQL).
-POOL_SIZE = 10
-POOL_OVERFLOW = 30
+# Five kept open when idle (SQLAlchemy's default), the rest opened under load and closed
+# when returned.
+POOL_SIZE = 5
+POOL_OVERFLOW = 35
+
+
+def write_transaction(db: Session) -> None:
+    """Make ``db``'s transaction a writer now, before it reads the state it will change.
+
+    PostgreSQL serialises such changes with the row lock of ``SELECT ... FOR UPDATE``; on
+    SQLite that clause does nothing, so two requests could both read "pending" and both
+    decide. There the transaction takes the database's write lock first (``BEGIN
+    IMMEDIATE``; a second writer waits up to the busy timeout) and then reads what the
+    previous writer committed. Reads before this point ran outside a transaction (the
+    driver begins one only before a write), and a transaction that has written already
+    holds the lock."""
+    if db.get_bind().dialect.name != "sqlite":
+        return
+    connection = db.connection()
+    driver = connection.connection.driver_connection
+    if driver is not None and not driver.in_transaction:
+        connection.exec_driver_sql("BEGIN IMMEDIATE")
 
 
 def build_engine(url: str) -> Engine:
@@ -41,7 +67,8 @@ def build_engine(url: str) -> Engine:
         memory = not parsed.database or parsed.database == ":memory:"
         if not memory:
             Path(parsed.database or "").parent.mkdir(parents=True, exist_ok=True)
-        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 5},
+        engine = create_engine(url, connect_args={"check_same_thread": False,
+                                                  "timeout": SQLITE_BUSY_TIMEOUT_S},
                                **({} if memory else pool))  # fmt: skip
         event.listen(engine, "connect", _sqlite_pragmas)
         return engine

@@ -13,7 +13,7 @@ import uvicorn
 from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons.backend.app import create_app
-from chameleons.backend.display.tokens import display_path, signing_key
+from chameleons.backend.display.links import current_path
 from chameleons.cli.common import load_settings
 from chameleons.cli.embedded import (
     DataDirInUseError,
@@ -107,7 +107,8 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     data = _prepare(settings)
     app = create_app(settings)
     base = settings.effective_public_url
-    display_url = base + display_path(signing_key(app), settings.embedded_worker_booth)
+    path = current_path(app, settings.embedded_worker_booth)
+    display_url = base + path if path else "(retired: issue a new link on /display)"
     _print_welcome(base, data, display_url, ports, simulate_face)
     simulator = start_face_simulator(settings) if simulate_face else None
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,

@@ -27,6 +27,7 @@ from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions import service as sessions
 from chameleons.backend.sessions.flow import load as load_flow
 from chameleons.backend.studies import service as studies
+from chameleons.cli.lifeline import child_env
 from chameleons.experiment.study import load_default_study
 from chameleons.settings import Settings
 
@@ -154,7 +155,8 @@ def start_face_simulator(settings: Settings, port: int | None = None) -> subproc
     """A synthetic face sent as Live Link Face UDP to the local worker (the iPhone's part)."""
     target = f"127.0.0.1:{port or settings.livelink_port}"
     command = [sys.executable, "-m", "chameleons", "simulate-face", "--target", target]
-    return subprocess.Popen(command, stdin=subprocess.DEVNULL)
+    # It ends with this process, even on kill -9 (lifeline.die_with_parent in the child).
+    return subprocess.Popen(command, stdin=subprocess.DEVNULL, env=child_env())
 
 
 def stop_process(process: subprocess.Popen[bytes], timeout: float = 5.0) -> None:

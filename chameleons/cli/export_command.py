@@ -36,16 +36,29 @@ from chameleons.prompts.locations import prompts_root
 )
 @click.option("--include-rehearsal", is_flag=True, help="Include sessions marked as rehearsals.")
 @click.option("--study", "study_id", type=int, help="Study id (default: the newest active).")
+@click.option(
+    "--raw-csv",
+    is_flag=True,
+    help="Write CSV text cells as stored, without the leading ' that keeps a spreadsheet "
+    "from running = + - @ cells as formulas (for R/pandas only).",
+)
 def export(
-    out: Path, formats: tuple[ExportFormat, ...], include_rehearsal: bool, study_id: int | None
+    out: Path,
+    formats: tuple[ExportFormat, ...],
+    include_rehearsal: bool,
+    study_id: int | None,
+    raw_csv: bool,
 ) -> None:
     """Export participants, interactions, suggestions, questionnaire, scores and events."""
     settings = load_settings()
     engine = build_engine(settings.effective_database_url)
     request = ExportRequest(
-        study_id=study_id, formats=("csv", *formats), include_rehearsal=include_rehearsal,
+        study_id=study_id,
+        formats=("csv", *formats),
+        include_rehearsal=include_rehearsal,
+        raw_csv=raw_csv,
         prompts_dir=prompts_root(settings),
-    )  # fmt: skip
+    )
     try:
         with build_sessionmaker(engine)() as db:
             plan = export_to_directory(db, request, out)

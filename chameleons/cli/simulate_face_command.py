@@ -10,6 +10,7 @@ from typing import cast
 import click
 
 from chameleons.cli.common import load_settings
+from chameleons.cli.lifeline import die_with_parent
 from chameleons.worker.ingest.livelink import rotation_factor
 from chameleons.worker.simulate import (
     FaceSample,
@@ -87,6 +88,7 @@ def simulate_face(protocol: str, target: str | None, fps: float, duration: float
     """Send a plausible synthetic face (blinks, head sway, smiles, talking) or a Live Link
     Face take to a worker, as a phone would. Rotations use the livelink_rotation_scale
     setting, so the worker reads back the degrees that were sent."""
+    die_with_parent()  # started by `chameleons demo`: never outlive it (even kill -9)
     settings = load_settings()
     default_port = settings.livelink_port if protocol == "livelink" else settings.facecapturex_port
     host, port = parse_target(target, default_port)

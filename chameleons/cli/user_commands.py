@@ -1,12 +1,18 @@
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import click
 from pydantic import ValidationError
+from sqlalchemy import select
+from sqlalchemy.orm import Session
 
-from chameleons.backend.auth import service
+from chameleons.backend.auth import repository, service, sessions
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
 from chameleons.backend.migrate import current_revision, head_revision
+from chameleons.backend.models import StaffUser
 from chameleons.cli.common import load_settings
 
 
@@ -32,6 +38,17 @@ def user_add(name: str, role: str, password: str | None) -> None:
     except ValidationError as exc:
         problems = "; ".join(f"{e['loc'][0]}: {e['msg']}" for e in exc.errors())
         raise click.ClickException(problems) from exc
+    with _database() as db:
+        try:
+            service.create_user(db, data)
+        except service.UserExistsError as exc:
+            raise click.ClickException(str(exc)) from exc
+    click.echo(f"created {role} account {name!r}")
+
+
+@contextmanager
+def _database() -> Iterator[Session]:
+    """A session on the configured database (committed on success); refuses an old schema."""
     settings = load_settings()
     engine = build_engine(settings.effective_database_url)
     try:
@@ -40,9 +57,44 @@ def user_add(name: str, role: str, password: str | None) -> None:
                 "The database is not set up (or not up to date): run `chameleons db upgrade` first."
             )
         with session_scope(build_sessionmaker(engine)) as db:
-            service.create_user(db, data)
-    except service.UserExistsError as exc:
-        raise click.ClickException(str(exc)) from exc
+            yield db
     finally:
         engine.dispose()
-    click.echo(f"created {role} account {name!r}")
+
+
+def _find(db: Session, name: str) -> StaffUser:
+    account = repository.get_by_username(db, name)
+    if account is None:
+        raise click.ClickException(f"there is no staff account {name!r}")
+    return account
+
+
+@user.command("deactivate")
+@click.argument("name")
+def user_deactivate(name: str) -> None:
+    """Deactivate account NAME: its sessions end at once and it cannot log in."""
+    with _database() as db:
+        service.set_active(db, _find(db, name), active=False)
+    click.echo(f"deactivated {name!r} and ended its sessions")
+
+
+@user.command("activate")
+@click.argument("name")
+def user_activate(name: str) -> None:
+    """Let account NAME log in again."""
+    with _database() as db:
+        service.set_active(db, _find(db, name), active=True)
+    click.echo(f"activated {name!r}")
+
+
+@user.command("list")
+def user_list() -> None:
+    """Staff accounts with role, state and open sessions."""
+    with _database() as db:
+        counts = sessions.open_counts(db)
+        for account in db.scalars(select(StaffUser).order_by(StaffUser.username)):
+            state = "active" if account.is_active else "deactivated"
+            click.echo(
+                f"{account.username}\t{account.role}\t{state}\t"
+                f"{counts.get(account.id, 0)} open session(s)"
+            )

@@ -8,8 +8,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-ItemType = Literal["differential", "agreement", "text"]
-Phase = Literal["interaction", "final"]
+from chameleons.experiment.procedure import Procedure
+
+ItemType = Literal["differential", "agreement", "text", "choice", "robot"]
+Phase = Literal["before", "interaction", "final"]
 SuggestionRule = Literal["best_move", "up_only"]
 NamePairing = Literal["per_actor", "per_interaction"]
 FacePairing = Literal["independent", "per_actor"]
@@ -134,9 +136,20 @@ class Personas:
 
 
 @dataclass(frozen=True)
+class Choice:
+    """One answer of a ``choice`` item: ``id`` is what the data record, ``label`` what the
+    participant reads."""
+
+    id: str
+    label: str
+
+
+@dataclass(frozen=True)
 class QuestionnaireItem:
     """A question. ``differential``: anchors ``left`` (1) and ``right`` (max);
-    ``agreement``: a statement rated on the scale; ``text``: an open answer.
+    ``agreement``: a statement rated on the scale; ``text``: an open answer; ``choice``: one
+    of ``options``; ``robot``: one of the robots the participant met (or "don't know"), which
+    the export resolves to that robot's condition (a manipulation check).
     ``required``: the phone refuses the page until it is answered (the loader's default:
     rated items required, open questions optional, as ethics boards expect); a skipped
     item is stored as skipped, never as a default value."""
@@ -149,10 +162,12 @@ class QuestionnaireItem:
     reverse: bool = False
     identifying: bool = False
     required: bool = True
+    options: tuple[Choice, ...] = ()
 
     @property
     def numeric(self) -> bool:
-        return self.type != "text"
+        """Rated on the questionnaire's scale (and so scored)."""
+        return self.type in ("differential", "agreement")
 
 
 @dataclass(frozen=True)
@@ -200,6 +215,8 @@ class Study:
     # robot name -> gender, for names the study gives one (match_gender keeps them apart)
     name_genders: dict[str, str] = field(default_factory=dict, hash=False, compare=False)
     warnings: tuple[str, ...] = field(default=(), hash=False, compare=False)
+    # consent and debriefing pages (none for a study that does not declare them)
+    procedure: Procedure = field(default_factory=Procedure, hash=False, compare=True)
 
     @property
     def condition_ids(self) -> tuple[str, ...]:

@@ -22,6 +22,7 @@ import yaml
 from chameleons.experiment import personas, sections
 from chameleons.experiment.lines import line_index, line_of
 from chameleons.experiment.model import Study
+from chameleons.experiment.procedure import procedure_config, read_procedure
 from chameleons.experiment.reader import SLUG, Reader
 from chameleons.experiment.wording import duplicate_wording
 
@@ -44,6 +45,7 @@ TOP_LEVEL_OPTIONAL = [
     "robot_names",
     "personas",
     "questionnaires",
+    "procedure",
 ]
 SUGGESTION_RULES = ("best_move", "up_only")
 # A snapshot stored before the rule was a setting was collected under the up-only rule.
@@ -188,6 +190,7 @@ def _build(
         "robot_names": names,
         "personas": sections.read_personas(reader, top.get("personas"), snapshot=snapshot),
         "questionnaires": sections.read_questionnaires(reader, top.get("questionnaires", {})),
+        "procedure": read_procedure(reader, top.get("procedure")),
     }
     _check_design_fits(reader, parts)
     if not reader.problems:
@@ -210,9 +213,7 @@ def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> 
     default = LEGACY_SUGGESTION_RULE if snapshot else SUGGESTION_RULES[0]
     rule = top.get("suggestion_rule", default)
     if rule not in SUGGESTION_RULES:
-        reader.problem(
-            "suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}"
-        )
+        reader.problem("suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}")
         return default
     return str(rule)
 
@@ -272,6 +273,7 @@ def _config_of(parts: dict[str, Any], name_genders: dict[str, str]) -> dict[str,
         "robot_names": names,
         "personas": asdict(parts["personas"]),
         "questionnaires": [_questionnaire_config(q) for q in parts["questionnaires"]],
+        **({"procedure": p} if (p := procedure_config(parts["procedure"])) else {}),
     }
 
 
@@ -283,6 +285,10 @@ def _questionnaire_config(questionnaire: Any) -> dict[str, Any]:
         entry = {k: v for k, v in asdict(item).items() if v != ""}
         if not item.numeric:
             entry.pop("reverse", None)
+        if item.options:
+            entry["options"] = [asdict(option) for option in item.options]
+        else:
+            entry.pop("options")
         if item.required == (item.type != "text"):
             # The default is not stored, so a snapshot from before the setting keeps its hash.
             entry.pop("required")

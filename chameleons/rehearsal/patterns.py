@@ -121,6 +121,9 @@ class Persona:
                 answers[item["id"]] = self.rng.choice(FINAL_ANSWERS if behaviour is None
                                                       else TEXT_ANSWERS)  # fmt: skip
                 continue
+            if item.get("options"):  # a choice or a robot item: one of its answers
+                answers[item["id"]] = self.rng.choice(item["options"])["id"]
+                continue
             value = self._point(level, points)
             reverse = keying(str(questionnaire["id"]), str(item["id"]))
             answers[item["id"]] = points + 1 - value if reverse else value

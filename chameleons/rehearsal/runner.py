@@ -151,6 +151,8 @@ def rehearse(target: Target, options: Options, progress: Progress | None = None)
         display = _open_display(target, http, say) if options.display else None
         try:
             summary = _sessions(target, options, staff, phone_http, study, say)
+            if display is not None:  # every play the server sent, before the page closes
+                display.wait_for_received("play_audio", summary.tally.prompts_played)
         finally:
             if display is not None:
                 display.close()

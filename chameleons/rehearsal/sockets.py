@@ -129,6 +129,14 @@ class DisplayScreen(_Reader):
         self._send({"type": "speech", "event": "start", "audio_delay_ms": 0.0, **ids})
         self._send({"type": "speech", "event": "end", "reason": "ended", **ids})
 
+    def wait_for_received(self, kind: str, count: int, timeout: float = 60.0) -> bool:
+        """Whether ``count`` messages of ``kind`` have arrived within ``timeout`` (the last
+        play of a run may still be on its way when the sessions end)."""
+        with self._condition:
+            return self._condition.wait_for(
+                lambda: self.closed or self.received[kind] >= count, timeout
+            ) and (self.received[kind] >= count)
+
     def wait_for_frames(self, count: int, timeout: float = 10.0) -> bool:
         """Whether ``count`` face frames of the virtual robot arrived within ``timeout``."""
         with self._condition:

@@ -61,7 +61,12 @@ def test_upgrading_sqlite_keeps_every_row(tmp_path: Path) -> None:
     with engine.begin() as connection:
         for statement in ROWS_AT_0001:
             connection.exec_driver_sql(statement)
-    tables = [table.name for table in Base.metadata.sorted_tables if table.name != "staff_user"]
+    at_0001 = set(inspect(engine).get_table_names())  # later tables cannot have old rows
+    tables = [
+        table.name
+        for table in Base.metadata.sorted_tables
+        if table.name != "staff_user" and table.name in at_0001
+    ]
     with engine.connect() as connection:
         before = {
             t: connection.exec_driver_sql(f'SELECT COUNT(*) FROM "{t}"').scalar() for t in tables
@@ -108,7 +113,7 @@ def test_upgraded_sqlite_never_reuses_ids(tmp_path: Path) -> None:
         for statement in ROWS_AT_0001:
             connection.exec_driver_sql(statement)
     engine.dispose()
-    upgrade(url, "0003_i13_optional_items")
+    upgrade(url, "0004_i13_consent")
     with engine.begin() as connection:
         connection.exec_driver_sql(SESSION_2)
     upgrade(url)
@@ -159,7 +164,7 @@ ROWS_AT_0002 = [
 def test_upgraded_postgres_continues_after_the_old_sequence(postgres_server: str) -> None:
     """SERIAL becomes an identity column that starts where the sequence was, not at
     MAX(id)+1 (which would reuse an id deleted from the top before the upgrade)."""
-    upgrade(postgres_server, "0003_i13_optional_items")
+    upgrade(postgres_server, "0004_i13_consent")
     engine = build_engine(postgres_server)
     with engine.begin() as connection:
         for statement in ROWS_AT_0002:

@@ -83,12 +83,13 @@ def _export(settings: Settings, out: Path) -> dict[str, Table]:
 def _check_row_counts(tables: dict[str, Table], spec: Study) -> None:
     per_interaction = sum(len(q.items) for q in spec.questionnaires_for("interaction"))
     final = sum(len(q.items) for q in spec.questionnaires_for("final"))
+    before = sum(len(q.items) for q in spec.questionnaires_for("before"))
     counts = {name: len(rows) for name, rows in tables.items()}
     assert counts == {
         "participants": PARTICIPANTS,
         "interactions": 3 * PARTICIPANTS,
         "suggestions": 9 * PARTICIPANTS,
-        "questionnaire": PARTICIPANTS * (3 * per_interaction + final),
+        "questionnaire": PARTICIPANTS * (before + 3 * per_interaction + final),
         "scores": 3 * PARTICIPANTS,
         "events": counts["events"],
     }

@@ -102,7 +102,10 @@ def test_default_questionnaires() -> None:
     assert all(item.left and item.right for item in credibility.items)
     experience = study.questionnaire("experience").items
     assert [(q.id, q.type, q.identifying) for q in experience] == [("experience", "text", True)]
-    assert [q.id for q in study.questionnaire("final").items] == ["differences", "comments"]
+    assert [q.id for q in study.questionnaire("final").items] == [
+        "differences", "comments", "noticed_imitation", "imitating_robot"
+    ]  # fmt: skip
+    assert [q.id for q in study.questionnaires_for("before")] == ["demographics"]
     assert study.measures == ("accepted", "credibility", "likeability", "trust")
 
 

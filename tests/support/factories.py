@@ -150,6 +150,7 @@ def add_completed_participant(
         phone_token=f"token-{study.id}-{code}-{rng.getrandbits(48):x}",
         short_code=f"{study.id % 100:02d}{code}{rng.randint(10, 99)}"[:16],
         is_rehearsal=rehearsal,
+        consent_at=start,
         started_at=start,
         completed_at=start + timedelta(minutes=45),
     )
@@ -164,18 +165,26 @@ def add_completed_participant(
             db, study, spec, session, planned, start, level, rng, recordings_dir, result, effects
         )
     final_time = start + timedelta(minutes=42)
-    for questionnaire in spec.questionnaires_for("final"):
+    answers = [
+        *((q, -1, start) for q in spec.questionnaires_for("before")),
+        *((q, 0, final_time) for q in spec.questionnaires_for("final")),
+    ]
+    for questionnaire, position, moment in answers:
         for item in questionnaire.items:
+            value, text = _closed_answer(item, len(row.interactions), rng)
             db.add(
                 QuestionnaireResponse(
                     session_id=session.id,
                     interaction_id=None,
-                    position=0,
+                    position=position,
                     questionnaire=questionnaire.id,
                     version=questionnaire.version,
                     item=item.id,
-                    text=f'Answer to {item.id} by {code}, with a comma, and a "quote".',
-                    created_at=final_time,
+                    value=value,
+                    text=text
+                    if item.type != "text"
+                    else f'Answer to {item.id} by {code}, with a comma, and a "quote".',
+                    created_at=moment,
                 )
             )
     _event(db, study, session, None, "session_completed", start + timedelta(minutes=45), {})
@@ -403,3 +412,12 @@ def add_event(
     db.add(event)
     db.flush()
     return event
+
+
+def _closed_answer(item: Any, robots: int, rng: random.Random) -> tuple[int | None, str | None]:
+    """A choice: one of its options (text); a robot item: one of the robots met (value)."""
+    if item.type == "choice":
+        return None, rng.choice(item.options).id
+    if item.type == "robot":
+        return rng.randint(1, robots), None
+    return None, None

@@ -247,6 +247,7 @@ def analysis_api(
         "view": view,
         "error": result.error,
         "analysis": result.analysis.to_dict() if result.analysis else None,
+        "manipulation_check": [summary.to_dict() for summary in result.manipulation],
         "error_scores": errors,
         "latex": result.latex,
     }

@@ -39,6 +39,7 @@ from chameleons.experiment.stats import (
     render_text,
 )
 from chameleons.experiment.stats.effect_sizes import BootstrapOptions
+from chameleons.experiment.stats.manipulation import ItemSummary, manipulation_check
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
 from chameleons.experiment.study import study_from_config
@@ -74,7 +75,6 @@ class StudyScores:
     def measures(self) -> tuple[str, ...]:
         return self.spec.measures
 
-
     @property
     def participant_count(self) -> int:
         return len({row["participant"] for row in self.rows})
@@ -86,6 +86,15 @@ class StudyAnalysis:
     analysis: Analysis | None
     error: str | None
     errors: dict[str, dict[str, Descriptive]]
+
+    @property
+    def manipulation(self) -> list[ItemSummary]:
+        """The final questionnaire's closed answers (the manipulation check) of the
+        analysis's participants, the named robots counted by condition."""
+        scores = self.scores
+        labels = {c: scores.condition_labels.get(c, c) for c in scores.condition_order}
+        kept = None if self.analysis is None else set(self.analysis.participants)
+        return manipulation_check(scores.spec.questionnaires, labels, scores.answers, kept)
 
     @property
     def latex(self) -> str:

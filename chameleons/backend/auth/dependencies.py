@@ -7,11 +7,9 @@ from urllib.parse import quote
 
 from fastapi import Depends, HTTPException, Request, status
 
-from chameleons.backend.auth import repository
+from chameleons.backend.auth import sessions
 from chameleons.backend.dependencies import DbSession
 from chameleons.backend.models import StaffUser
-
-SESSION_USER_KEY = "staff_id"
 
 
 class LoginRequiredError(Exception):
@@ -27,9 +25,8 @@ def _is_api(request: Request) -> bool:
 
 
 def current_staff(request: Request, db: DbSession) -> StaffUser:
-    user_id = request.session.get(SESSION_USER_KEY)
-    user = repository.get_by_id(db, user_id) if isinstance(user_id, int) else None
-    if user is None or not user.is_active:
+    user = sessions.staff_of(db, request.session)
+    if user is None:
         if _is_api(request):
             raise HTTPException(status.HTTP_401_UNAUTHORIZED, "Log in as staff first.")
         target = request.url.path + (f"?{request.url.query}" if request.url.query else "")

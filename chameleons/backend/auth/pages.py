@@ -7,9 +7,9 @@ from typing import Annotated
 from fastapi import APIRouter, Depends, Form, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
-from chameleons.backend.auth import service
+from chameleons.backend.auth import service, sessions
 from chameleons.backend.auth.csrf import rotate_csrf_token, verify_csrf
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY, CurrentStaff
+from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.dependencies import DbSession, Templates
 
@@ -41,7 +41,7 @@ def login(
 ) -> Response:
     throttle: LoginThrottle = request.app.state.login_throttle
     client = request.client.host if request.client else "unknown"
-    keys = (f"user:{username.lower()}", f"ip:{client}")
+    keys = LoginThrottle.keys(username, client)
     wait = throttle.retry_after(*keys)
     error: str | None = None
     status_code = status.HTTP_200_OK
@@ -53,7 +53,8 @@ def login(
         if user is not None:
             throttle.reset(*keys)
             request.session.clear()
-            request.session[SESSION_USER_KEY] = user.id
+            hours = request.app.state.settings.staff_session_hours
+            request.session[sessions.SESSION_KEY] = sessions.start(db, user, hours)
             rotate_csrf_token(request)
             return RedirectResponse(_safe_next(next), status_code=status.HTTP_303_SEE_OTHER)
         throttle.record_failure(*keys)
@@ -68,7 +69,17 @@ def login(
 
 
 @router.post("/logout", dependencies=[Depends(verify_csrf)])
-def logout(request: Request) -> Response:
+def logout(request: Request, db: DbSession) -> Response:
+    """Ends the session on the server too: the cookie, if kept or replayed, is dead."""
+    sessions.end(db, request.session)
+    request.session.clear()
+    return RedirectResponse("/login", status_code=status.HTTP_303_SEE_OTHER)
+
+
+@router.post("/logout/everywhere", dependencies=[Depends(verify_csrf)])
+def logout_everywhere(request: Request, user: CurrentStaff, db: DbSession) -> Response:
+    """End every session of this account (a lost laptop, a shared browser)."""
+    sessions.end_all(db, user.id, "logged out everywhere")
     request.session.clear()
     return RedirectResponse("/login", status_code=status.HTTP_303_SEE_OTHER)
 
@@ -81,6 +92,7 @@ STAFF_LINKS = (
     ("Analysis", "/pi/analysis", "Table I, Friedman tests, plots, LaTeX.", True),
     ("Export", "/pi/export", "Data for R and pandas.", True),
     ("Study and plan", "/studies", "Create the study and its counterbalancing plan.", True),
+    ("Staff accounts", "/pi/staff", "Add, deactivate and log out staff accounts.", True),
 )
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from difflib import SequenceMatcher
 from functools import cache
+from pathlib import Path
 
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
@@ -15,6 +17,32 @@ def _dummy_hash() -> str:
     """Verified against when the user does not exist, so timing does not reveal valid
     usernames. Made on first use, not at import (hashing costs tens of milliseconds)."""
     return _hasher.hash("not-a-real-password")
+
+
+MIN_PASSWORD_LENGTH = 8  # Django's MinimumLengthValidator default; NIST SP 800-63B's floor
+_COMMON_FILE = Path(__file__).with_name("common_passwords.txt")
+
+
+@cache
+def _common() -> frozenset[str]:
+    lines = _COMMON_FILE.read_text(encoding="utf-8").splitlines()
+    return frozenset(line.strip().lower() for line in lines if line and not line.startswith("#"))
+
+
+def password_problem(password: str, username: str = "") -> str | None:
+    """Why a new staff password is refused (None when it is fine): Django's validators
+    (common passwords, similarity to the user name, all digits) in short."""
+    lowered = password.lower()
+    if lowered in _common():
+        return "This password is too common: choose one that is not on breach lists."
+    # Django's UserAttributeSimilarityValidator: a password too like the user name.
+    if username and SequenceMatcher(a=lowered, b=username.lower()).quick_ratio() >= 0.7:
+        return "The password is too similar to the user name."
+    if password.isdigit():
+        return "The password must not be only digits."
+    if len(set(password)) < 4:
+        return "The password needs more different characters."
+    return None
 
 
 def hash_password(password: str) -> str:

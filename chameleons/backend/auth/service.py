@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from sqlalchemy.orm import Session
 
-from chameleons.backend.auth import repository
+from chameleons.backend.auth import repository, sessions
 from chameleons.backend.auth.passwords import hash_password, verify_password
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.models import StaffUser
@@ -25,6 +25,14 @@ def create_user(db: Session, data: StaffUserCreate) -> StaffUser:
 
 def set_password(db: Session, user: StaffUser, password: str) -> None:
     user.password_hash = hash_password(password)
+    db.flush()
+
+
+def set_active(db: Session, user: StaffUser, active: bool) -> None:
+    """Deactivating ends the account's sessions at once; it cannot log in until reactivated."""
+    user.is_active = active
+    if not active:
+        sessions.end_all(db, user.id, "deactivated")
     db.flush()
 
 

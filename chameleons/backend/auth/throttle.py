@@ -1,4 +1,13 @@
-"""Slow down repeated failed logins: after N failures a key is locked out for a while."""
+"""Slow down password guessing without letting anyone lock a colleague out.
+
+Failures are counted per (username, source address) pair and per source address. A pair
+locks after ``max_failures`` failures in a row, for ``lockout_seconds`` doubling with each
+further failure (at most ``MAX_LOCKOUT_SECONDS``); an address that fails on many usernames
+(spraying) locks after ``ADDRESS_FACTOR`` times as many. A stranger failing on the PI's
+name locks only their own address, never the PI's (OWASP Authentication Cheat Sheet:
+"account lockout" can be abused for denial of service; Django-axes locks on
+username + address for the same reason). A success clears the pair.
+"""
 
 from __future__ import annotations
 
@@ -7,36 +16,62 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from threading import Lock
 
+MAX_LOCKOUT_SECONDS = 15 * 60.0
+ADDRESS_FACTOR = 4
+
+
+@dataclass
+class _Record:
+    failures: int = 0
+    last: float = 0.0
+
 
 @dataclass
 class LoginThrottle:
     max_failures: int
     lockout_seconds: float
     clock: Callable[[], float] = time.monotonic
-    _failures: dict[str, list[float]] = field(default_factory=dict)
+    _records: dict[str, _Record] = field(default_factory=dict)
     _lock: Lock = field(default_factory=Lock)
+
+    @staticmethod
+    def keys(username: str, address: str) -> tuple[str, str]:
+        return (f"pair:{username.lower()}|{address}", f"address:{address}")
+
+    def _limit(self, key: str) -> int:
+        factor = ADDRESS_FACTOR if key.startswith("address:") else 1
+        return self.max_failures * factor
+
+    def _wait(self, key: str, now: float) -> float:
+        record = self._records.get(key)
+        if record is None:
+            return 0.0
+        over = record.failures - self._limit(key)
+        if over < 0:
+            if now - record.last > self.lockout_seconds:  # a quiet spell forgives them
+                del self._records[key]
+            return 0.0
+        lockout = min(self.lockout_seconds * 2.0**over, MAX_LOCKOUT_SECONDS)
+        wait = record.last + lockout - now
+        if wait <= 0 and now - record.last > MAX_LOCKOUT_SECONDS:
+            del self._records[key]
+        return max(0.0, wait)
 
     def retry_after(self, *keys: str) -> float:
         """Seconds until these keys may try again (0 when not locked out)."""
         now = self.clock()
         with self._lock:
-            waits = [self._wait(key, now) for key in keys]
-        return max(waits, default=0.0)
-
-    def _wait(self, key: str, now: float) -> float:
-        recent = [t for t in self._failures.get(key, []) if now - t < self.lockout_seconds]
-        self._failures[key] = recent
-        if len(recent) < self.max_failures:
-            return 0.0
-        return max(0.0, recent[-self.max_failures] + self.lockout_seconds - now)
+            return max((self._wait(key, now) for key in keys), default=0.0)
 
     def record_failure(self, *keys: str) -> None:
         now = self.clock()
         with self._lock:
             for key in keys:
-                self._failures.setdefault(key, []).append(now)
+                record = self._records.setdefault(key, _Record())
+                record.failures += 1
+                record.last = now
 
     def reset(self, *keys: str) -> None:
         with self._lock:
             for key in keys:
-                self._failures.pop(key, None)
+                self._records.pop(key, None)

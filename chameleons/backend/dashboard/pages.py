@@ -31,6 +31,7 @@ FLAG_LABELS = {
     "outage": "outage",
     "not_voiced": "prompt not voiced",
     "latency": "slow wizard/worker",
+    "typed_speech": "typed speech",
 }
 BAD_FLAGS = ("deviation", "outage", "ended_early", "excluded", "partial", "not_voiced")
 

@@ -7,7 +7,9 @@
 - excluded: the PI left the participant out of the analysis (reason);
 - not_voiced: a prompt the robot did not speak (the display or robot reported it not
   played: ``prompt.not_voiced``, ``prompt.not_played``, or ``prompt.speech_end`` with a
-  reason such as ``autoplay_blocked``).
+  reason such as ``autoplay_blocked``);
+- typed_speech: the wizard typed a sentence for the robot because no prompt fitted (a
+  deviation from the scripted prompts, with its text).
 """
 
 from __future__ import annotations
@@ -64,6 +66,19 @@ def run_flags(
             text = f"excluded from the analysis: {participant.exclusion_reason}"
             add(session.id, "excluded", None, text, None)
     _not_voiced(events, {i.id: i.position for i in interactions}, add)
+    _typed_speech(events, add)
+
+
+def _typed_speech(events: list[Event], add: AddFlag) -> None:
+    for event in events:
+        if event.kind != "wizard.typed_speech" or event.session_id is None:
+            continue
+        payload: dict[str, Any] = event.payload or {}
+        position = payload.get("position")
+        where = f"interaction {position}" if position else "session"
+        add(event.session_id, "typed_speech", position,
+            f"{where}: the robot said a typed sentence: \"{payload.get('text', '')}\"",
+            event.id)  # fmt: skip
 
 
 def _where(interactions: list[Interaction]) -> int | None:

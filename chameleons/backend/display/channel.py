@@ -8,12 +8,13 @@ forwards speech events to the worker).
 
 The current face and the last face frame of each booth are kept, so a page that
 (re)connects shows the right character at once. A slow page loses old face/head frames,
-never control messages.
+never control messages; a page that does not read even those is disconnected.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import inspect
 import logging
 import threading
@@ -25,6 +26,7 @@ from typing import Any
 from fastapi import FastAPI
 
 from chameleons.backend.display.protocol import DROPPABLE_TYPES, Message, set_face_message
+from chameleons.backend.events.guard import POLICY_VIOLATION, SocketClosed, slow_client
 
 log = logging.getLogger(__name__)
 
@@ -32,37 +34,86 @@ Listener = Callable[[str, Message], Awaitable[None] | None]
 DEFAULT_QUEUE_LIMIT = 256
 
 
-class Subscription:
-    """One connected page's outgoing queue. Only touched on the event loop's thread."""
+class _Entry:
+    __slots__ = ("alive", "message")
 
-    def __init__(self, booth: str, limit: int) -> None:
+    def __init__(self, message: Message) -> None:
+        self.message = message
+        self.alive = True
+
+
+class Subscription:
+    """One connected page's outgoing queue. Only touched on the event loop's thread.
+
+    Bounded, and O(1) (amortised) per message whatever the backlog: frames (face/head)
+    are kept in a second queue of their own, so the oldest one is found without a scan and
+    dropped in place (lazily: marked dead, skipped by ``get``). A queue full of control
+    messages means the page is not reading: ``overflowed`` is set and ``get`` raises
+    :class:`~chameleons.backend.events.guard.SocketClosed`, so the socket is closed.
+    """
+
+    def __init__(self, booth: str, limit: int, by_link: bool = False) -> None:
         self.booth = booth
         self.limit = limit
+        self.by_link = by_link  # let in with the booth's link (not a staff login)
         self.dropped = 0
-        self._items: deque[Message] = deque()
+        self.overflowed = False
+        self.revoked: str | None = None
+        self._items: deque[_Entry] = deque()
+        self._frames: deque[_Entry] = deque()  # the droppable entries of _items, in order
+        self._live = 0
         self._ready = asyncio.Event()
 
     def put(self, message: Message) -> None:
-        full = len(self._items) >= self.limit and not self._drop_oldest_frame()
-        if full and message.get("type") in DROPPABLE_TYPES:  # control messages always go
-            self.dropped += 1
+        if self.overflowed:
             return
-        self._items.append(message)
+        droppable = message.get("type") in DROPPABLE_TYPES
+        if self._live >= self.limit and not self._drop_oldest_frame():
+            if droppable:
+                self.dropped += 1
+                return
+            self.overflowed = True  # control messages are never dropped: shed the page
+            self._ready.set()
+            return
+        entry = _Entry(message)
+        self._items.append(entry)
+        if droppable:
+            self._frames.append(entry)
+        self._live += 1
+        if len(self._items) > 2 * self.limit:  # dead entries: compact, amortised O(1)
+            self._items = deque(e for e in self._items if e.alive)
         self._ready.set()
 
     def _drop_oldest_frame(self) -> bool:
-        for i, queued in enumerate(self._items):
-            if queued.get("type") in DROPPABLE_TYPES:
-                del self._items[i]
+        while self._frames:
+            entry = self._frames.popleft()
+            if entry.alive:
+                entry.alive = False
+                self._live -= 1
                 self.dropped += 1
                 return True
         return False
 
+    def revoke(self, reason: str) -> None:
+        self.revoked = reason
+        self._ready.set()
+
     async def get(self) -> Message:
-        while not self._items:
+        while True:
+            if self.revoked is not None:
+                raise SocketClosed(POLICY_VIOLATION, self.revoked)
+            if self.overflowed:
+                raise slow_client(f"{self.limit} messages queued")
+            while self._items:
+                entry = self._items.popleft()
+                if entry.alive:
+                    entry.alive = False
+                    self._live -= 1
+                    if self._frames and self._frames[0] is entry:
+                        self._frames.popleft()
+                    return entry.message
             self._ready.clear()
             await self._ready.wait()
-        return self._items.popleft()
 
 
 class DisplayChannel:
@@ -101,11 +152,26 @@ class DisplayChannel:
         for subscription in subscriptions:
             subscription.put(message)
 
+    def revoke(self, booth: str, reason: str) -> None:
+        """Disconnect the booth's pages that came in with its link (from any thread)."""
+        loop = self._loop
+        if loop is None or _running_in(loop):
+            self._revoke(booth, reason)
+            return
+        with contextlib.suppress(RuntimeError):  # the loop has stopped: nobody is connected
+            loop.call_soon_threadsafe(self._revoke, booth, reason)
+
+    def _revoke(self, booth: str, reason: str) -> None:
+        with self._lock:
+            subscriptions = [s for s in self._subscriptions.get(booth, ()) if s.by_link]
+        for subscription in subscriptions:
+            subscription.revoke(reason)
+
     @contextmanager
-    def subscribe(self, booth: str) -> Iterator[Subscription]:
+    def subscribe(self, booth: str, by_link: bool = False) -> Iterator[Subscription]:
         """Register a page (call on the event loop); it first gets the booth's state."""
         self._loop = asyncio.get_running_loop()
-        subscription = Subscription(booth, self.queue_limit)
+        subscription = Subscription(booth, self.queue_limit, by_link)
         with self._lock:
             if booth in self._faces:
                 subscription.put(set_face_message(self._faces[booth]))

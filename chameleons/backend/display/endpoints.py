@@ -10,14 +10,15 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+from typing import Any
 from urllib.parse import urlsplit
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.auth import repository
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.db import session_scope
+from chameleons.backend.display import links
 from chameleons.backend.display.channel import DisplayChannel, Subscription, get_display_channel
 from chameleons.backend.display.protocol import (
     ProtocolError,
@@ -25,12 +26,8 @@ from chameleons.backend.display.protocol import (
     parse_inbound,
     pong_message,
 )
-from chameleons.backend.display.tokens import (
-    check_token,
-    display_token,
-    is_valid_booth,
-    signing_key,
-)
+from chameleons.backend.display.tokens import is_valid_booth
+from chameleons.backend.events import guard
 
 router = APIRouter(tags=["display"])
 
@@ -44,24 +41,29 @@ async def display_socket(websocket: WebSocket, booth: str, token: str | None = N
         return
     await websocket.accept()
     channel = get_display_channel(websocket.app)
-    with channel.subscribe(booth) as subscription:
-        await websocket.send_text(json.dumps(hello_message(booth)))
-        sender = asyncio.create_task(_send_loop(websocket, subscription))
-        try:
-            await _receive_loop(websocket, channel, subscription)
-        finally:
-            sender.cancel()
-            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect):
-                await sender
+    async with guard.guarded(websocket):
+        with channel.subscribe(booth, by_link=token is not None) as subscription:
+            await guard.send_text(websocket, json.dumps(hello_message(booth)))
+            sender = asyncio.create_task(_send_loop(websocket, subscription))
+            receiver = asyncio.create_task(_receive_loop(websocket, channel, subscription))
+            tasks = {sender, receiver}
+            try:
+                await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                guard.raise_closed(tasks)
+            finally:
+                for task in tasks:
+                    task.cancel()
+                for task in tasks:
+                    with contextlib.suppress(asyncio.CancelledError, Exception):
+                        await task
 
 
 async def _authorised(websocket: WebSocket, booth: str, token: str | None) -> bool:
     if token is not None:
-        return check_token(display_token(signing_key(websocket.app), booth), token)
-    staff_id = websocket.session.get(SESSION_USER_KEY)
-    if not isinstance(staff_id, int) or not _same_origin(websocket):
+        return await run_in_threadpool(_token_works, websocket, booth, token)
+    if not _same_origin(websocket):
         return False
-    return await run_in_threadpool(_active_staff, websocket, staff_id)
+    return await run_in_threadpool(_active_staff, websocket, dict(websocket.session))
 
 
 def _same_origin(websocket: WebSocket) -> bool:
@@ -70,37 +72,37 @@ def _same_origin(websocket: WebSocket) -> bool:
     return origin is not None and urlsplit(origin).netloc == websocket.headers.get("host")
 
 
-def _active_staff(websocket: WebSocket, staff_id: int) -> bool:
+def _token_works(websocket: WebSocket, booth: str, token: str) -> bool:
     with session_scope(websocket.app.state.sessionmaker) as db:
-        user = repository.get_by_id(db, staff_id)
-        return user is not None and user.is_active
-    return False
+        return links.token_works(db, websocket.app, booth, token)
+
+
+def _active_staff(websocket: WebSocket, cookie: dict[str, Any]) -> bool:
+    with session_scope(websocket.app.state.sessionmaker) as db:
+        return staff_sessions.staff_of(db, cookie) is not None
 
 
 async def _send_loop(websocket: WebSocket, subscription: Subscription) -> None:
-    while True:
-        message = await subscription.get()
-        await websocket.send_text(json.dumps(message, separators=(",", ":")))
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            message = await subscription.get()
+            await guard.send_text(websocket, json.dumps(message, separators=(",", ":")))
 
 
 async def _receive_loop(
     websocket: WebSocket, channel: DisplayChannel, subscription: Subscription
 ) -> None:
     booth = subscription.booth
-    while True:
-        frame = await websocket.receive()
-        if frame["type"] == "websocket.disconnect":
-            return
-        text = frame.get("text")
-        if not isinstance(text, str):
-            channel.counters["inbound.binary"] += 1
-            continue
-        try:
-            message = parse_inbound(text)
-        except ProtocolError as error:
-            channel.counters[f"inbound.{error.reason}"] += 1
-            continue
-        if message["type"] == "ping":
-            subscription.put(pong_message(message))
-        else:
-            await channel.report(booth, message)
+    inbound = guard.Inbound(websocket)
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            text = await inbound.text()
+            try:
+                message = parse_inbound(text)
+            except ProtocolError as error:
+                channel.counters[f"inbound.{error.reason}"] += 1
+                continue
+            if message["type"] == "ping":
+                subscription.put(pong_message(message))
+            else:
+                await channel.report(booth, message)

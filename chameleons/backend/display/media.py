@@ -29,6 +29,8 @@ from urllib.parse import quote, unquote, urlsplit, urlunsplit
 from fastapi import APIRouter, FastAPI, HTTPException, Query, Request, status
 from fastapi.responses import FileResponse
 
+from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.db import session_scope
 from chameleons.backend.display.tokens import check_token, media_token, signing_key
 from chameleons.backend.wizard.catalogues import prompts_root
 from chameleons.settings import Settings
@@ -40,6 +42,7 @@ MEDIA_TYPES: Final = {
     ".flac": "audio/flac", ".csv": "text/csv; charset=utf-8",
 }  # fmt: skip
 TRANSCODE_SOURCES: Final = (".mp3", ".ogg", ".opus", ".flac")
+_TYPED_URL = re.compile(r"^/media/typed/(?P<digest>[0-9a-f]+)\.wav$")
 _AUDIO_URL = re.compile(r"^/media/prompts/(?P<actor>[^/]+)/audio/(?P<stem>[^/]+)\.\w+$")
 
 
@@ -67,6 +70,10 @@ def lipsync_url_for(settings: Settings, audio_url: str) -> str | None:
     """The lip-sync CSV URL of a prompt audio URL built here, by the assets' convention
     (``audio/<id>.<ext>`` beside ``lipsync/<id>.csv``), when that file exists."""
     parts = urlsplit(audio_url)
+    typed = _TYPED_URL.match(unquote(parts.path))
+    if typed is not None:  # a typed sentence's curve lies beside its WAV
+        origin = urlunsplit((parts.scheme, parts.netloc, "", "", ""))
+        return f"{origin}/media/typed/{typed.group('digest')}.csv?{parts.query}"
     match = _AUDIO_URL.match(unquote(parts.path))
     if match is None:
         return None
@@ -88,7 +95,9 @@ def _actor_file(settings: Settings, actor: str, relative: str) -> Path:
 
 
 def _staff_session(request: Request) -> bool:
-    return isinstance(request.session.get("staff_id"), int)
+    """A logged-in staff member (an open server-side session), checked only without a key."""
+    with session_scope(request.app.state.sessionmaker) as db:
+        return staff_sessions.staff_of(db, request.session) is not None
 
 
 @router.get("/media/prompts/{actor}/{relative:path}", name="prompt_media")

@@ -1,7 +1,8 @@
 """Unguessable per-booth display links without a schema change: HMACs of the booth id.
 
 The display token is ``HMAC-SHA256(secret_key, "display:" + booth)``; media links use
-``"media:" + actor``. Changing ``CHAMELEONS_SECRET_KEY`` invalidates every link.
+``"media:" + actor``. Changing ``CHAMELEONS_SECRET_KEY`` invalidates every link; the PI
+rotates or retires one booth's link on the display page (``links.py``).
 """
 
 from __future__ import annotations
@@ -48,8 +49,9 @@ def _sign(key: bytes, purpose: str, subject: str) -> str:
     return base64.urlsafe_b64encode(digest[:_TOKEN_BYTES]).decode().rstrip("=")
 
 
-def display_token(key: bytes, booth: str) -> str:
-    return _sign(key, "display", booth)
+def display_token(key: bytes, booth: str, generation: int = 0) -> str:
+    """Generation 0 is the booth's first link; the PI's rotations count up (``links.py``)."""
+    return _sign(key, "display", booth if generation == 0 else f"{booth}#{generation}")
 
 
 def media_token(key: bytes, actor: str) -> str:
@@ -60,6 +62,6 @@ def check_token(expected: str, given: str | None) -> bool:
     return given is not None and hmac.compare_digest(expected.encode(), given.encode())
 
 
-def display_path(key: bytes, booth: str) -> str:
+def display_path(key: bytes, booth: str, generation: int = 0) -> str:
     """The booth screen's link (relative to the server's public URL)."""
-    return f"/display/{booth}/{display_token(key, booth)}"
+    return f"/display/{booth}/{display_token(key, booth, generation)}"

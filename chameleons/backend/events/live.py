@@ -14,20 +14,23 @@ from collections.abc import Awaitable, Callable
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from chameleons.backend.events import guard
 from chameleons.backend.events.hub import Message, Subscription
 
 OnChange = Callable[[list[Message]], Awaitable[bool]]  # True: stop serving
 
 
 async def send_json(websocket: WebSocket, message: Message) -> None:
-    await websocket.send_text(json.dumps(message, separators=(",", ":")))
+    """Send one message; a client that does not read it in time is disconnected (guard)."""
+    await guard.send_text(websocket, json.dumps(message, separators=(",", ":")))
 
 
 async def _answer_incoming(websocket: WebSocket) -> None:
-    """Reply to pings; return when the client disconnects."""
+    """Reply to pings (rate-limited, text only); return when the client disconnects."""
+    inbound = guard.Inbound(websocket)
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
-            text = await websocket.receive_text()
+            text = await inbound.text()
             try:
                 message = json.loads(text)
             except ValueError:
@@ -37,6 +40,12 @@ async def _answer_incoming(websocket: WebSocket) -> None:
 
 
 async def serve(websocket: WebSocket, subscription: Subscription, on_change: OnChange) -> None:
+    """Serve until the client goes; a guard's verdict closes the socket with its reason."""
+    async with guard.guarded(websocket):
+        await _serve(websocket, subscription, on_change)
+
+
+async def _serve(websocket: WebSocket, subscription: Subscription, on_change: OnChange) -> None:
     receiver = asyncio.create_task(_answer_incoming(websocket))
     try:
         while True:
@@ -44,6 +53,7 @@ async def serve(websocket: WebSocket, subscription: Subscription, on_change: OnC
             done, _ = await asyncio.wait({receiver, getter}, return_when=asyncio.FIRST_COMPLETED)
             if receiver in done:
                 getter.cancel()
+                guard.raise_closed({receiver})
                 return
             if await on_change([getter.result(), *subscription.drain()]):
                 return

@@ -8,10 +8,12 @@ the response. After the commit, the events recorded in the transaction go to the
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import AsyncIterator, Iterator
 from contextlib import AbstractContextManager, contextmanager
-from typing import Annotated
+from typing import Annotated, Any
 
+import anyio
+import anyio.to_thread
 from fastapi import Depends, Request
 from sqlalchemy import event as sa_event
 from sqlalchemy.orm import Session, sessionmaker
@@ -65,8 +67,37 @@ def write_session(factory: sessionmaker[Session], hub: LiveHub) -> AbstractConte
     return contextmanager(write_scope)(factory, hub)
 
 
-def get_write_db(request: Request) -> Iterator[Session]:
-    yield from write_scope(request.app.state.sessionmaker, get_hub(request))
+async def get_write_db(request: Request) -> AsyncIterator[Session]:
+    """The request's session; it commits (or rolls back) on a thread of its own pool.
+
+    A request that holds a write lock (SQLite's, taken by ``BEGIN IMMEDIATE``, or a
+    PostgreSQL row lock) must be able to commit while every request thread waits for that
+    lock. Committing in a sync dependency's exit needs a thread of the shared pool, which
+    those waiting requests hold: each waited out the lock's timeout (bench/server_bench.py:
+    a burst of 50 phones on SQLite took 30 s and failed). Creating the session does no I/O,
+    so it happens here in the event loop."""
+    db = request.app.state.sessionmaker()
+    attach_hub(db, get_hub(request))
+    ending = _ending_limiter(request.app.state)
+    try:
+        yield db
+        await anyio.to_thread.run_sync(db.commit, limiter=ending)
+    except BaseException:
+        await anyio.to_thread.run_sync(db.rollback, limiter=ending)
+        raise
+    finally:
+        await anyio.to_thread.run_sync(db.close, limiter=ending)
+
+
+ENDING_THREADS = 8
+
+
+def _ending_limiter(state: Any) -> anyio.CapacityLimiter:
+    """The commit/rollback threads, made on first use (a limiter needs the running loop)."""
+    limiter: anyio.CapacityLimiter | None = getattr(state, "ending_limiter", None)
+    if limiter is None:
+        limiter = state.ending_limiter = anyio.CapacityLimiter(ENDING_THREADS)
+    return limiter
 
 
 WriteDb = Annotated[Session, Depends(get_write_db, scope="function")]

@@ -121,7 +121,7 @@ def participants_table(spec: StudySpec) -> TableSpec:
                 "status",
                 "string",
                 "Participant status.",
-                "registered, active, complete, ended_early",
+                "registered, active, complete, ended_early, declined",
             ),
             Column("rehearsal", "boolean", "Marked as a staff rehearsal, not a real participant."),
             _session(),
@@ -132,7 +132,11 @@ def participants_table(spec: StudySpec) -> TableSpec:
                 "Session state at export time (ended: ended early by the wizard).",
                 "pending, running, final_questionnaire, complete, ended",
             ),
-            _time("consent_at", "Time consent was recorded"),
+            _time(
+                "consent_at",
+                "When the participant agreed on the phone's consent page; empty for a study"
+                " without one and for a participant who declined (end_reason consent_declined)",
+            ),
             _time("started_at", "Session start"),
             _time("completed_at", "Session completion"),
             Column("duration_s", "number", "Session duration in seconds (start to completion)."),
@@ -140,8 +144,9 @@ def participants_table(spec: StudySpec) -> TableSpec:
             Column(
                 "end_reason",
                 "string",
-                "Why the session was ended early; empty for sessions not ended early.",
-                ", ".join(END_REASONS),
+                "Why the session was ended early (consent_declined: the participant declined"
+                " on the consent page; nothing else was recorded); empty otherwise.",
+                ", ".join([*END_REASONS, "consent_declined"]),
             ),
             Column(
                 "end_note",
@@ -250,8 +255,7 @@ def suggestions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "to_rank",
                 "integer",
-                "Rank the robot proposed (above from_rank, or below it under the best-move "
-                "rule).",
+                "Rank the robot proposed (above from_rank, or below it under the best-move rule).",
             ),
             Column(
                 "kind",
@@ -279,8 +283,9 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
             Column(
                 "position",
                 "integer",
-                "Interaction the answer is about; 0 = the final questionnaire.",
-                f"0..{spec.interactions_per_session}",
+                "Interaction the answer is about; 0 = the final questionnaire; -1 = the"
+                " questions before the interactions (about the participant).",
+                f"-1..{spec.interactions_per_session}",
             ),
             Column(
                 "condition",
@@ -305,7 +310,8 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 "value",
                 "integer",
                 "Raw answer on the questionnaire's scale (1 = left anchor / strongly"
-                " disagree); empty for open questions.",
+                " disagree); for a robot item the position of the robot named; empty for"
+                " open questions and choices (their option id is in text).",
                 "1..7",
             ),
             Column(
@@ -319,6 +325,14 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 "Open answer. POSSIBLY IDENTIFYING: free text may name or describe the"
                 " participant; review before sharing.",
                 identifying=True,
+            ),
+            Column(
+                "named_condition",
+                "string",
+                "Robot items (manipulation check): the condition of the robot the answer names"
+                " (value = its position in the session); empty otherwise and for 'dont_know'"
+                " (in text).",
+                ", ".join(spec.condition_ids),
             ),
             Column(
                 "skipped",

@@ -24,12 +24,13 @@ def export_zip(
     format: Annotated[list[ExportFormat] | None, Query()] = None,
     include_rehearsal: bool = False,
     study: int | None = None,
+    raw_csv: bool = False,
 ) -> StreamingResponse:
     """The study's tables (CSV plus the asked formats), codebook, config and metadata."""
     factory: sessionmaker[DbSession] = request.app.state.sessionmaker
     formats: tuple[ExportFormat, ...] = ("csv", *(f for f in format or [] if f != "csv"))
     export = ExportRequest(
-        study_id=study, formats=formats, include_rehearsal=include_rehearsal,
+        study_id=study, formats=formats, include_rehearsal=include_rehearsal, raw_csv=raw_csv,
         prompts_dir=prompts_root(request.app.state.settings),
     )  # fmt: skip
     try:

@@ -68,7 +68,7 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
             "session": session.id,
             "booth": session.booth,
             "session_state": session.state,
-            "consent_at": iso(participant.consent_at),
+            "consent_at": iso(session.consent_at or participant.consent_at),
             "started_at": iso(session.started_at),
             "completed_at": iso(session.completed_at),
             "duration_s": _seconds(session.started_at, session.completed_at),
@@ -159,10 +159,31 @@ def _reverse_keyed(spec: StudySpec) -> dict[tuple[str, str], int]:
     }
 
 
+def _robot_conditions(
+    db: DbSession, study: Study, spec: StudySpec
+) -> dict[tuple[int, str, str, int | None], str]:
+    """(session, questionnaire, item, answered position) -> that interaction's condition,
+    for the study's robot items (the manipulation check names a robot by its position)."""
+    items = [(q.id, i.id) for q in spec.questionnaires for i in q.items if i.type == "robot"]
+    if not items:
+        return {}
+    query = (
+        select(Interaction.session_id, Interaction.position, Interaction.condition)
+        .join(Session, Session.id == Interaction.session_id)
+        .where(Session.study_id == study.id)
+    )
+    return {
+        (session_id, questionnaire, item, position): condition
+        for session_id, position, condition in db.execute(query)
+        for questionnaire, item in items
+    }
+
+
 def questionnaire_rows(
     db: DbSession, study: Study, spec: StudySpec, include_rehearsal: bool
 ) -> Iterator[Row]:
     reverse = _reverse_keyed(spec)
+    robots = _robot_conditions(db, study, spec)
     query = (
         select(QuestionnaireResponse, Interaction.condition, Participant.code)
         .join(Session, Session.id == QuestionnaireResponse.session_id)
@@ -192,6 +213,8 @@ def questionnaire_rows(
             "value": answer.value,
             "scored_value": scored,
             "text": answer.text,
+            "named_condition": robots.get((answer.session_id, answer.questionnaire, answer.item,
+                                           answer.value)),
             "skipped": answer.skipped,
             "answered_at": iso(answer.created_at),
         }

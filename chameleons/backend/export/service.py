@@ -50,6 +50,9 @@ class ExportRequest:
     study_id: int | None = None
     formats: tuple[ExportFormat, ...] = ("csv",)
     include_rehearsal: bool = False
+    # CSV text cells a spreadsheet would run as formulas get a leading ' (OWASP); raw_csv
+    # writes them as stored (for R/pandas users who never open the files in a spreadsheet).
+    raw_csv: bool = False
     # The prompts folder in use (for the catalogue versions); None: the repository's.
     prompts_dir: Path | None = None
 
@@ -82,6 +85,7 @@ class ExportPlan:
             "include_rehearsal": self.request.include_rehearsal,
             "formats": ["csv", *(f for f in self.request.formats if f != "csv")],
             "list_separator": LIST_SEPARATOR,
+            "csv_formula_guard": not self.request.raw_csv,
             "missing_value": "empty cell (CSV), null (JSON, Parquet)",
             "rows": {name: count[0] for name, count in self.row_counts.items()},
         }
@@ -117,11 +121,18 @@ def plan_export(db: DbSession, request: ExportRequest) -> ExportPlan:
         _add_table_parts(db, plan, table)
     if "xlsx" in request.formats:
         plan.parts.append(_xlsx_part(db, plan, specs))
-    book = codebook_rows(specs) + provenance_codebook()
+    book = codebook_rows(specs)
+    if not request.raw_csv:
+        for entry in book:
+            if entry["type"] == "string":
+                entry["description"] = f"{entry['description']} {CSV_GUARD_NOTE}"
+    book += provenance_codebook()  # metadata.json keys, not CSV cells
     plan.parts.append(
         Part(
             "codebook.csv",
-            lambda s: writers.write_csv(s, list(CODEBOOK_COLUMNS), book, [0]),
+            lambda s: writers.write_csv(
+                s, list(CODEBOOK_COLUMNS), book, [0], _guarded(request, CODEBOOK_COLUMNS)
+            ),
         )
     )
     config = json.dumps(study.config, indent=2, sort_keys=True, ensure_ascii=False) + "\n"
@@ -143,8 +154,9 @@ def _add_table_parts(db: DbSession, plan: ExportPlan, table: TableSpec) -> None:
     source = _table_source(db, plan, table.name)
     counter = plan.row_counts.setdefault(table.name, [0])
     columns = table.column_names
+    text = _guarded(plan.request, [c.name for c in table.columns if c.type == "string"])
     plan.parts.append(
-        Part(f"{table.name}.csv", lambda s: writers.write_csv(s, columns, source(), counter))
+        Part(f"{table.name}.csv", lambda s: writers.write_csv(s, columns, source(), counter, text))
     )
     if "parquet" in plan.request.formats:
         plan.parts.append(
@@ -161,6 +173,10 @@ def _add_table_parts(db: DbSession, plan: ExportPlan, table: TableSpec) -> None:
     for fmt in ("sav", "dta"):
         if fmt in plan.request.formats:
             plan.parts.append(_statfile_part(plan, table, source, fmt))
+
+
+def _guarded(request: ExportRequest, text_columns: Iterable[str]) -> list[str]:
+    return [] if request.raw_csv else list(text_columns)
 
 
 def _statfile_part(
@@ -195,6 +211,7 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
         "Times are ISO 8601 in UTC. Missing values are empty cells. Lists (rankings) are item",
         f"ids joined by '{LIST_SEPARATOR}', rank 1 first. Columns marked possibly_identifying",
         "in the codebook (free-text answers) must be reviewed before sharing the data.",
+        *_formula_note(plan),
         "",
         "R:      Rscript analysis.R   (the whole analysis: tests, models, plots)",
         "        scores <- read.csv('scores.csv')",
@@ -210,6 +227,20 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+CSV_GUARD_NOTE = "(CSV: text starting with = + - @ tab or CR has a leading ', see README.md.)"
+
+
+def _formula_note(plan: ExportPlan) -> list[str]:
+    if plan.request.raw_csv:
+        return ["Text cells are as stored (raw CSV): do not open these files in a spreadsheet."]
+    return [
+        "Text cells starting with = + - @ tab or CR carry a leading ' in the CSV files (OWASP",
+        "CSV-injection guidance: a spreadsheet would run them as formulas); data.xlsx stores",
+        'all text as text. Strip it in R with sub("^\'([-=+@\\t\\r])", "\\\\1", x), or export',
+        "with --raw-csv (metadata.json: csv_formula_guard).",
+    ]
 
 
 def export_to_directory(db: DbSession, request: ExportRequest, out: Path) -> ExportPlan:

@@ -41,6 +41,16 @@ def _batches(rows: Iterable[Row]) -> Iterator[list[Row]]:
         yield batch
 
 
+# OWASP "CSV Injection" and ASVS 1.2.10: a spreadsheet runs a cell that starts with one of
+# these as a formula; a leading ' makes it text (Excel, LibreOffice and Sheets hide it).
+FORMULA_TRIGGERS = ("=", "+", "-", "@", "\t", "\r", "\0")
+
+
+def neutralise(text: str) -> str:
+    """``text`` as a spreadsheet shows it but never evaluates it."""
+    return "'" + text if text.startswith(FORMULA_TRIGGERS) else text
+
+
 def csv_cell(value: Any) -> str:
     """Cells R and pandas read without options: empty = missing, true/false, full floats."""
     if value is None:
@@ -53,18 +63,32 @@ def csv_cell(value: Any) -> str:
 
 
 def write_csv(
-    stream: IO[bytes], columns: list[str], rows: Iterable[Row], counter: list[int]
+    stream: IO[bytes],
+    columns: list[str],
+    rows: Iterable[Row],
+    counter: list[int],
+    text_columns: Iterable[str] = (),
 ) -> Iterator[None]:
+    """CSV; cells of ``text_columns`` that a spreadsheet would run as formulas are
+    neutralised (pass none for raw output, e.g. ``chameleons export --raw-csv``)."""
+    guarded = frozenset(text_columns)
     text = io.TextIOWrapper(stream, encoding="utf-8", newline="", write_through=True)
     try:
         writer = csv.writer(text, lineterminator="\n")
         writer.writerow(columns)
         for batch in _batches(rows):
-            writer.writerows([csv_cell(row.get(name)) for name in columns] for row in batch)
+            writer.writerows(
+                [_cell(row.get(name), name in guarded) for name in columns] for row in batch
+            )
             counter[0] += len(batch)
             yield
     finally:
         text.detach()  # the caller owns (and closes) the binary stream
+
+
+def _cell(value: Any, guarded: bool) -> str:
+    cell = csv_cell(value)
+    return neutralise(cell) if guarded and isinstance(value, str) else cell
 
 
 def write_json(
@@ -116,16 +140,31 @@ def write_parquet(
 def write_xlsx(
     stream: IO[bytes], sheets: list[tuple[str, list[str], Iterable[Row]]]
 ) -> Iterator[None]:
-    """One workbook, one sheet per table (times stay ISO text: Excel has no time zones)."""
+    """One workbook, one sheet per table (times stay ISO text: Excel has no time zones).
+
+    Every string is written as a text cell (``t="inlineStr"``, never a formula): openpyxl
+    would otherwise store a string starting with ``=`` as a live formula."""
     from openpyxl import Workbook  # imported here: only Excel exports need it
 
     workbook = Workbook(write_only=True)
     for title, columns, rows in sheets:
         sheet = workbook.create_sheet(title=title[:31])
-        sheet.append(columns)
+        sheet.append([_text_cell(sheet, name) for name in columns])
         for batch in _batches(rows):
             for row in batch:
-                sheet.append([row.get(name) for name in columns])
+                sheet.append([_xlsx_value(sheet, row.get(name)) for name in columns])
             yield
     workbook.save(stream)
     yield
+
+
+def _text_cell(sheet: Any, text: str) -> Any:
+    from openpyxl.cell import WriteOnlyCell
+
+    cell = WriteOnlyCell(sheet, value=text)
+    cell.data_type = "s"  # openpyxl made "=..." a formula and "#N/A" an error: text it is
+    return cell
+
+
+def _xlsx_value(sheet: Any, value: Any) -> Any:
+    return _text_cell(sheet, value) if isinstance(value, str) else value

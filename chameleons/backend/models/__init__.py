@@ -1,6 +1,7 @@
 """SQLAlchemy models, one per module; importing this package registers them all."""
 
 from chameleons.backend.models.base import Base
+from chameleons.backend.models.display_link import DisplayLink
 from chameleons.backend.models.event import Event
 from chameleons.backend.models.interaction import Interaction
 from chameleons.backend.models.participant import Participant
@@ -8,12 +9,14 @@ from chameleons.backend.models.plan_row import PlanRow
 from chameleons.backend.models.questionnaire_response import QuestionnaireResponse
 from chameleons.backend.models.recording import Recording
 from chameleons.backend.models.session import Session
+from chameleons.backend.models.staff_session import StaffSession
 from chameleons.backend.models.staff_user import StaffUser
 from chameleons.backend.models.study import Study
 from chameleons.backend.models.suggestion import Suggestion
 
 __all__ = [
     "Base",
+    "DisplayLink",
     "Event",
     "Interaction",
     "Participant",
@@ -21,6 +24,7 @@ __all__ = [
     "QuestionnaireResponse",
     "Recording",
     "Session",
+    "StaffSession",
     "StaffUser",
     "Study",
     "Suggestion",

@@ -23,7 +23,8 @@ class Participant(Base):
         # One participant per plan row at a time; a withdrawn participant's row is freed.
         UniqueConstraint("plan_row_id"),
         CheckConstraint(
-            "status IN ('registered', 'active', 'complete', 'ended_early')", name="status"
+            "status IN ('registered', 'active', 'complete', 'ended_early', 'declined')",
+            name="status",
         ),
         NEVER_REUSED_IDS,
     )

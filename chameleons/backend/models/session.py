@@ -13,7 +13,9 @@ class Session(Base):
 
     ``state`` is pending -> running -> final_questionnaire -> complete, or ``ended`` when the
     wizard ended it early (``end_reason``: participant_withdrew, technical_failure, time,
-    other; ``end_note`` says more). An ended session keeps all its data."""
+    other; ``end_note`` says more) or the participant declined consent on the phone
+    (``consent_declined``). An ended session keeps all its data. ``consent_at``: when the
+    participant agreed on the phone (studies with a consent page)."""
 
     __tablename__ = "session"
     __table_args__ = NEVER_REUSED_IDS
@@ -31,6 +33,7 @@ class Session(Base):
     short_code: Mapped[str] = mapped_column(String(16), unique=True)
     is_rehearsal: Mapped[bool] = mapped_column(default=False)
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    consent_at: Mapped[datetime | None]
     started_at: Mapped[datetime | None]
     completed_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]

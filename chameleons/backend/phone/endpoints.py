@@ -16,16 +16,25 @@ from chameleons.backend.events import live
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import WriteDb, write_session
-from chameleons.backend.phone.schemas import QuestionnaireSubmission, RankingSubmission
+from chameleons.backend.phone.schemas import (
+    ConsentSubmission,
+    QuestionnaireSubmission,
+    RankingSubmission,
+)
 from chameleons.backend.phone.submissions import Receipt, submit
 from chameleons.backend.phone.view import PhoneState, phone_state
 from chameleons.backend.sessions.answers import submit_questionnaire, submit_ranking
+from chameleons.backend.sessions.consent import record_consent
 from chameleons.backend.sessions.flow import load_by_token
 from chameleons.backend.sessions.snapshot import phone_presence_key
 from chameleons.backend.studies.errors import GoneError, NotFoundError, http_errors
 
 router = APIRouter(tags=["phone"])
 ENDED_MESSAGE = "This session has ended. Thank you for taking part!"
+DECLINED_MESSAGE = (
+    "You have chosen not to take part, and nothing about you has been kept. Thank you for "
+    "your time; please give the phone back to the experimenter."
+)
 
 
 @router.get("/api/phone/{token}/state")
@@ -45,6 +54,14 @@ def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
             token,
             data.client_id,
             lambda flow: submit_ranking(flow, data.client_id, data.position, data.ranking),
+        )
+
+
+@router.post("/api/phone/{token}/consent")
+def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
+    with http_errors():
+        return submit(
+            db, token, data.client_id, lambda flow: record_consent(flow, data.client_id, data.agree)
         )
 
 

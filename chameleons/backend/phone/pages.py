@@ -12,8 +12,8 @@ from sqlalchemy import select
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.models import Session as SessionRow
-from chameleons.backend.phone.endpoints import ENDED_MESSAGE
-from chameleons.backend.phone.view import phone_state
+from chameleons.backend.phone.endpoints import DECLINED_MESSAGE, ENDED_MESSAGE
+from chameleons.backend.phone.view import ended_view, phone_state
 from chameleons.backend.sessions.flow import load_by_token
 from chameleons.backend.sessions.service import SHORT_CODE_ALPHABET, SHORT_CODE_LENGTH
 from chameleons.backend.studies.errors import NotFoundError
@@ -46,7 +46,19 @@ def session_page(token: str, request: Request, db: DbSession, templates: Templat
             request, templates, "Link not valid", exc.message, status.HTTP_404_NOT_FOUND
         )
     if flow.session.state in ("complete", "ended"):
-        return _message(request, templates, "Thank you!", ENDED_MESSAGE, status.HTTP_410_GONE)
+        # A reload after the end shows the same last page (the debriefing, if any).
+        last = ended_view(flow)
+        return templates.TemplateResponse(
+            request,
+            "phone/message.html",
+            {
+                "title": "Thank you!",
+                "text": DECLINED_MESSAGE if last.get("declined") else ENDED_MESSAGE,
+                "debriefing": last.get("debriefing"),
+            },
+            status_code=status.HTTP_410_GONE,
+            headers=PRIVATE_HEADERS,
+        )
     return templates.TemplateResponse(
         request,
         "phone/session.html",

@@ -17,7 +17,14 @@ class RankingSubmission(BaseModel):
 
 class QuestionnaireSubmission(BaseModel):
     client_id: str = ClientId
-    position: int = Field(ge=0, le=100, description="0: the final questionnaire")
+    position: int = Field(
+        ge=-1, le=100, description="0: the final questionnaire; -1: before the interactions"
+    )
     questionnaire: str = Field(max_length=64)
     # Any JSON value: the flow checks each answer and says which one is wrong and why.
     answers: dict[str, Any] = Field(max_length=200)
+
+
+class ConsentSubmission(BaseModel):
+    client_id: str = ClientId
+    agree: bool = Field(description="true: takes part; false: declines (the session ends)")

@@ -11,10 +11,17 @@ from typing import Any
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Interaction
-from chameleons.backend.sessions.answers import FINAL_POSITION, answered, questionnaires_for
+from chameleons.backend.sessions.answers import (
+    DONT_KNOW,
+    FINAL_POSITION,
+    answered,
+    questionnaires_for,
+)
+from chameleons.backend.sessions.consent import BEFORE_POSITION, CONSENT_DECLINED
 from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.studies.specs import item_key
-from chameleons.experiment.model import Questionnaire
+from chameleons.experiment.model import Questionnaire, QuestionnaireItem
+from chameleons.experiment.procedure import paragraphs
 
 PhoneState = dict[str, Any]
 
@@ -29,9 +36,9 @@ def phone_state(flow: Flow) -> PhoneState:
 def _view(flow: Flow) -> PhoneState:
     session = flow.session
     if session.state in ("complete", "ended"):
-        return {"view": "ended"}
+        return ended_view(flow)
     if session.state == "pending":
-        return {"view": "welcome"}
+        return _before(flow)
     if session.state == "final_questionnaire":
         return _questionnaire(flow, FINAL_POSITION, robot_name=None)
     current = flow.current
@@ -47,6 +54,40 @@ def _view(flow: Flow) -> PhoneState:
         ranking = current.current_ranking or current.initial_ranking or []
         return {**base, "view": "ranked", **_task(flow, current), "ranking": list(ranking)}
     return _questionnaire(flow, current.position, robot_name=current.robot_name)
+
+
+def ended_view(flow: Flow) -> PhoneState:
+    """The last page: a polite goodbye after declining consent; the debriefing (when the
+    study has one) after a session that started, complete or ended early."""
+    session = flow.session
+    if session.end_reason == CONSENT_DECLINED:
+        return {"view": "ended", "declined": True}
+    debriefing = flow.spec.procedure.debriefing
+    if debriefing is None or session.started_at is None:
+        return {"view": "ended"}
+    shown = {"title": debriefing.title, "paragraphs": paragraphs(debriefing.text)}
+    return {"view": "ended", "debriefing": shown}
+
+
+def _before(flow: Flow) -> PhoneState:
+    """Before the session starts: consent first, then the questions about the participant
+    (demographics), then the welcome page until the wizard starts."""
+    consent = flow.spec.procedure.consent
+    if consent is not None and flow.session.consent_at is None:
+        return {
+            "view": "consent",
+            "consent": {
+                "title": consent.title,
+                "paragraphs": paragraphs(consent.text),
+                "agree": consent.agree,
+                "decline": consent.decline,
+            },
+        }
+    if questionnaires_for(flow, BEFORE_POSITION):
+        state = _questionnaire(flow, BEFORE_POSITION, robot_name=None)
+        if state["view"] == "questionnaire":
+            return state
+    return {"view": "welcome"}
 
 
 def _task(flow: Flow, interaction: Interaction) -> PhoneState:
@@ -72,16 +113,20 @@ def _questionnaire(flow: Flow, position: int, robot_name: str | None) -> PhoneSt
         "view": "questionnaire",
         "position": position,
         "final": position == FINAL_POSITION,
+        "before": position == BEFORE_POSITION,
         "robot_name": robot_name,
         "page": pages.index(page) + 1,
         "pages": len(pages),
-        "questionnaire": questionnaire_wording(page),
+        "questionnaire": questionnaire_wording(page, [i.robot_name for i in flow.interactions]),
     }
 
 
-def questionnaire_wording(questionnaire: Questionnaire) -> PhoneState:
+def questionnaire_wording(questionnaire: Questionnaire, robots: list[str]) -> PhoneState:
+    """The questions as the phone shows them; a robot item offers the robots the participant
+    met, by name in the order met (the position is the answer), and "don't know"."""
     return {
         "id": questionnaire.id,
+        "title": questionnaire.title,
         "points": questionnaire.points,
         "low": questionnaire.low,
         "high": questionnaire.high,
@@ -93,7 +138,17 @@ def questionnaire_wording(questionnaire: Questionnaire) -> PhoneState:
                 "left": item.left,
                 "right": item.right,
                 "required": item.required,
+                "options": _options(item, robots),
             }
             for item in questionnaire.items
         ],
     }
+
+
+def _options(item: QuestionnaireItem, robots: list[str]) -> list[dict[str, Any]]:
+    if item.type == "choice":
+        return [{"id": option.id, "label": option.label} for option in item.options]
+    if item.type == "robot":
+        named = [{"id": n, "label": name} for n, name in enumerate(robots, start=1)]
+        return [*named, {"id": DONT_KNOW, "label": "I don't know"}]
+    return []

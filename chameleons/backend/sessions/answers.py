@@ -14,12 +14,14 @@ from typing import Any
 from sqlalchemy import select
 
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse
+from chameleons.backend.sessions.consent import BEFORE_POSITION, waiting_before_start
 from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.studies.errors import ConflictError, GoneError, InvalidInputError
 from chameleons.experiment.model import Questionnaire, QuestionnaireItem
 
 MAX_TEXT_LENGTH = 5000
 FINAL_POSITION = 0
+DONT_KNOW = "dont_know"  # a robot item's answer when the participant cannot tell
 
 
 def submit_ranking(flow: Flow, client_id: str, position: int, ranking: list[str]) -> Event:
@@ -51,6 +53,8 @@ def _check_permutation(ranking: list[str], presented: list[Any]) -> None:
 
 
 def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
+    if position == BEFORE_POSITION:
+        return flow.spec.questionnaires_for("before")
     return flow.spec.questionnaires_for("final" if position == FINAL_POSITION else "interaction")
 
 
@@ -75,7 +79,7 @@ def submit_questionnaire(
         raise InvalidInputError("These questions do not belong to this part of the study.")
     if questionnaire.id in answered(flow, position):
         raise ConflictError("You have already answered these questions.")
-    values = _validated(questionnaire, answers)
+    values = _validated(questionnaire, answers, len(flow.interactions))
     for item_id, value in values.items():
         # A skipped optional item is stored as skipped (empty in the export), so the
         # data say it was shown and left out; it is never given a default value.
@@ -108,7 +112,7 @@ def submit_questionnaire(
     )
     if interaction is not None:
         finish_interaction_if_answered(flow, interaction)
-    else:
+    elif position == FINAL_POSITION:
         _complete_if_answered(flow)
     return event
 
@@ -119,6 +123,10 @@ def _check_open(flow: Flow) -> None:
 
 
 def _questionnaire_target(flow: Flow, position: int) -> Interaction | None:
+    if position == BEFORE_POSITION:
+        if flow.session.state != "pending" or waiting_before_start(flow) == "consent":
+            raise ConflictError("These questions are not open at the moment.")
+        return None
     if position == FINAL_POSITION:
         if flow.session.state != "final_questionnaire":
             raise ConflictError("The final questions are not open yet.")
@@ -132,7 +140,7 @@ def _questionnaire_target(flow: Flow, position: int) -> Interaction | None:
 
 
 def _validated(
-    questionnaire: Questionnaire, answers: dict[str, Any]
+    questionnaire: Questionnaire, answers: dict[str, Any], robots: int
 ) -> dict[str, int | str | None]:
     """item id -> answer, None for a skipped optional item."""
     known = {item.id for item in questionnaire.items}
@@ -141,17 +149,19 @@ def _validated(
         raise InvalidInputError(f"Unknown question(s): {', '.join(unknown)}.")
     values: dict[str, int | str | None] = {}
     for number, item in enumerate(questionnaire.items, start=1):
-        values[item.id] = _value(questionnaire, item, number, answers.get(item.id))
+        values[item.id] = _value(questionnaire, item, number, answers.get(item.id), robots)
     return values
 
 
 def _value(
-    questionnaire: Questionnaire, item: QuestionnaireItem, number: int, raw: Any
+    questionnaire: Questionnaire, item: QuestionnaireItem, number: int, raw: Any, robots: int
 ) -> int | str | None:
     if raw is None or (isinstance(raw, str) and not raw.strip()):
         if item.required:
             raise InvalidInputError(f"Please answer question {number}.")
         return None
+    if item.type in ("choice", "robot"):
+        return _chosen(item, number, raw, robots)
     if item.numeric:
         points = questionnaire.points
         if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= points:
@@ -167,6 +177,20 @@ def _value(
             f"The answer to question {number} is longer than {MAX_TEXT_LENGTH} characters."
         )
     return text
+
+
+def _chosen(item: QuestionnaireItem, number: int, raw: Any, robots: int) -> int | str:
+    """A choice's option id (stored as text); a robot item's robot by its position in the
+    session (stored as value), or ``dont_know`` (stored as text)."""
+    if item.type == "choice":
+        if isinstance(raw, str) and raw in {option.id for option in item.options}:
+            return str(raw)
+        raise InvalidInputError(f"Please choose one of the answers to question {number}.")
+    if raw == DONT_KNOW:
+        return DONT_KNOW
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= robots:
+        raise InvalidInputError(f"Please choose one of the robots in question {number}.")
+    return int(raw)
 
 
 def finish_interaction_if_answered(flow: Flow, interaction: Interaction) -> None:

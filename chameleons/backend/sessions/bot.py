@@ -118,7 +118,12 @@ class WizardBot:
         self.snapshot = self.staff.get(f"/api/sessions/{self.session_id}")
         return self.snapshot
 
-    def start(self) -> Json:
+    def start(self, prepare: bool = True) -> Json:
+        """Start the session; ``prepare``: first let the participant agree on the phone and
+        answer the questions before the session, as a participant does (tests of the
+        refusal pass False)."""
+        if prepare:
+            ParticipantBot(self.staff.http, self.token).prepare(random.Random(self.session_id))
         return self._do("start")
 
     def advance(self, position: int, to: str) -> Json:
@@ -197,6 +202,19 @@ class ParticipantBot:
         }
         return self._send("questionnaire", body)
 
+    def consent(self, agree: bool = True, client_id: str | None = None) -> Json:
+        body = {"client_id": client_id or new_client_id(), "agree": agree}
+        return self._send("consent", body)
+
+    def prepare(self, rng: random.Random) -> None:
+        """Agree on the consent page and answer the questions before the session (if the
+        study has them and they are not answered yet)."""
+        state = self.state()
+        if state["view"] == "consent":
+            state = self.consent(True)["state"]
+        if state["view"] == "questionnaire" and state.get("before"):
+            self.answer_questionnaires(-1, rng)
+
     def rank(self, rng: random.Random) -> Json:
         state = self.state()
         if state["view"] != "ranking":
@@ -226,6 +244,8 @@ def answers_for(questionnaire: Json, rng: random.Random) -> Json:
         item["id"]: (
             f"Answer {rng.randint(1, 999)} to {item['id']}."
             if item["type"] == "text"
+            else rng.choice(item["options"])["id"]
+            if item.get("options")
             else rng.randint(1, questionnaire["points"])
         )
         for item in questionnaire["items"]

@@ -13,6 +13,7 @@ from datetime import UTC, datetime, timedelta
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from chameleons.backend.db import write_transaction
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event, Interaction, Participant, PlanRow, Suggestion
 from chameleons.backend.models import Session as SessionRow
@@ -100,8 +101,10 @@ class Flow:
 def load(db: Session, session_id: int, *, lock: bool = True) -> Flow:
     query = select(SessionRow).where(SessionRow.id == session_id)
     if lock:
-        # Serialises changes of one session (wizard and phone at once) on PostgreSQL;
-        # SQLite serialises writers anyway.
+        # Serialises changes of one session (two wizards, wizard and phone at once): the
+        # row lock on PostgreSQL, the write lock taken first on SQLite (FOR UPDATE is a
+        # no-op there; see db.write_transaction).
+        write_transaction(db)
         query = query.with_for_update()
     session = db.scalars(query).first()
     if session is None:
@@ -112,6 +115,7 @@ def load(db: Session, session_id: int, *, lock: bool = True) -> Flow:
 def load_by_token(db: Session, token: str, *, lock: bool = True) -> Flow:
     query = select(SessionRow).where(SessionRow.phone_token == token)
     if lock:
+        write_transaction(db)
         query = query.with_for_update()
     session = db.scalars(query).first()
     if session is None:
@@ -143,7 +147,10 @@ def undo_deadline(suggestion: Suggestion) -> datetime | None:
 def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
     state = flow.session.state
     if state == "pending":
-        return [{"action": "start"}]
+        from chameleons.backend.sessions.consent import waiting_before_start
+
+        waiting = waiting_before_start(flow)
+        return [{"action": "wait", "for": waiting}] if waiting else [{"action": "start"}]
     if state == "final_questionnaire":
         return [{"action": "wait", "for": "final_questionnaire"}]
     if state == "complete":

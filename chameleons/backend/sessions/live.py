@@ -14,8 +14,7 @@ from fastapi import APIRouter, WebSocket
 from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session, sessionmaker
 
-from chameleons.backend.auth import repository as staff
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY
+from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import write_session
@@ -26,12 +25,9 @@ from chameleons.backend.studies.errors import NotFoundError
 router = APIRouter(tags=["sessions"])
 
 
-def _is_staff(factory: sessionmaker[Session], user_id: Any) -> bool:
-    if not isinstance(user_id, int):
-        return False
+def _is_staff(factory: sessionmaker[Session], cookie: dict[str, Any]) -> bool:
     with factory() as db:
-        user = staff.get_by_id(db, user_id)
-        return user is not None and user.is_active
+        return staff_sessions.staff_of(db, cookie) is not None
 
 
 def _snapshot(
@@ -47,8 +43,8 @@ def _snapshot(
 async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
     factory = websocket.app.state.sessionmaker
     hub: LiveHub = websocket.app.state.live_hub
-    user_id = websocket.session.get(SESSION_USER_KEY)
-    if not live.same_origin(websocket) or not await run_in_threadpool(_is_staff, factory, user_id):
+    cookie = dict(websocket.session)
+    if not live.same_origin(websocket) or not await run_in_threadpool(_is_staff, factory, cookie):
         await websocket.close(code=4401)
         return
     base_url = live.base_url(websocket)

@@ -23,9 +23,7 @@ def propose(
 ) -> Suggestion:
     """The next suggestion under the study's rule, seeded deterministically (the same
     inputs give the same move)."""
-    return next_suggestion(
-        ranking, expert_order, frozenset(declined), random.Random(seed), rule
-    )
+    return next_suggestion(ranking, expert_order, frozenset(declined), random.Random(seed), rule)
 
 
 def accept(ranking: list[str], item: str, from_rank: int, to_rank: int) -> list[str]:

@@ -17,6 +17,7 @@ from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions import negotiation
 from chameleons.backend.sessions.answers import finish_interaction_if_answered
+from chameleons.backend.sessions.consent import waiting_before_start
 from chameleons.backend.sessions.flow import Flow, load
 from chameleons.backend.sessions.states import NEXT_STEP, WIZARD_STEPS
 from chameleons.backend.studies import service as studies
@@ -118,6 +119,11 @@ def _interaction(session: SessionRow, planned: dict[str, object]) -> Interaction
 def start(flow: Flow, worker_time: float | None = None) -> None:
     if flow.session.state != "pending":
         raise flow.refuse(f"The session has already started (it is {flow.session.state}).")
+    waiting = waiting_before_start(flow)
+    if waiting == "consent":
+        raise flow.refuse("The session cannot start before the participant has given consent.")
+    if waiting == "before":
+        raise flow.refuse("The participant has not answered the questions before the session.")
     flow.session.state = "running"
     flow.session.started_at = datetime.now(UTC)
     flow.participant.status = "active"

@@ -43,6 +43,10 @@ def describe(action: Action) -> str:
         waited = action["for"]
         if waited == "ranking":
             return f"wait for the participant's ranking in interaction {position}"
+        if waited == "consent":
+            return "wait for the participant's consent on the phone"
+        if waited == "before":
+            return "wait for the participant's answers before the session (about them)"
         if waited == "questionnaire":
             return f"wait for the participant's questionnaire after interaction {position}"
         return "wait for the participant's final questionnaire"

@@ -9,13 +9,13 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, status
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, field_validator
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.dependencies import DbSession
 from chameleons.backend.studies.errors import http_errors
-from chameleons.backend.wizard import layout, playback, repository, robot
+from chameleons.backend.wizard import layout, playback, repository, robot, typed_speech
 from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
 from chameleons.backend.wizard.console_state import console_state
 
@@ -107,6 +107,28 @@ async def play_prompt(
     worker acknowledged or failed to; ``sent`` false says why (the play is logged anyway)."""
     with http_errors():
         return await playback.play(request.app.state, session_id, data.group)
+
+
+class SayRequest(BaseModel):
+    text: str = Field(min_length=1, max_length=typed_speech.MAX_TEXT,
+                      description="what the robot says, in the actor's voice")  # fmt: skip
+
+    @field_validator("text")
+    @classmethod
+    def _sayable(cls, text: str) -> str:
+        text = " ".join(text.split())
+        if not text:
+            raise ValueError("Type what the robot should say first.")
+        return text
+
+
+@router.post("/sessions/{session_id}/prompts/say", dependencies=WRITE)
+async def say_typed(
+    session_id: int, data: SayRequest, request: Request, _user: CurrentStaff
+) -> dict[str, Any]:
+    """Speech fallback: the robot says the typed sentence (logged as a deviation)."""
+    with http_errors():
+        return await playback.say(request.app.state, session_id, data.text)
 
 
 @router.post("/sessions/{session_id}/prompts/stop", dependencies=WRITE)

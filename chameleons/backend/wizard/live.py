@@ -17,9 +17,8 @@ import anyio
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.auth import repository as staff
-from chameleons.backend.auth.dependencies import SESSION_USER_KEY
-from chameleons.backend.events import live
+from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.studies.errors import NotFoundError
@@ -45,9 +44,8 @@ class Sender:
             await live.send_json(self._websocket, message)
 
 
-def _is_staff(db: Any, user_id: Any) -> bool:
-    user = staff.get_by_id(db, user_id) if isinstance(user_id, int) else None
-    return user is not None and user.is_active
+def _is_staff(db: Any, cookie: dict[str, Any]) -> bool:
+    return staff_sessions.staff_of(db, cookie) is not None
 
 
 def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Message:
@@ -57,9 +55,9 @@ def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Messa
 @router.websocket("/ws/wizard/sessions/{session_id}")
 async def console_feed(websocket: WebSocket, session_id: int) -> None:
     state = websocket.app.state
-    user_id = websocket.session.get(SESSION_USER_KEY)
+    cookie = dict(websocket.session)
     if not live.same_origin(websocket) or not await run_in_threadpool(
-        read, state, _is_staff, user_id
+        read, state, _is_staff, cookie
     ):
         await websocket.close(code=UNAUTHORIZED)
         return
@@ -110,12 +108,16 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
             asyncio.create_task(_answer_pings(websocket, sender)),
         ]
         try:
-            await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+            async with guard.guarded(websocket):
+                done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+                guard.raise_closed(done)
         finally:
             for task in tasks:
                 task.cancel()
             for task in tasks:
-                with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                with contextlib.suppress(
+                    asyncio.CancelledError, WebSocketDisconnect, RuntimeError, guard.SocketClosed
+                ):
                     await task
             with anyio.CancelScope(shield=True):  # even when the server cancels the handler
                 await asyncio.gather(*reads, return_exceptions=True)
@@ -126,10 +128,11 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
 
 async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:
     """Reply to the console's pings (it measures the link); return when it disconnects."""
+    inbound = guard.Inbound(websocket)
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             try:
-                message = json.loads(await websocket.receive_text())
+                message = json.loads(await inbound.text())
             except ValueError:
                 continue
             if isinstance(message, dict) and message.get("type") == "ping":

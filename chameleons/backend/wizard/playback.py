@@ -22,7 +22,7 @@ from chameleons.backend.display.media import media_path
 from chameleons.backend.display.tokens import signing_key
 from chameleons.backend.events.unit_of_work import write_scope
 from chameleons.backend.models.base import utcnow
-from chameleons.backend.wizard import service, speech, worker_link
+from chameleons.backend.wizard import service, speech, typed_speech, worker_link
 from chameleons.backend.wizard.service import Cue, Outcome
 from chameleons.worker.control import PLAY_PROMPT, STOP_PROMPT
 
@@ -51,6 +51,20 @@ async def play(
     body = {"prompt_id": cue.prompt.id, "audio_url": audio_url(state, cue)}
     if cue.lipsync is not None:
         body["lipsync_path"] = cue.lipsync
+    return await _deliver(state, cue, body)
+
+
+async def say(state: Any, session_id: int, text: str) -> dict[str, Any]:
+    """The wizard's typed sentence in the actor's synthetic voice (``typed_speech``)."""
+    cue, audio = await run_in_threadpool(
+        write, state, typed_speech.start_typed, state, session_id, text
+    )
+    body = {"prompt_id": cue.prompt.id, "audio_url": typed_speech.media_url(state, audio.digest)}
+    return await _deliver(state, cue, body)
+
+
+async def _deliver(state: Any, cue: Cue, body: dict[str, Any]) -> dict[str, Any]:
+    """Send a logged play to the booth's worker; log its outcome and watch its speech."""
     bridge = worker_link.bridge_of(state)
     events = speech.open_events(bridge, cue.booth)
     display = speech.open_display(state, cue.booth, cue.prompt.id)

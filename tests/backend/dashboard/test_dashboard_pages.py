@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import random
+import re
 from typing import Any
 
 from fastapi.testclient import TestClient
@@ -9,6 +11,7 @@ from sqlalchemy import Engine
 
 from chameleons.backend.db import build_sessionmaker, session_scope
 from tests.backend.test_auth import add_user, login
+from tests.support.bots import run_session, staff_api, study_with_plan
 from tests.support.factories import PopulatedStudy, add_event, populate
 
 
@@ -99,3 +102,23 @@ def test_several_studies_can_be_switched(client: TestClient, engine: Engine) -> 
     older = client.get("/pi", params={"study": first.study_id}).text
     assert 'data-participant="P002"' not in older
     assert client.get("/pi", params={"study": 999}).status_code == 404
+
+
+def test_the_balance_shows_as_one_coloured_map_with_the_raw_tables_a_click_away(
+    client: TestClient, engine: Engine
+) -> None:
+    pi = staff_api(client, engine, "pi")
+    study_id = study_with_plan(pi, participants=6)
+    for n in range(2):
+        run_session(pi, client, study_id, random.Random(n))
+    page = client.get("/pi", params={"study": study_id}).text
+    balance_map = page.split('id="balance-map"', 1)[1].split("</table>", 1)[0]
+    constraints = re.findall(r'<tr data-constraint="([^"]+)"', balance_map)
+    assert "condition_position" in constraints
+    assert len(constraints) == len(set(constraints)) >= 10
+    cells = re.findall(r'<span class="cell dev-(\d)" title="([^"]+)">(\d+)</span>', balance_map)
+    assert cells
+    for level, title, count in cells:
+        ideal = float(title.rsplit("ideal ", 1)[1])
+        assert int(level) == min(int(abs(int(count) - ideal)), 3), title
+    assert '<details class="balance-raw">' in page  # the named counts, one click away

@@ -92,15 +92,20 @@ def test_questionnaire_is_long_with_reverse_keying_and_versions(
 ) -> None:
     export_to_directory(db_session, ExportRequest(), tmp_path)
     _, rows = read_csv(tmp_path / "questionnaire.csv")
-    assert len(rows) == 12 * (3 * (12 + 10 + 6 + 1) + 2)
+    # per person: 3 interactions' questionnaires, 3 questions before, 4 final questions
+    assert len(rows) == 12 * (3 * (12 + 10 + 6 + 1) + 3 + 4)
     reliable = [r for r in rows if (r["questionnaire"], r["item"]) == ("credibility", "reliable")]
     assert reliable
     assert all(r["reverse_keyed"] == "true" for r in reliable)
     assert all(int(r["scored_value"]) == 8 - int(r["value"]) for r in reliable)
     final = [r for r in rows if r["position"] == "0"]
-    assert len(final) == 24
-    assert all(r["condition"] == "" and r["text"] for r in final)
-    assert {r["version"] for r in rows} == {"rau2009-v1", "final-v1"}
+    assert len(final) == 48
+    assert all(r["condition"] == "" for r in final)
+    assert all(r["text"] for r in final if r["item"] != "imitating_robot")
+    named = [r for r in final if r["item"] == "imitating_robot"]
+    assert all(r["named_condition"] in ("still", "natural", "copy") for r in named)
+    assert {r["position"] for r in rows if r["questionnaire"] == "demographics"} == {"-1"}
+    assert {r["version"] for r in rows} == {"rau2009-v1", "final-v2", "demographics-v1"}
 
 
 def test_rehearsals_only_when_asked(
@@ -134,7 +139,7 @@ def test_codebook_config_and_version(
     metadata = json.loads((tmp_path / "metadata.json").read_text())
     assert metadata["study_config_hash"] == populated.spec.content_hash
     assert metadata["software_version"] == __version__
-    assert metadata["rows"]["questionnaire"] == 12 * 89
+    assert metadata["rows"]["questionnaire"] == 12 * (87 + 3 + 4)
 
 
 def test_parquet_json_and_excel_hold_the_same_rows_as_csv(

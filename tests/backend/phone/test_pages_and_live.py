@@ -21,7 +21,7 @@ def test_the_link_opens_the_session_page_without_login(
         page = participant.get(wizard.phone_path)
     assert page.status_code == 200
     assert 'id="initial-state"' in page.text
-    assert '"view":"welcome"' in page.text.replace(" ", "")
+    assert '"view":"consent"' in page.text.replace(" ", "")  # the consent page comes first
     assert page.headers["cache-control"] == "no-store"
     assert page.headers["referrer-policy"] == "no-referrer"
     assert phone.http.get("/p/not-a-real-token").status_code == 404
@@ -69,8 +69,8 @@ def test_the_phone_socket_follows_the_session_and_closes_at_the_end(
     client: TestClient, wizard: WizardBot, phone: ParticipantBot
 ) -> None:
     with client.websocket_connect(f"/ws/p/{wizard.token}") as socket:
-        assert socket.receive_json()["state"]["view"] == "welcome"
-        wizard.start()
+        assert socket.receive_json()["state"]["view"] == "consent"
+        wizard.start()  # the participant consents and answers the questions before
         views = _views_until(socket, "waiting")
         assert views[-1] == "waiting"
         assert wizard.refresh()["phone"]["connected"] is True
@@ -102,9 +102,13 @@ def test_the_wizard_socket_needs_login_and_streams_events_and_snapshots(
         first = socket.receive_json()
         assert first["type"] == "snapshot"
         assert first["session"]["state"] == "pending"
-        wizard.start()
+        wizard.start()  # after the participant's consent and answers (events too)
         event = _until(socket, lambda m: m["type"] == "event")
-        assert event["event"]["kind"] == "session.started"
+        assert event["event"]["kind"] == "consent.given"
+        started = _until(
+            socket, lambda m: m["type"] == "event" and m["event"]["kind"] == "session.started"
+        )
+        assert started["event"]["source"] == "wizard"
         snapshot = _until(socket, lambda m: m["type"] == "snapshot")
         assert snapshot["session"]["state"] == "running"
         channel = session_channel(wizard.session_id)

@@ -129,7 +129,7 @@ def test_bad_questionnaire_answers_are_refused(
         answers = {**good, **change}
         got = refused(partial(phone.submit_questionnaire, 1, "credibility", answers), 422)
         assert got == message, change
-    assert _count(engine, QuestionnaireResponse) == 0
+    assert _count(engine, QuestionnaireResponse, position=1) == 0
     assert phone.state()["page"] == 1
 
 
@@ -146,7 +146,7 @@ def test_questionnaires_must_match(
     assert refused(lambda: phone.submit_questionnaire(2, "credibility", {}), 409) == (
         "These questions are not open at the moment."
     )
-    assert _count(engine, QuestionnaireResponse) == 0
+    assert _count(engine, QuestionnaireResponse, position=1) == 0
 
 
 def test_questionnaire_pages_are_stored_once_and_finish_the_interaction(
@@ -172,7 +172,9 @@ def test_questionnaire_pages_are_stored_once_and_finish_the_interaction(
         "experience",
     ]
     with build_sessionmaker(engine)() as db:
-        rows = list(db.scalars(select(QuestionnaireResponse)))
+        rows = list(
+            db.scalars(select(QuestionnaireResponse).where(QuestionnaireResponse.position > 0))
+        )
     assert {r.version for r in rows} == {"rau2009-v1"}
     assert all(r.interaction_id is not None and r.position == 1 for r in rows)
     assert sorted(r.value or 0 for r in rows if r.questionnaire == "credibility") == sorted(

@@ -63,7 +63,8 @@ def test_every_change_is_an_event_with_server_time(
             )
         )
     kinds = [e.kind for e in events]
-    assert kinds[:2] == ["session.created", "session.started"]
+    assert kinds[:2] == ["session.created", "consent.given"]
+    assert kinds[2:4] == ["questionnaire.submitted", "session.started"]  # demographics first
     assert kinds[-3:] == [
         "session.final_questionnaire",
         "questionnaire.submitted",
@@ -74,7 +75,7 @@ def test_every_change_is_an_event_with_server_time(
     assert kinds.count("suggestion.decided") == 9
     # discussion, ranking, negotiation, questionnaire by the wizard; done by the phone
     assert kinds.count("interaction.advanced") == 15
-    assert kinds.count("questionnaire.submitted") == 3 * 4 + 1
+    assert kinds.count("questionnaire.submitted") == 1 + 3 * 4 + 1  # before, 3 x 4, final
     assert all(e.server_time is not None for e in events)
     submitted = [e for e in events if e.source == "participant" and e.kind.endswith("submitted")]
     assert all(e.client_id for e in submitted)

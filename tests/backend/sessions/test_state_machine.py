@@ -2,11 +2,23 @@
 
 from __future__ import annotations
 
+import random
+
 from tests.backend.sessions.conftest import refused, to_negotiation
 from tests.support.bots import ParticipantBot, WizardBot
 
 
-def test_advancing_before_start_is_refused(wizard: WizardBot) -> None:
+def test_advancing_before_start_is_refused(wizard: WizardBot, phone: ParticipantBot) -> None:
+    message = refused(lambda: wizard.advance(1, "discussion"), 409)
+    assert message == (
+        "The session has not started yet. Allowed now: wait for the participant's consent on "
+        "the phone."
+    )
+    phone.consent()
+    message = refused(lambda: wizard.advance(1, "discussion"), 409)
+    assert message.endswith("Allowed now: wait for the participant's answers before the "
+                            "session (about them).")  # fmt: skip
+    phone.answer_questionnaires(-1, random.Random(1))
     message = refused(lambda: wizard.advance(1, "discussion"), 409)
     assert message == "The session has not started yet. Allowed now: start the session."
     assert wizard.refresh()["interactions"][0]["state"] == "pending"

@@ -53,6 +53,8 @@ def answer(page: Page, value: int = 4, text: str = "It was a fine conversation."
     for field in page.locator("fieldset.question").all():
         if field.locator("textarea").count():
             field.locator("textarea").fill(text)
+        elif field.locator("label.choice").count():  # a choice: its first answer
+            field.locator("label.choice").first.click()
         else:
             field.locator("label.point").nth(value - 1).click()
 
@@ -137,6 +139,9 @@ def test_a_participant_completes_a_whole_session_on_a_phone(
     page = phone_context.new_page()
     page.set_default_timeout(10_000)
     page.goto(server[0].url + wizard.phone_path)
+    page.get_by_role("button", name="I agree to take part").click()
+    expect(page.get_by_role("heading", name="About you")).to_be_visible()
+    page.get_by_role("button", name=SAVE).click()  # every question about oneself is optional
     expect(page.get_by_role("heading", name="Welcome!")).to_be_visible()
     expect(page.locator("#connection")).to_have_text("Connected")
     wizard.start()
@@ -219,9 +224,11 @@ def test_a_participant_completes_a_whole_session_on_a_phone(
 
     assert wizard.refresh()["state"] == "complete"
     http.close()
-    assert count(engine, QuestionnaireResponse) == 3 * (12 + 10 + 6 + 1) + 2
+    # 3 questions before (skipped), 3 interactions' questionnaires, 4 final questions
+    assert count(engine, QuestionnaireResponse) == 3 + 3 * (12 + 10 + 6 + 1) + 4
+    assert count(engine, QuestionnaireResponse, skipped=True) == 3
     assert count(engine, Event, kind="ranking.submitted") == 3
-    assert count(engine, Event, kind="questionnaire.submitted") == 3 * 4 + 1
+    assert count(engine, Event, kind="questionnaire.submitted") == 1 + 3 * 4 + 1
 
 
 def check_small_screen_and_rotation(page: Page) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import random
 import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -69,10 +70,12 @@ def console(
     live_server: LiveServer, staff: StaffApi, page: Page, engine: Engine, http: httpx.Client
 ) -> Console:
     wizard = WizardBot.create(staff, study_with_plan(staff, participants=2))
+    phone = ParticipantBot(http, wizard.token)
+    phone.prepare(random.Random(wizard.session_id))  # consent and the questions before
     path = f"/wizard/sessions/{wizard.session_id}"
     log_in(page, live_server.url, engine, path)
     page.wait_for_url(f"**{path}")
-    return Console(live_server, wizard, page, ParticipantBot(http, wizard.token))
+    return Console(live_server, wizard, page, phone)
 
 
 @pytest.fixture

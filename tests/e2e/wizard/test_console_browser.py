@@ -135,7 +135,8 @@ def test_a_full_interaction_with_the_participant(console: Console, phone_page: P
     for part in (2, 3, 4):
         answer_page(phone, part)
     expect(page.locator("#primary-action")).to_contain_text("Start interaction 2")
-    expect(page.locator("#timeline li[data-kind='questionnaire.submitted']")).to_have_count(4)
+    # the four pages after interaction 1, and the questions before the session
+    expect(page.locator("#timeline li[data-kind='questionnaire.submitted']")).to_have_count(5)
 
     timeline_holds_every_event(console)
     page.reload()
@@ -233,6 +234,7 @@ def test_the_wizard_opens_the_next_participant_s_session_from_the_picker(
     page.get_by_label("Booth").fill("booth-2")
     page.get_by_role("button", name="Register and open session").click()
     expect(page.locator("#bar-participant")).to_have_text("P001")
-    expect(page.locator("#primary-action")).to_contain_text("Start the session")
+    # The session waits for the participant's consent on the phone before it can start.
+    expect(page.locator("#primary-action")).to_contain_text("Waiting for the participant's consent")
     expect(page.locator("#phone-qr")).to_be_visible()
     expect(page.locator("#health")).to_contain_text("Robot booth-2")

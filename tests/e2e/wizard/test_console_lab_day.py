@@ -37,7 +37,7 @@ def test_a_refusal_shows_below_the_primary_action(console: Console, size: tuple[
     page = console.page
     page.set_viewport_size({"width": size[0], "height": size[1]})
     expect(page.locator("#primary-action")).to_contain_text("Start the session")
-    page.locator("body").click()
+    page.locator("#bar-participant").click()
     page.keyboard.press("a")  # accept: nothing to accept before the negotiation
     flash = page.locator("#flash")
     expect(flash).to_contain_text("Cannot accept now. Allowed now: start the session")
@@ -48,7 +48,7 @@ def test_a_refusal_shows_below_the_primary_action(console: Console, size: tuple[
 def test_a_late_undo_says_it_is_too_late_and_nothing_else(console: Console, page: Page) -> None:
     into_negotiation(console)
     expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 1")
-    page.locator("body").click()
+    page.locator("#bar-participant").click()
     page.keyboard.press("a")
     expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 2")
     undo = next(a for a in console.wizard.refresh()["allowed"] if a["action"] == "undo")
@@ -83,7 +83,7 @@ def test_a_finished_session_turns_prompts_off_and_the_phone_chip_says_it_left(
     assert buttons.evaluate_all("(all) => all.every((b) => b.disabled)")
     expect(phone_page.get_by_role("heading", name="Thank you!")).to_be_visible()
     expect(page.locator("#phone-state")).to_have_text("phone left")
-    page.locator("body").click()
+    page.locator("#bar-participant").click()
     page.keyboard.press("i")  # a prompt's letter: refused, nothing sent
     expect(page.locator("#flash")).to_have_text("The session is over: prompts are off.")
     assert not [e for e in console.events() if e["kind"] == "prompt.played"]

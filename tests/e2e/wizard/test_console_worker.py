@@ -108,3 +108,29 @@ def test_a_failing_check_is_amber_then_red_after_the_grace_period(console: Conso
     expect(page.locator("#health .alarm")).to_have_count(0)
     expect(chip).to_have_attribute("data-state", "bad", timeout=15_000)
     expect(page.locator("#health .alarm")).to_contain_text("Face stream")
+
+
+@pytest.mark.usefixtures("worker")
+def test_a_typed_sentence_is_spoken_tracked_and_logged_as_a_deviation(console: Console) -> None:
+    page = console.page
+    expect(page.locator("#health .chip[data-check='worker']")).to_have_attribute(
+        "data-state", "ok", timeout=15_000
+    )
+    page.locator("#bar-participant").click()
+    page.keyboard.press("Shift+T")
+    expect(page.locator("#say-text")).to_be_focused()
+    page.keyboard.type("The road is about seventy miles away.")
+    page.keyboard.press("Enter")
+    played = page.locator("#timeline li[data-kind='prompt.played']")
+    expect(played).to_contain_text("▶ (typed) The road is about seventy miles away.")
+    expect(played.locator(".tl-latency")).to_have_text(
+        re.compile(r"^ack \d+(\.\d)? ms · speech \d+(\.\d)? ms$")
+    )
+    expect(page.locator("#timeline li[data-kind='wizard.typed_speech']")).to_contain_text(
+        'TYPED SPEECH (deviation): "The road is about seventy miles away."'
+    )
+    expect(page.locator("#say-text")).to_have_value("")
+    kinds = [e["kind"] for e in console.events()
+             if str(e["kind"]).startswith(("prompt.", "wizard.typed"))]  # fmt: skip
+    assert kinds == ["prompt.played", "wizard.typed_speech", "prompt.acked",
+                     "prompt.speech_start", "prompt.speech_end"]  # fmt: skip

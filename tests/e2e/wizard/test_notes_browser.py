@@ -18,7 +18,7 @@ pytestmark = pytest.mark.browser
 def test_a_note_from_the_keyboard_lands_on_the_timeline(console: Console) -> None:
     page = console.page
     expect(page.locator("#primary-action")).to_be_enabled()
-    page.locator("body").click()  # nothing focused: the console's keys are live
+    page.locator("#bar-participant").click()  # nothing focused: the console's keys are live
     page.keyboard.press("Shift+N")
     note = page.locator("#note-text")
     expect(note).to_be_focused()

@@ -93,7 +93,7 @@
     showError("");
     var builders = {
       welcome: welcomeView, waiting: waitingView, listen: listenView, ranking: rankingView,
-      ranked: rankedView, questionnaire: questionnaireView, ended: endedView
+      ranked: rankedView, questionnaire: questionnaireView, ended: endedView, consent: consentView
     };
     app.replaceChildren((builders[next.view] || waitingView)(next));
     app.dataset.view = next.view;
@@ -106,6 +106,18 @@
   function panel() {
     var section = h("section", { class: "panel" });
     for (var i = 0; i < arguments.length; i++) { if (arguments[i]) { section.appendChild(arguments[i]); } }
+    return section;
+  }
+
+  function consentView(s) {
+    var c = s.consent;
+    var section = panel(h("h1", { text: c.title }));
+    c.paragraphs.forEach(function (text) { section.appendChild(h("p", { text: text })); });
+    var agree = h("button", { type: "button", class: "big primary", id: "consent-agree", text: c.agree });
+    var decline = h("button", { type: "button", class: "big", id: "consent-decline", text: c.decline });
+    agree.addEventListener("click", function () { submit("consent", { position: 0, agree: true }); });
+    decline.addEventListener("click", function () { submit("consent", { position: 0, agree: false }); });
+    section.appendChild(h("div", { class: "consent-actions" }, agree, decline));
     return section;
   }
 
@@ -262,7 +274,7 @@
       submit("questionnaire", { position: s.position, questionnaire: q.id, answers: answers }, draftName);
     });
     countAnswered(form, q, counter);
-    var title = s.final ? "Final questions" : "Questions about " + s.robot_name;
+    var title = s.before ? q.title : s.final ? "Final questions" : "Questions about " + s.robot_name;
     return panel(
       h("p", { class: "progress-label", text: "Part " + s.page + " of " + s.pages }),
       h("progress", { value: s.page - 1, max: s.pages, "aria-label": "Progress" }),
@@ -278,6 +290,17 @@
       area.addEventListener("input", function () { onChange(area.value); field.classList.remove("invalid"); });
       field.appendChild(h("legend", { text: number + ". " + item.text }, optional));
       field.appendChild(area);
+      return field;
+    }
+    if (item.options && item.options.length) {
+      field.appendChild(h("legend", { text: number + ". " + item.text }, optional));
+      var list = h("div", { class: "choices" });
+      item.options.forEach(function (option) {
+        var choice = h("input", { type: "radio", name: item.id, value: String(option.id), checked: saved === option.id });
+        choice.addEventListener("change", function () { onChange(option.id); field.classList.remove("invalid"); });
+        list.appendChild(h("label", { class: "choice" }, choice, h("span", { text: option.label })));
+      });
+      field.appendChild(list);
       return field;
     }
     var legend = item.type === "differential"
@@ -311,7 +334,11 @@
         if (text) { answers[item.id] = text; }
       } else {
         var checked = form.querySelector('input[name="' + CSS.escape(item.id) + '"]:checked');
-        if (checked) { answers[item.id] = Number(checked.value); }
+        if (checked && item.options && item.options.length) {
+          // the option's own id: text for a choice, the robot's number for a robot item
+          var picked = item.options.filter(function (o) { return String(o.id) === checked.value; })[0];
+          if (picked) { answers[item.id] = picked.id; }
+        } else if (checked) { answers[item.id] = Number(checked.value); }
       }
     });
     return answers;
@@ -322,10 +349,20 @@
     counter.textContent = done + " of " + q.items.length + " answered";
   }
 
-  function endedView() {
-    return panel(h("h1", { text: "Thank you!" }),
-      h("p", { class: "lead", text: "This session has ended. Thank you for taking part!" }),
-      h("p", { text: "You can give the phone back now." }));
+  function endedView(s) {
+    if (s.declined) {
+      return panel(h("h1", { text: "Thank you!" }),
+        h("p", { class: "lead", text: "You have chosen not to take part, and nothing about you has been kept." }),
+        h("p", { text: "Thank you for your time; please give the phone back to the experimenter." }));
+    }
+    var section = panel(h("h1", { text: "Thank you!" }),
+      h("p", { class: "lead", text: "This session has ended. Thank you for taking part!" }));
+    if (s.debriefing) {
+      section.appendChild(h("h2", { text: s.debriefing.title }));
+      s.debriefing.paragraphs.forEach(function (text) { section.appendChild(h("p", { text: text })); });
+    }
+    section.appendChild(h("p", { text: "You can give the phone back now." }));
+    return section;
   }
 
   /* ---------- submissions: outbox first, then the server; shown as saved only once stored ---------- */

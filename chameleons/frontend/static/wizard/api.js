@@ -54,5 +54,6 @@ export function createApi(sessionId, csrf, onReachable) {
       call("POST", `${session}/condition`, { position, condition, confirm_deviation: confirmDeviation }),
     end: (reason, note) => call("POST", `${session}/end`, { reason, note }),
     note: (text) => call("POST", `${session}/notes`, { text }),
+    say: (text) => call("POST", `${wizard}/prompts/say`, { text }),
   };
 }

@@ -294,8 +294,36 @@ async function addNote(event) {
   }
 }
 
+async function sayTyped(event) {
+  event.preventDefault();
+  const input = $("say-text");
+  const text = input.value.trim();
+  if (!text) {
+    flash("Type what the robot should say first.", "warn");
+    return;
+  }
+  if (board.disabled) {
+    flash("The session is over: prompts are off.", "warn");
+    return;
+  }
+  sendingGroup = "typed";
+  now.sending(text, "typed");
+  try {
+    const result = await api.say(text);
+    input.value = ""; // kept when it failed, so nothing typed is lost
+    if (!result.sent) flash(`Not sent to the robot: ${result.detail || result.reason}`, "warn");
+  } catch (error) {
+    flash(`Not said: ${error.message}`);
+  } finally {
+    sendingGroup = null;
+  }
+  if (!link.live) await refresh();
+  else if (state) now.show(playState(state.events));
+}
+
 bindKeys({
   note: () => $("note-text").focus(),
+  say: () => $("say-text").focus(),
   stop: () => perform("stop", () => api.stop()),
   search: () => $("prompt-search").focus(),
   help: () => $("help-dialog").showModal(),
@@ -324,6 +352,7 @@ bindKeys({
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
 $("note-form").addEventListener("submit", addNote);
+$("say-form").addEventListener("submit", sayTyped);
 bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = filter));
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);

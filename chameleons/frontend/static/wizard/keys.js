@@ -16,7 +16,7 @@ export function bindKeys(handlers) {
     const target = event.target;
     if (TYPING.has(target.tagName)) {
       if (target.id === "prompt-search") searchKeys(event, handlers);
-      if (target.id === "note-text" && event.key === "Escape") target.blur();
+      if (["note-text", "say-text"].includes(target.id) && event.key === "Escape") target.blur();
       return;
     }
     if (event.altKey || event.metaKey) return;
@@ -47,6 +47,11 @@ export function bindKeys(handlers) {
     if (event.shiftKey && event.code === "KeyN") {
       event.preventDefault();
       handlers.note();
+      return;
+    }
+    if (event.shiftKey && event.code === "KeyT") {
+      event.preventDefault();
+      handlers.say();
       return;
     }
     const suggestion = SUGGESTION_CODES.indexOf(event.code);

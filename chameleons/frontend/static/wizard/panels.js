@@ -15,6 +15,8 @@ const STEP_ACTIONS = {
   questionnaire: () => "Send to the questionnaire",
 };
 const WAITING = {
+  consent: "Waiting for the participant's consent on the phone…",
+  before: "Waiting for the participant's answers about themselves…",
   ranking: "Waiting for the participant's ranking…",
   questionnaire: "Waiting for the participant's questionnaire…",
   final_questionnaire: "Waiting for the final questionnaire…",

@@ -33,7 +33,8 @@ export function describe(event, names) {
     case "suggestion.undone": return `Suggestion ${p.index}: decision undone (was ${p.was_accepted ? "accepted" : "declined"})`;
     case "condition.switched": return `Condition of interaction ${p.position}: ${p.from} → ${p.to} (planned ${p.planned})${p.confirmed ? `, confirmed although interaction ${p.repeats_position} already ran ${p.to}` : ""}`;
     case "plan.deviation": return `DEVIATION from plan: interaction ${p.position} runs ${p.to}, planned ${p.planned}`;
-    case "prompt.played": return `▶ ${p.text}`;
+    case "prompt.played": return p.typed ? `▶ (typed) ${p.text}` : `▶ ${p.text}`;
+    case "wizard.typed_speech": return `TYPED SPEECH (deviation): "${p.text}"`;
     case "prompt.acked": return `Worker acknowledged ${p.prompt_id} after ${p.click_to_ack_ms} ms`;
     case "prompt.not_sent": return `Not sent: ${p.detail || p.reason}`;
     case "prompt.speech_start": return `Speech started ${p.click_to_speech_ms} ms after the click`;
@@ -70,7 +71,7 @@ export function describe(event, names) {
 }
 
 const DEVIATIONS = new Set(["plan.deviation", "condition.switched", "session.ended_early",
-  "participant.excluded", "plan_row.handed_on", "prompt.not_voiced"]);
+  "participant.excluded", "plan_row.handed_on", "prompt.not_voiced", "wizard.typed_speech"]);
 
 /** The filter an event belongs to: prompts, phone, robot, deviations or notes. */
 export function category(kind, source) {

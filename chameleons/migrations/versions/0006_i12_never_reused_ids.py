@@ -11,8 +11,8 @@ recorded anywhere and may still be handed out once more).
 PostgreSQL's SERIAL sequences never went back; they become identity columns (the SQL
 standard form) that continue from the old sequence's next value, not from MAX(id)+1.
 
-Revision ID: 0004_i12_never_reused_ids
-Revises: 0003_i13_optional_items
+Revision ID: 0006_i12_never_reused_ids
+Revises: 0004_i13_consent
 Create Date: 2026-11-24 23:50:00
 """
 from __future__ import annotations
@@ -20,8 +20,8 @@ from __future__ import annotations
 from alembic import op
 
 
-revision = '0004_i12_never_reused_ids'
-down_revision = '0003_i13_optional_items'
+revision = '0006_i12_never_reused_ids'
+down_revision = '0004_i13_consent'
 branch_labels = None
 depends_on = None
 

@@ -1,0 +1,95 @@
+"""Server-side staff sessions: what the login cookie points to, and ending them.
+
+The signed cookie holds a random key (``SESSION_KEY``); the database holds its SHA-256 with
+the user, an expiry (``CHAMELEONS_STAFF_SESSION_HOURS``) and, once ended, why. A cookie is
+good only while its record is open, unexpired and its user active, so logout, "log out
+everywhere" and deactivation take effect at once (OWASP Session Management Cheat Sheet:
+server-side invalidation on logout). Flushes only; the caller commits.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import secrets
+from collections.abc import Mapping
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import Session
+
+from chameleons.backend.models import StaffSession, StaffUser
+from chameleons.backend.models.base import utcnow
+
+SESSION_KEY = "staff_session"
+
+
+def _hash(key: str) -> str:
+    return hashlib.sha256(key.encode()).hexdigest()
+
+
+def _aware(moment: datetime) -> datetime:
+    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)  # SQLite drops the zone
+
+
+def start(db: Session, user: StaffUser, hours: float) -> str:
+    """A new session for ``user``; returns the key for the cookie."""
+    key = secrets.token_urlsafe(32)
+    now = utcnow()
+    db.add(
+        StaffSession(
+            key_hash=_hash(key),
+            user_id=user.id,
+            created_at=now,
+            expires_at=now + timedelta(hours=hours),
+        )
+    )
+    db.flush()
+    return key
+
+
+def _record(db: Session, cookie: Mapping[str, Any]) -> StaffSession | None:
+    key = cookie.get(SESSION_KEY)
+    if not isinstance(key, str) or not key:
+        return None
+    return db.scalars(select(StaffSession).where(StaffSession.key_hash == _hash(key))).first()
+
+
+def staff_of(db: Session, cookie: Mapping[str, Any]) -> StaffUser | None:
+    """The active staff member whose open, unexpired session the cookie names."""
+    record = _record(db, cookie)
+    if record is None or record.ended_at is not None:
+        return None
+    if _aware(record.expires_at) <= datetime.now(UTC):
+        return None
+    user = db.get(StaffUser, record.user_id)
+    return user if user is not None and user.is_active else None
+
+
+def end(db: Session, cookie: Mapping[str, Any], reason: str = "logout") -> None:
+    record = _record(db, cookie)
+    if record is not None and record.ended_at is None:
+        record.ended_at = utcnow()
+        record.end_reason = reason
+        db.flush()
+
+
+def end_all(db: Session, user_id: int, reason: str) -> int:
+    """End every open session of the user (log out everywhere, deactivation)."""
+    result = db.execute(
+        update(StaffSession)
+        .where(StaffSession.user_id == user_id, StaffSession.ended_at.is_(None))
+        .values(ended_at=utcnow(), end_reason=reason)
+    )
+    db.flush()
+    return int(getattr(result, "rowcount", 0) or 0)
+
+
+def open_counts(db: Session) -> dict[int, int]:
+    """Open (unended, unexpired) sessions per user id."""
+    rows = db.execute(
+        select(StaffSession.user_id, func.count())
+        .where(StaffSession.ended_at.is_(None), StaffSession.expires_at > utcnow())
+        .group_by(StaffSession.user_id)
+    )
+    return {int(user_id): int(count) for user_id, count in rows}

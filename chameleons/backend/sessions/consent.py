@@ -1,0 +1,66 @@
+"""Consent on the phone, before anything else.
+
+A study with a consent page (``procedure.consent``) cannot start until the participant
+agreed on the phone; ``consent_at`` records when (on the session, and on the participant
+for the participants table). Declining ends the session at once, politely: the session is
+``ended`` with reason ``consent_declined``, the participant ``declined``, and nothing but
+the refusal is kept: the consent page comes before every question, so there are no
+answers, and the timeline only says that the phone connected and consent was declined.
+The participant's plan row is freed for the next participant, as nothing of it ran.
+"""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+
+from sqlalchemy import select
+
+from chameleons.backend.models import Event, QuestionnaireResponse
+from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.studies.errors import ConflictError, GoneError
+
+CONSENT_DECLINED = "consent_declined"
+BEFORE_POSITION = -1  # questionnaires answered before the interactions (demographics)
+
+
+def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
+    consent = flow.spec.procedure.consent
+    session = flow.session
+    if session.state in ("complete", "ended"):
+        raise GoneError("This session has ended. Thank you!")
+    if consent is None:
+        raise ConflictError("This study does not ask for consent on the phone.")
+    if session.consent_at is not None:
+        raise ConflictError("Your consent was already recorded.")
+    if session.state != "pending":
+        raise ConflictError("The session has already started.")
+    now = datetime.now(UTC)
+    payload: dict[str, object] = {"version": consent.version}
+    if agree:
+        session.consent_at = now
+        flow.participant.consent_at = now
+        flow.db.flush()
+        return flow.log("consent.given", source="participant", client_id=client_id, payload=payload)
+    session.state = "ended"
+    session.ended_at = now
+    session.end_reason = CONSENT_DECLINED
+    flow.participant.status = "declined"
+    # Nothing ran, so the plan row goes to the next participant (the session still names it).
+    flow.participant.plan_row_id = None
+    flow.db.flush()
+    return flow.log("consent.declined", source="participant", client_id=client_id, payload=payload)
+
+
+def waiting_before_start(flow: Flow) -> str | None:
+    """What the session waits for before the wizard may start it: ``consent``, the
+    ``before`` questionnaires (demographics), or nothing (None)."""
+    if flow.spec.procedure.consent is not None and flow.session.consent_at is None:
+        return "consent"
+    needed = {q.id for q in flow.spec.questionnaires_for("before")}
+    if not needed:
+        return None
+    query = select(QuestionnaireResponse.questionnaire).where(
+        QuestionnaireResponse.session_id == flow.session.id,
+        QuestionnaireResponse.position == BEFORE_POSITION,
+    )
+    return None if needed <= set(flow.db.scalars(query)) else "before"

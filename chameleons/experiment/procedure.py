@@ -1,0 +1,94 @@
+"""The steps before and after the interactions, as study data: the consent page and the
+debriefing page (the demographics questionnaire is a questionnaire with ``phase: before``,
+the manipulation check items of the final questionnaire).
+
+``procedure`` in the study file is optional; a study without it (or a snapshot stored
+before it existed) has no consent step and no debriefing, as the software had then.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from chameleons.experiment.reader import Reader, join
+
+DEFAULT_AGREE = "I agree to take part"
+DEFAULT_DECLINE = "I do not want to take part"
+
+
+@dataclass(frozen=True)
+class Consent:
+    """The consent page the phone shows first. ``version`` is recorded with the answer;
+    ``text`` is split into paragraphs at blank lines."""
+
+    version: str
+    title: str
+    text: str
+    agree: str = DEFAULT_AGREE
+    decline: str = DEFAULT_DECLINE
+
+
+@dataclass(frozen=True)
+class Debriefing:
+    """The page after the last answer (and after an ended session that had started): what
+    the study was about, including what the participant was not told before."""
+
+    title: str
+    text: str
+
+
+@dataclass(frozen=True)
+class Procedure:
+    consent: Consent | None = None
+    debriefing: Debriefing | None = None
+
+
+def paragraphs(text: str) -> list[str]:
+    return [" ".join(part.split()) for part in text.split("\n\n") if part.strip()]
+
+
+def read_procedure(reader: Reader, node: object) -> Procedure:
+    if node is None:
+        return Procedure()
+    body = reader.mapping(node, "procedure")
+    reader.check_keys(body, "procedure", [], ["consent", "debriefing"])
+    consent = None
+    if "consent" in body:
+        place = join("procedure", "consent")
+        part = reader.mapping(body["consent"], place)
+        reader.check_keys(part, place, ["version", "text"], ["title", "agree", "decline"])
+        consent = Consent(
+            version=reader.text(part, "version", place),
+            title=reader.text(part, "title", place, default="Consent to take part"),
+            text=_long_text(reader, part, place),
+            agree=reader.text(part, "agree", place, default=DEFAULT_AGREE),
+            decline=reader.text(part, "decline", place, default=DEFAULT_DECLINE),
+        )
+    debriefing = None
+    if "debriefing" in body:
+        place = join("procedure", "debriefing")
+        part = reader.mapping(body["debriefing"], place)
+        reader.check_keys(part, place, ["text"], ["title"])
+        debriefing = Debriefing(
+            title=reader.text(part, "title", place, default="About this study"),
+            text=_long_text(reader, part, place),
+        )
+    return Procedure(consent, debriefing)
+
+
+def _long_text(reader: Reader, part: dict[str, Any], place: str) -> str:
+    """Paragraphs kept (YAML ``|`` blocks); each paragraph's line breaks are spaces."""
+    text = reader.text(part, "text", place)
+    return "\n\n".join(paragraphs(text))
+
+
+def procedure_config(procedure: Procedure) -> dict[str, Any] | None:
+    """The snapshot's ``procedure`` (None when the study has neither step, so a study
+    without one keeps the hash it had before the setting existed)."""
+    data: dict[str, Any] = {}
+    if procedure.consent is not None:
+        data["consent"] = dict(procedure.consent.__dict__)
+    if procedure.debriefing is not None:
+        data["debriefing"] = dict(procedure.debriefing.__dict__)
+    return data or None

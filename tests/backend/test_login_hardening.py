@@ -1,0 +1,92 @@
+"""Passwords: minimum length, common-password list, not like the user name. Lock-out per
+username and source address with backoff, so nobody can keep the PI locked out."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+from pydantic import ValidationError
+from sqlalchemy import Engine
+
+from chameleons.backend.auth.passwords import password_problem
+from chameleons.backend.auth.schemas import StaffUserCreate
+from chameleons.backend.auth.throttle import ADDRESS_FACTOR, LoginThrottle
+from tests.backend.test_auth import add_user, login
+
+
+@pytest.mark.parametrize(
+    ("password", "why"),
+    [
+        ("Password1", "too common"),
+        ("qwertyuiop", "too common"),
+        ("12345678901", "only digits"),
+        ("aaaaaaaaaaaa", "different characters"),
+        ("maryjones1", "similar to the user name"),
+    ],
+)
+def test_guessable_passwords_are_refused_with_a_reason(password: str, why: str) -> None:
+    assert why in (password_problem(password, "maryjones") or "")
+    with pytest.raises(ValidationError):
+        StaffUserCreate(username="maryjones", password=password, role="wizard")
+
+
+def test_short_passwords_are_refused_and_good_ones_pass() -> None:
+    with pytest.raises(ValidationError):
+        StaffUserCreate(username="mary", password="x7#k", role="pi")
+    assert password_problem("tall green ladder", "mary") is None
+    StaffUserCreate(username="mary", password="tall green ladder", role="pi")
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_lockout_doubles_with_each_further_failure() -> None:
+    clock = Clock()
+    throttle = LoginThrottle(max_failures=3, lockout_seconds=30, clock=clock)
+    keys = LoginThrottle.keys("pia", "10.0.0.5")
+    for _ in range(3):
+        assert throttle.retry_after(*keys) == 0
+        throttle.record_failure(*keys)
+    assert throttle.retry_after(*keys) == 30
+    clock.now += 31
+    assert throttle.retry_after(*keys) == 0
+    throttle.record_failure(*keys)  # one more after the lock-out: twice as long
+    assert throttle.retry_after(*keys) == 60
+    clock.now += 61
+    throttle.reset(*keys)  # a success forgives
+    throttle.record_failure(*keys)
+    assert throttle.retry_after(*keys) == 0
+
+
+def test_failures_from_one_address_do_not_lock_the_user_out_elsewhere() -> None:
+    throttle = LoginThrottle(max_failures=3, lockout_seconds=30, clock=Clock())
+    attacker = LoginThrottle.keys("pia", "203.0.113.9")
+    for _ in range(50):
+        throttle.record_failure(*attacker)
+    assert throttle.retry_after(*attacker) > 0
+    assert throttle.retry_after(*LoginThrottle.keys("pia", "10.0.0.5")) == 0
+
+
+def test_an_address_spraying_many_names_is_locked_too() -> None:
+    throttle = LoginThrottle(max_failures=3, lockout_seconds=30, clock=Clock())
+    for n in range(3 * ADDRESS_FACTOR):
+        keys = LoginThrottle.keys(f"user{n}", "203.0.113.9")
+        assert throttle.retry_after(*keys) == 0
+        throttle.record_failure(*keys)
+    assert throttle.retry_after(*LoginThrottle.keys("someone", "203.0.113.9")) > 0
+
+
+def test_the_pi_logs_in_while_a_stranger_fails_on_her_name(app: FastAPI, engine: Engine) -> None:
+    add_user(engine, "pia", "tall green ladder", "pi")
+    with TestClient(app, client=("203.0.113.9", 4000)) as stranger:
+        for _ in range(10):
+            login(stranger, "pia", "wrong guess!")
+        assert login(stranger, "pia", "tall green ladder").status_code == 429  # type: ignore[attr-defined]
+    with TestClient(app, client=("10.0.0.5", 4000)) as lab:
+        assert login(lab, "pia", "tall green ladder").status_code == 303  # type: ignore[attr-defined]
