@@ -16,6 +16,7 @@ from chameleons.backend.export.service import (
     export_to_directory,
 )
 from chameleons.cli.common import load_settings
+from chameleons.prompts.locations import prompts_root
 
 
 @click.command("export")
@@ -56,6 +57,7 @@ def export(
         formats=("csv", *formats),
         include_rehearsal=include_rehearsal,
         raw_csv=raw_csv,
+        prompts_dir=prompts_root(settings),
     )
     try:
         with build_sessionmaker(engine)() as db:

@@ -67,6 +67,25 @@ from chameleons.rehearsal.script import SCRIPTS
     help="Prompts the wizard plays: all of them, a few, or none.",
 )
 @click.option(
+    "--drop-out",
+    "drop_out",
+    type=click.FloatRange(0.0, 1.0),
+    default=0.0,
+    show_default=True,
+    metavar="RATE",
+    help="Share of sessions that drop out (never started, or ended early during an "
+    "interaction with a reason), seeded by --seed.",
+)
+@click.option(
+    "--deviate",
+    type=click.FloatRange(0.0, 1.0),
+    default=0.0,
+    show_default=True,
+    metavar="RATE",
+    help="Share of sessions where the wizard reruns an earlier interaction's condition "
+    "(confirmed as a deviation), seeded by --seed.",
+)
+@click.option(
     "--simulate-face/--no-simulate-face",
     default=True,
     show_default=True,
@@ -75,7 +94,7 @@ from chameleons.rehearsal.script import SCRIPTS
 def rehearse(
     participants: int, seed: int, pattern: str, server: str | None, username: str | None,
     password: str | None, study_id: int | None, booth: str | None, script: str,
-    simulate_face: bool,
+    drop_out: float, deviate: float, simulate_face: bool,
 ) -> None:  # fmt: skip
     """Run whole sessions with a scripted wizard and participant, marked as rehearsals.
 
@@ -83,7 +102,7 @@ def rehearse(
     driving the virtual robot. Rehearsals stay out of balance tables, exports and the
     analysis unless asked for (chameleons export --include-rehearsal).
     """
-    options = Options(participants, seed, pattern, script)
+    options = Options(participants, seed, pattern, script, drop_out=drop_out, deviate=deviate)
     try:
         if server is not None:
             if not username or not password:

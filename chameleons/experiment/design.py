@@ -91,6 +91,12 @@ class Plan:
     notes: list[str]
 
 
+# The planner's algorithm version, exported with every data set: ``plan(study, n, seed)``
+# gives the same rows for the same study, seed and planner version. Bump it with any change
+# that would give different rows (tests/experiment/test_plan.py pins known rows).
+PLANNER_VERSION = "1"
+
+
 def plan(study: Study, participants: int, seed: int = 0) -> Plan:
     if participants < 0:
         raise PlanError("the number of participants cannot be negative")

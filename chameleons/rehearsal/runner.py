@@ -22,6 +22,7 @@ from chameleons.experiment.model import Study
 from chameleons.experiment.study import load_default_study
 from chameleons.rehearsal.patterns import PATTERNS, Keying, Persona, not_keyed
 from chameleons.rehearsal.script import ConsoleWizard, PhoneParticipant, Tally, run_session
+from chameleons.rehearsal.situations import draw, situations_rng
 from chameleons.rehearsal.sockets import DisplayScreen, PhoneSocket
 
 Json = dict[str, Any]
@@ -52,6 +53,8 @@ class Options:
     pattern: str = "neutral"
     script: str = "full"  # prompts the wizard plays: full, brief or silent
     display: bool = True  # also be the virtual robot's display page
+    drop_out: float = 0.0  # share of sessions that drop out (see .situations)
+    deviate: float = 0.0  # share of sessions with a confirmed repeated condition
 
 
 @dataclass
@@ -64,6 +67,7 @@ class Summary:
     options: Options
     tally: Tally
     display: dict[str, int] = field(default_factory=dict)
+    situations: list[str] = field(default_factory=list)  # dropouts and deviations made
 
     def lines(self) -> list[str]:
         count = len(self.codes)
@@ -90,6 +94,13 @@ class Summary:
             for condition, values in sorted(tally.accepted.items())
         )
         lines.append(f"Accepted suggestions per interaction (mean): {accepted or '-'}.")
+        if self.options.drop_out or self.options.deviate:
+            lines.append(
+                f"Dropouts and deviations (--drop-out {self.options.drop_out:g}, --deviate "
+                f"{self.options.deviate:g}): {tally.unstarted} never started, "
+                f"{tally.ended_early} ended early, {tally.deviations} deviated."
+            )
+            lines += [f"  {said}" for said in self.situations]
         lines += [f"Note: {problem}" for problem in tally.problems[:5]]
         lines.append("Export with: chameleons export --include-rehearsal --out DIR")
         return lines
@@ -182,12 +193,15 @@ def _sessions(
 ) -> Summary:
     pattern = PATTERNS[options.pattern]
     rng = random.Random(options.seed)
+    situations = situations_rng(options.seed)  # its own stream: answers stay the seed's
     tally = Tally()
     summary = Summary(study["id"], study["name"], [], [], 0.0, options, tally)
     for number in range(1, options.participants + 1):
         persona = Persona.draw(pattern, random.Random(rng.getrandbits(64)))
         wizard_rng = random.Random(rng.getrandbits(64))
         bot = WizardBot.create(staff, study["id"], booth=target.booth, rehearsal=True)
+        count = int(bot.snapshot["interaction_count"])
+        situation = draw(situations, options.drop_out, options.deviate, count)
         wizard = ConsoleWizard(bot, options.script, tally, wizard_rng)
         keying = keying_for(bot.snapshot["config_hash"], target.studies)
         if keying is not_keyed:
@@ -196,7 +210,7 @@ def _sessions(
         try:
             participant = PhoneParticipant(ParticipantBot(phone_http, bot.token), socket,
                                            persona, keying)  # fmt: skip
-            snapshot = run_session(wizard, participant, tally)
+            snapshot = run_session(wizard, participant, tally, situation)
         except (ApiError, TimeoutError) as error:
             code = bot.snapshot["participant"]["code"]
             raise RehearsalError(f"Session {bot.session_id} ({code}) broke off: {error}") from error
@@ -205,5 +219,11 @@ def _sessions(
         code = snapshot["participant"]["code"]
         summary.codes.append(code)
         summary.session_ids.append(bot.session_id)
-        say(f"  {number}/{options.participants}: {code} complete (session {bot.session_id})")
+        repeated = None
+        if situation.deviate_at is not None:
+            repeated = str(snapshot["interactions"][situation.deviate_at - 1]["condition"])
+        summary.situations += situation.describe(code, repeated)
+        state = {"complete": "complete", "ended": "ended early"}.get(snapshot["state"])
+        say(f"  {number}/{options.participants}: {code} {state or 'never started'} "
+            f"(session {bot.session_id})")  # fmt: skip
     return summary

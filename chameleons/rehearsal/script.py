@@ -16,6 +16,8 @@ from typing import Any
 from chameleons.backend.sessions.answers import FINAL_POSITION
 from chameleons.backend.sessions.bot import ApiError, ParticipantBot, StaffApi, WizardBot
 from chameleons.rehearsal.patterns import Keying, Persona, not_keyed
+from chameleons.rehearsal.situations import NONE as NO_SITUATION
+from chameleons.rehearsal.situations import Situation, repeat_earlier_condition
 from chameleons.rehearsal.sockets import PhoneSocket
 
 Json = dict[str, Any]
@@ -32,6 +34,9 @@ class Tally:
     robot_applied: int = 0
     robot_not_applied: int = 0
     phone_updates: int = 0
+    unstarted: int = 0  # --drop-out: registered, never started
+    ended_early: int = 0  # --drop-out: ended during an interaction
+    deviations: int = 0  # --deviate: an earlier condition run again, confirmed
     accepted: dict[str, list[int]] = field(default_factory=dict)  # condition -> per interaction
     problems: list[str] = field(default_factory=list)
 
@@ -213,11 +218,47 @@ def _negotiate(
         decisions.append(accepted)
 
 
-def run_session(wizard: ConsoleWizard, participant: PhoneParticipant, tally: Tally) -> Json:
-    """Drive a created, not yet started session to its end; returns the final snapshot."""
+def end_during(
+    wizard: ConsoleWizard, participant: PhoneParticipant, position: int, reason: str
+) -> None:
+    """Interaction ``position`` up to one decided suggestion, then the session ends early
+    (that interaction is partial, later ones never run)."""
     bot = wizard.bot
+    bot.advance(position, "discussion")
+    wizard.apply_robot()
+    bot.advance(position, "ranking")
+    interaction = bot.interaction(position)
+    expert = {str(item["id"]): int(item["expert_rank"]) for item in interaction["items"]}
+    participant.rank(position, expert)
+    bot.advance(position, "negotiation")
+    behaviour = behaviour_of(bot.snapshot, str(bot.interaction(position)["condition"]))
+    pending = [s for s in bot.interaction(position)["suggestions"] if s["accepted"] is None]
+    if pending:
+        bot.decide(position, pending[0]["index"], participant.persona.accepts(behaviour))
+    bot.end(reason, "rehearsal (--drop-out)")
+
+
+def run_session(
+    wizard: ConsoleWizard,
+    participant: PhoneParticipant,
+    tally: Tally,
+    situation: Situation = NO_SITUATION,
+) -> Json:
+    """Drive a created, not yet started session to its end (or to the dropout or deviation
+    ``situation`` asks for); returns the final snapshot."""
+    bot = wizard.bot
+    if situation.stop_at == 0:
+        tally.unstarted += 1
+        return bot.refresh()
     bot.start()
     for position in range(1, bot.snapshot["interaction_count"] + 1):
+        if position == situation.deviate_at:
+            repeat_earlier_condition(bot, situation)
+            tally.deviations += 1
+        if position == situation.stop_at:
+            end_during(wizard, participant, position, situation.reason)
+            tally.ended_early += 1
+            return bot.refresh()
         run_interaction(wizard, participant, position, tally)
     participant.answer(FINAL_POSITION, None)
     snapshot = bot.refresh()

@@ -13,6 +13,14 @@ from chameleons.backend.models import Event
 from chameleons.backend.models.base import utcnow
 
 OUTBOX_KEY = "live_outbox"
+GONE_KEY = "live_gone_sessions"
+GONE: dict[str, Any] = {"type": "gone"}
+
+
+def announce_gone(db: Session, session_ids: list[int]) -> None:
+    """After the commit, tell whoever watches these sessions live that they no longer exist
+    (a withdrawal deleted them): an open console tab says so instead of going stale."""
+    db.info.setdefault(GONE_KEY, []).extend(session_ids)
 
 
 def record(

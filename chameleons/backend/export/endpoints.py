@@ -12,6 +12,7 @@ from sqlalchemy.orm import sessionmaker
 from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.export.selection import StudyNotFoundError
 from chameleons.backend.export.service import ExportFormat, ExportRequest, stream_zip
+from chameleons.prompts.locations import prompts_root
 
 router = APIRouter(prefix="/api/pi", tags=["export"])
 
@@ -29,8 +30,9 @@ def export_zip(
     factory: sessionmaker[DbSession] = request.app.state.sessionmaker
     formats: tuple[ExportFormat, ...] = ("csv", *(f for f in format or [] if f != "csv"))
     export = ExportRequest(
-        study_id=study, formats=formats, include_rehearsal=include_rehearsal, raw_csv=raw_csv
-    )
+        study_id=study, formats=formats, include_rehearsal=include_rehearsal, raw_csv=raw_csv,
+        prompts_dir=prompts_root(request.app.state.settings),
+    )  # fmt: skip
     try:
         name, chunks = stream_zip(factory, export)
     except StudyNotFoundError as exc:

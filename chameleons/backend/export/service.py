@@ -31,12 +31,14 @@ from chameleons.backend.export.columns import (
 )
 from chameleons.backend.export.datapackage import datapackage
 from chameleons.backend.export.frames import table_frame
+from chameleons.backend.export.provenance import provenance, provenance_codebook
 from chameleons.backend.export.scoring import score_rows
 from chameleons.backend.export.selection import resolve_study
 from chameleons.backend.export.statfiles import StatFormat, write_statfile
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.study import study_from_config
+from chameleons.prompts.locations import REPOSITORY_PROMPTS
 
 ExportFormat = Literal["csv", "parquet", "xlsx", "json", "sav", "dta"]
 FORMATS: tuple[ExportFormat, ...] = ("csv", "parquet", "xlsx", "json", "sav", "dta")
@@ -51,6 +53,8 @@ class ExportRequest:
     # CSV text cells a spreadsheet would run as formulas get a leading ' (OWASP); raw_csv
     # writes them as stored (for R/pandas users who never open the files in a spreadsheet).
     raw_csv: bool = False
+    # The prompts folder in use (for the catalogue versions); None: the repository's.
+    prompts_dir: Path | None = None
 
 
 @dataclass
@@ -77,6 +81,7 @@ class ExportPlan:
             "exported_at": datetime.now(UTC).isoformat(timespec="seconds"),
             "study": {"id": self.study.id, "name": self.study.name},
             "study_config_hash": self.study.config_hash,
+            **provenance(self.study, self.spec, self.request.prompts_dir or REPOSITORY_PROMPTS),
             "include_rehearsal": self.request.include_rehearsal,
             "formats": ["csv", *(f for f in self.request.formats if f != "csv")],
             "list_separator": LIST_SEPARATOR,
@@ -121,6 +126,7 @@ def plan_export(db: DbSession, request: ExportRequest) -> ExportPlan:
         for entry in book:
             if entry["type"] == "string":
                 entry["description"] = f"{entry['description']} {CSV_GUARD_NOTE}"
+    book += provenance_codebook()  # metadata.json keys, not CSV cells
     plan.parts.append(
         Part(
             "codebook.csv",
@@ -210,6 +216,12 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
         "R:      Rscript analysis.R   (the whole analysis: tests, models, plots)",
         "        scores <- read.csv('scores.csv')",
         "pandas: scores = pandas.read_csv('scores.csv')",
+        "",
+        "Provenance (metadata.json, described in codebook.csv under table metadata.json):",
+        "the study configuration's hash and how to recompute it from study_config.json,",
+        "the plan seed and planner version, the software version and git commit, and the",
+        "prompt catalogue versions. interactions.csv says per interaction which recording",
+        "the natural condition replayed (natural_source, natural_recording).",
         "",
         *(f"- {t.name}: {t.description}" for t in specs),
         "",

@@ -28,3 +28,11 @@ class Base(DeclarativeBase):
         dict[str, Any]: JSON,
         list[Any]: JSON,
     }
+
+
+# Ids of participant data are never handed out twice, even after a withdrawal deleted the
+# highest ones: a console tab, a file name (``interaction-<id>-...``) or an event cursor
+# that names a deleted id must never come to mean someone else. SQLite reuses the largest
+# rowid unless the table says AUTOINCREMENT; PostgreSQL identity columns (like the sequences
+# of SERIAL before them) never go back.
+NEVER_REUSED_IDS = {"sqlite_autoincrement": True}

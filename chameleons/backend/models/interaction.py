@@ -3,10 +3,10 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, UniqueConstraint
+from sqlalchemy import CheckConstraint, ForeignKey, Identity, String, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base
 
 
 class Interaction(Base):
@@ -19,9 +19,10 @@ class Interaction(Base):
     __table_args__ = (
         UniqueConstraint("session_id", "position"),
         CheckConstraint("position >= 1", name="position"),
+        NEVER_REUSED_IDS,
     )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("session.id", ondelete="CASCADE"))
     position: Mapped[int]
     state: Mapped[str] = mapped_column(String(32), default="pending")

@@ -2,10 +2,10 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, Text, UniqueConstraint
+from sqlalchemy import CheckConstraint, ForeignKey, Identity, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 PARTICIPANT_STATUSES = ("registered", "active", "complete", "ended_early")
 
@@ -26,9 +26,10 @@ class Participant(Base):
             "status IN ('registered', 'active', 'complete', 'ended_early', 'declined')",
             name="status",
         ),
+        NEVER_REUSED_IDS,
     )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     study_id: Mapped[int] = mapped_column(ForeignKey("study.id", ondelete="RESTRICT"))
     code: Mapped[str] = mapped_column(String(32))
     plan_row_id: Mapped[int | None] = mapped_column(ForeignKey("plan_row.id", ondelete="RESTRICT"))

@@ -2,10 +2,18 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, Text, UniqueConstraint, false
+from sqlalchemy import (
+    CheckConstraint,
+    ForeignKey,
+    Identity,
+    String,
+    Text,
+    UniqueConstraint,
+    false,
+)
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 
 class QuestionnaireResponse(Base):
@@ -20,12 +28,11 @@ class QuestionnaireResponse(Base):
     __tablename__ = "questionnaire_response"
     __table_args__ = (
         UniqueConstraint("session_id", "position", "questionnaire", "item"),
-        CheckConstraint(
-            "skipped OR value IS NOT NULL OR text IS NOT NULL", name="has_answer"
-        ),
+        CheckConstraint("skipped OR value IS NOT NULL OR text IS NOT NULL", name="has_answer"),
+        NEVER_REUSED_IDS,
     )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("session.id", ondelete="CASCADE"))
     interaction_id: Mapped[int | None] = mapped_column(
         ForeignKey("interaction.id", ondelete="CASCADE")

@@ -2,19 +2,22 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String
+from sqlalchemy import CheckConstraint, ForeignKey, Identity, String
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 
 class Recording(Base):
     """A face-stream file a worker wrote for an interaction (indexed, not stored, here)."""
 
     __tablename__ = "recording"
-    __table_args__ = (CheckConstraint("stream IN ('participant', 'agent')", name="stream"),)
+    __table_args__ = (
+        CheckConstraint("stream IN ('participant', 'agent')", name="stream"),
+        NEVER_REUSED_IDS,
+    )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     interaction_id: Mapped[int] = mapped_column(ForeignKey("interaction.id", ondelete="CASCADE"))
     stream: Mapped[str] = mapped_column(String(16))
     path: Mapped[str] = mapped_column(String(512))

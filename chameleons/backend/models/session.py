@@ -2,10 +2,10 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import ForeignKey, String, Text
+from sqlalchemy import ForeignKey, Identity, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 
 class Session(Base):
@@ -18,8 +18,9 @@ class Session(Base):
     participant agreed on the phone (studies with a consent page)."""
 
     __tablename__ = "session"
+    __table_args__ = NEVER_REUSED_IDS
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     study_id: Mapped[int] = mapped_column(ForeignKey("study.id", ondelete="RESTRICT"))
     participant_id: Mapped[int] = mapped_column(
         ForeignKey("participant.id", ondelete="CASCADE"), index=True

@@ -2,10 +2,10 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, UniqueConstraint
+from sqlalchemy import CheckConstraint, ForeignKey, Identity, String, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column
 
-from chameleons.backend.models.base import Base, utcnow
+from chameleons.backend.models.base import NEVER_REUSED_IDS, Base, utcnow
 
 
 class Suggestion(Base):
@@ -18,9 +18,10 @@ class Suggestion(Base):
         CheckConstraint('"index" >= 1', name="index_range"),
         CheckConstraint("kind IN ('optimal', 'random')", name="kind"),
         CheckConstraint("to_rank <> from_rank AND to_rank >= 1", name="moves"),
+        NEVER_REUSED_IDS,
     )
 
-    id: Mapped[int] = mapped_column(primary_key=True)
+    id: Mapped[int] = mapped_column(Identity(), primary_key=True)
     interaction_id: Mapped[int] = mapped_column(ForeignKey("interaction.id", ondelete="CASCADE"))
     index: Mapped[int]
     item: Mapped[str] = mapped_column(String(64))

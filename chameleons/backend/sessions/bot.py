@@ -135,8 +135,16 @@ class WizardBot:
     def undo(self, position: int, index: int) -> Json:
         return self._do("undo", {"position": position, "index": index})
 
-    def switch_condition(self, condition: str, position: int | None = None) -> Json:
-        return self._do("condition", {"condition": condition, "position": position})
+    def switch_condition(
+        self, condition: str, position: int | None = None, confirm_deviation: bool = False
+    ) -> Json:
+        body = {"condition": condition, "position": position}
+        return self._do("condition", {**body, "confirm_deviation": confirm_deviation})
+
+    def end(self, reason: str, note: str = "") -> Json:
+        """End the session early (reasons: participant_withdrew, technical_failure, time,
+        other with a note)."""
+        return self._do("end", {"reason": reason, "note": note})
 
     def interaction(self, position: int) -> Json:
         interaction: Json = self.snapshot["interactions"][position - 1]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
@@ -15,6 +17,7 @@ from chameleons.backend.dashboard.context import flash, page_context, study_or_4
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
 from chameleons.backend.models import Interaction, Recording, Session
 from chameleons.backend.withdrawal.rehearsal import RehearsalError, set_rehearsal
+from chameleons.backend.withdrawal.scrub import scrub_database
 from chameleons.backend.withdrawal.service import (
     ParticipantNotFoundError,
     WithdrawalError,
@@ -41,6 +44,18 @@ def _http_error(exc: WithdrawalError) -> HTTPException:
     if isinstance(exc, RehearsalError):
         return HTTPException(status.HTTP_409_CONFLICT, str(exc))
     return HTTPException(status.HTTP_400_BAD_REQUEST, str(exc))
+
+
+def withdraw_and_scrub(
+    db: DbSession, study_id: int, code: str, confirmation: str, data_dir: Path
+) -> WithdrawalResult:
+    """Withdraw, commit, then scrub the database file. The commit comes here, not in the
+    request's unit of work: SQLite's checkpoint can only move committed pages, and the
+    report must say what actually happened to them."""
+    result = withdraw_participant(db, study_id, code, confirmation, data_dir)
+    db.commit()
+    removed, kept = scrub_database(db.get_bind())  # type: ignore[arg-type]
+    return replace(result, removed=result.removed + tuple(removed), kept=tuple(kept))
 
 
 def _recording_count(db: DbSession, participant_id: int) -> int:
@@ -82,7 +97,7 @@ def withdraw_submit(
 ) -> Response:  # fmt: skip
     found = study_or_404(db, study)
     try:
-        result = withdraw_participant(db, found.id, code, confirm, settings.data_dir)
+        result = withdraw_and_scrub(db, found.id, code, confirm, settings.data_dir)
     except ParticipantNotFoundError as exc:
         raise _http_error(exc) from exc
     except WithdrawalError as exc:
@@ -92,30 +107,28 @@ def withdraw_submit(
             recordings=_recording_count(db, participant.id), error=str(exc),
         )  # fmt: skip
         return _withdraw_page(request, templates, context, status.HTTP_400_BAD_REQUEST)
-    flash(request, _withdrawn_message(code, result))
-    return RedirectResponse(f"/pi{study_query(found)}", status_code=status.HTTP_303_SEE_OTHER)
-
-
-def _withdrawn_message(code: str, result: WithdrawalResult) -> str:
-    row = f"plan row {result.plan_row_number} is free" if result.plan_row_number else "no plan row"
-    files = f"{result.files_deleted} recording file{'s' if result.files_deleted != 1 else ''}"
-    return f"{code} was withdrawn: all data and {files} deleted; {row}."
+    context = page_context(request, user, found, "overview", code=code, result=result)
+    return templates.TemplateResponse(
+        request, "pi/withdrawn.html", context, headers={"Cache-Control": "no-store"}
+    )
 
 
 @router.post("/api/pi/participants/{code}/withdraw", dependencies=CSRF)
 def withdraw_api(
     code: str, body: WithdrawRequest, _pi: CurrentPI, db: DbSession, settings: AppSettings,
     study: int | None = None,
-) -> dict[str, int | None]:  # fmt: skip
+) -> dict[str, object]:  # fmt: skip
     found = study_or_404(db, study)
     try:
-        result = withdraw_participant(db, found.id, code, body.confirm, settings.data_dir)
+        result = withdraw_and_scrub(db, found.id, code, body.confirm, settings.data_dir)
     except WithdrawalError as exc:
         raise _http_error(exc) from exc
     return {
         "plan_row": result.plan_row_number,
         "sessions": result.sessions,
         "files_deleted": result.files_deleted,
+        "removed": list(result.removed),
+        "not_removed": list(result.kept),
     }
 
 

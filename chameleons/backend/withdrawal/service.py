@@ -1,4 +1,5 @@
-"""Withdraw a participant: delete every row and file of theirs, free their plan row.
+"""Withdraw a participant: delete every row and file of theirs and what was derived from
+them (see :mod:`.derived`), free their plan row, and report each thing removed.
 
 Order matters for "no trace" even after a crash: rows are deleted and flushed, then the
 files; the request commits afterwards. If deleting a file fails the transaction rolls
@@ -10,13 +11,15 @@ only that a withdrawal happened and which plan row was freed: no code, no conten
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.analysis.cache import analyses
+from chameleons.backend.events.repository import announce_gone
 from chameleons.backend.models import (
     Event,
     Interaction,
@@ -26,6 +29,13 @@ from chameleons.backend.models import (
     Recording,
     Session,
     Suggestion,
+)
+from chameleons.backend.withdrawal.derived import (
+    Withdrawn,
+    YokedReplay,
+    forget_replays,
+    redact_events,
+    yoked_replays,
 )
 from chameleons.backend.withdrawal.files import delete_files, files_of, recording_file
 
@@ -42,9 +52,14 @@ class ParticipantNotFoundError(WithdrawalError):
 
 @dataclass(frozen=True)
 class WithdrawalResult:
+    """``removed``: one sentence per kind of thing deleted; ``kept``: what could not be
+    removed from here, each with why (see :mod:`.scrub` for the database file)."""
+
     plan_row_number: int | None
     sessions: int
     files_deleted: int
+    removed: tuple[str, ...] = ()
+    kept: tuple[str, ...] = field(default_factory=tuple)
 
 
 def find_participant(db: DbSession, study_id: int, code: str) -> Participant:
@@ -71,18 +86,30 @@ def withdraw_participant(
     interaction_ids = list(
         db.scalars(select(Interaction.id).where(Interaction.session_id.in_(session_ids)))
     )
-    indexed = [
-        recording_file(data_dir, stored)
-        for stored in db.scalars(
-            select(Recording.path).where(Recording.interaction_id.in_(interaction_ids))
-        )
-    ]
+    recordings = list(
+        db.execute(
+            select(Recording.id, Recording.path).where(
+                Recording.interaction_id.in_(interaction_ids)
+            )
+        ).tuples()
+    )
+    indexed = [recording_file(data_dir, stored) for _, stored in recordings]
     files = files_of(indexed, interaction_ids, data_dir)
+    withdrawn = Withdrawn(
+        code, participant.id, frozenset(interaction_ids), frozenset(r for r, _ in recordings)
+    )
+    replays = yoked_replays(db, study_id, withdrawn, data_dir)
+    replay_files = [path for replay in replays.values() for path in replay.files]
+    withdrawn = replace(withdrawn, file_names=frozenset(p.name for p in files + replay_files))
     row = _plan_row_of(db, participant, session_ids)
     _delete_rows(db, participant, session_ids, interaction_ids)
+    forget_replays(db, replays)
+    redacted = redact_events(db, study_id, withdrawn)
     if row is not None:
         row.withdrawals += 1
     deleted = delete_files(files, data_dir)
+    replayed = delete_files(replay_files, data_dir)
+    analyses.clear()  # cached analyses were computed from their rows
     db.add(
         Event(
             study_id=study_id,
@@ -92,7 +119,41 @@ def withdraw_participant(
         )
     )
     db.flush()
-    return WithdrawalResult(row.row_number if row else None, len(session_ids), deleted)
+    announce_gone(db, session_ids)
+    removed = _removed(code, len(session_ids), len(interaction_ids), deleted, replays, replayed)
+    if redacted:
+        removed.append(
+            f"what {redacted} event{_s(redacted)} of other sessions said about them "
+            "(each keeps its kind and time, not its content)"
+        )
+    removed.append("the analysis page's cached results")
+    return WithdrawalResult(
+        row.row_number if row else None, len(session_ids), deleted, tuple(removed)
+    )
+
+
+def _s(count: int) -> str:
+    return "" if count == 1 else "s"
+
+
+def _removed(
+    code: str, sessions: int, interactions: int, files: int,
+    replays: dict[int, YokedReplay], replay_files: int,
+) -> list[str]:  # fmt: skip
+    removed = [
+        f"{code}'s {sessions} session{_s(sessions)} with {interactions} "
+        f"interaction{_s(interactions)}: rankings, suggestions, answers and timeline",
+        f"{files} face recording file{_s(files)} of {code}",
+    ]
+    for replay in sorted(replays.values(), key=lambda r: (r.code, r.position)):
+        removed.append(
+            f"the robot's recording in {replay.code}'s interaction {replay.position}, which "
+            f"replayed {code}'s face (yoked natural; {len(replay.files)} file"
+            f"{_s(len(replay.files))}; {replay.code}'s own data stays)"
+        )
+    if replays and replay_files == 0:
+        removed.append("(the robot's replay recordings had no files left on this server)")
+    return removed
 
 
 def _plan_row_of(db: DbSession, participant: Participant, session_ids: list[int]) -> PlanRow | None:

@@ -2,7 +2,8 @@
 
 On connect ``{"type": "console", ...}`` (the whole console state); then, per batch of
 committed changes, each new event as ``{"type": "event", ...}`` followed by a fresh console
-state; and once a second the robot's health as ``{"type": "health", ...}``.
+state; and once a second the robot's health as ``{"type": "health", ...}``. When the session
+is deleted (its participant withdrawn), ``{"type": "gone"}`` and the socket closes.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from starlette.concurrency import run_in_threadpool
 from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
+from chameleons.backend.events.repository import GONE
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import health, worker_link
 from chameleons.backend.wizard.console_state import console_state
@@ -63,6 +65,10 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
     try:
         first = await run_in_threadpool(read, state, _state_message, state, session_id, base_url)
     except NotFoundError:
+        # Accepted first so the console learns why (a refused handshake looks like a
+        # network failure and it would retry for ever); staff only, checked above.
+        await websocket.accept()
+        await live.send_json(websocket, GONE)
         await websocket.close(code=NOT_FOUND)
         return
     await websocket.accept()
@@ -74,12 +80,14 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
 
         reads: set[asyncio.Future[Message]] = set()
 
-        async def forward_changes() -> None:
+        async def forward_changes() -> Message:
             while True:
                 messages = [await subscription.get(), *subscription.drain()]
                 for message in messages:
                     if message.get("type") != "resync":
                         await sender.send(message)
+                if any(message.get("type") == GONE["type"] for message in messages):
+                    return GONE  # withdrawn: the tab says so and stops reconnecting
                 # Shielded: a read cut off by a disconnect still finishes (and gives its
                 # database connection back) before the handler returns.
                 reading = asyncio.ensure_future(
@@ -87,7 +95,12 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
                 )
                 reads.add(reading)
                 reading.add_done_callback(reads.discard)
-                await sender.send(await asyncio.shield(reading))
+                try:
+                    fresh = await asyncio.shield(reading)
+                except NotFoundError:  # deleted between the change and this read
+                    await sender.send(GONE)
+                    return GONE
+                await sender.send(fresh)
 
         tasks = [
             asyncio.create_task(forward_changes()),
@@ -108,6 +121,9 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
                     await task
             with anyio.CancelScope(shield=True):  # even when the server cancels the handler
                 await asyncio.gather(*reads, return_exceptions=True)
+        if tasks[0].done() and not tasks[0].cancelled() and tasks[0].result() is GONE:
+            with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+                await websocket.close(code=NOT_FOUND)
 
 
 async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:

@@ -156,8 +156,12 @@ def test_pi_withdraws_through_the_confirmation_form(
     assert wrong.status_code == 400
     assert "type the participant code P001 exactly" in wrong.text
     done = client.post(url, data={"confirm": "P001", "csrf_token": token}, follow_redirects=False)
-    assert done.status_code == 303
-    assert done.headers["location"] == f"/pi?study={data.study_id}"
+    assert done.status_code == 200
+    assert "P001 was withdrawn" in done.text
+    assert "6 face recording files of P001" in done.text
+    assert "Not removed from here" in done.text
+    assert "Backups and copies of the database" in done.text
+    assert f'href="/pi?study={data.study_id}"' in done.text
     with session_scope(build_sessionmaker(engine)) as db:
         assert "P001" not in text_of(all_rows(db))
     assert not any(p.exists() for p in data.recording_paths[:6])
@@ -179,7 +183,10 @@ def test_withdraw_api_needs_pi_and_csrf(client: TestClient, engine: Engine) -> N
     assert client.post(url, json={"confirm": "P001"}).status_code == 403
     response = client.post(url, json={"confirm": "P001"}, headers={"X-CSRF-Token": token})
     assert response.status_code == 200
-    assert response.json() == {"plan_row": 1, "sessions": 1, "files_deleted": 0}
+    body = response.json()
+    assert (body["plan_row"], body["sessions"], body["files_deleted"]) == (1, 1, 0)
+    assert body["removed"][0].startswith("P001's 1 session with 3 interactions")
+    assert any("Backups" in sentence for sentence in body["not_removed"])
     again = client.post(url, json={"confirm": "P001"}, headers={"X-CSRF-Token": token})
     assert again.status_code == 404
 

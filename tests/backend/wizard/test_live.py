@@ -10,7 +10,7 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from tests.backend.wizard.conftest import api
-from tests.support.bots import WizardBot
+from tests.support.bots import StaffApi, WizardBot
 
 
 def next_of(socket: Any, kind: str, limit: int = 20) -> dict[str, Any]:
@@ -63,10 +63,25 @@ def test_the_feed_is_for_staff_only(client: TestClient, wizard: WizardBot) -> No
     assert closed.value.code == 4401
 
 
-def test_an_unknown_session_closes_the_feed(client: TestClient, wizard: WizardBot) -> None:
-    with (
-        pytest.raises(WebSocketDisconnect) as closed,
-        client.websocket_connect("/ws/wizard/sessions/987654") as socket,
-    ):
-        socket.receive_json()
+def test_an_unknown_session_says_gone_and_closes_the_feed(
+    client: TestClient, wizard: WizardBot
+) -> None:
+    with client.websocket_connect("/ws/wizard/sessions/987654") as socket:
+        assert socket.receive_json() == {"type": "gone"}
+        with pytest.raises(WebSocketDisconnect) as closed:
+            socket.receive_json()
+    assert closed.value.code == 4404
+
+
+def test_withdrawing_the_participant_tells_the_open_feed(
+    client: TestClient, wizard: WizardBot, pi: StaffApi
+) -> None:
+    snapshot = wizard.refresh()
+    code, study = snapshot["participant"]["code"], snapshot["study_id"]
+    with client.websocket_connect(f"/ws/wizard/sessions/{wizard.session_id}") as socket:
+        assert socket.receive_json()["type"] == "console"
+        pi.post(f"/api/pi/participants/{code}/withdraw?study={study}", {"confirm": code})
+        assert next_of(socket, "gone") == {"type": "gone"}
+        with pytest.raises(WebSocketDisconnect) as closed:
+            next_of(socket, "no more messages")  # health beats may still be on their way
     assert closed.value.code == 4404

@@ -30,6 +30,7 @@ const api = createApi(sessionId, root.dataset.csrf, (ok) => {
 });
 
 let state = null;
+let gone = false; // the session was deleted (its participant withdrawn): nothing works here
 let promptsPosition = null;
 let sendingGroup = null;
 let flashTimer = null;
@@ -42,6 +43,7 @@ const now = new NowPlaying($("now-playing"), $("now-label"), $("now-bar"), (s) =
 const health = new HealthStrip($("health"), () => perform("try the robot again", api.robotRetry));
 
 function showLink() {
+  if (gone) return;
   const banner = $("conn-banner");
   const problems = [];
   if (!link.server) problems.push("The server is unreachable: actions are not saved. Retrying…");
@@ -60,13 +62,46 @@ function flash(message, kind = "error") {
   flashTimer = setTimeout(() => (node.hidden = true), kind === "error" ? 9000 : 4000);
 }
 
+/** Say, for good, that this tab's session no longer exists, and stop acting on it: ids are
+ * never reused, so the tab cannot quietly turn into another participant's session. */
+function showGone() {
+  if (gone) return;
+  gone = true;
+  feed.close();
+  const banner = $("conn-banner");
+  banner.replaceChildren(
+    "This session no longer exists: its participant was withdrawn (or the session deleted). " +
+      "Nothing done on this page is saved. ",
+  );
+  const back = document.createElement("a");
+  back.href = "/wizard";
+  back.textContent = "Back to the sessions";
+  banner.append(back);
+  banner.hidden = false;
+  banner.dataset.gone = "true";
+  root.classList.add("gone");
+  for (const control of root.querySelectorAll("button, input, select, textarea")) control.disabled = true;
+}
+
+/** A 404 from an action may be about the thing acted on; the console itself says whether
+ * the session is gone. */
+async function checkGone() {
+  try {
+    await api.console();
+  } catch (error) {
+    if (error.status === 404) showGone();
+  }
+}
+
 async function perform(what, run, thenApplyRobot = false) {
+  if (gone) return;
   try {
     await run();
     if (thenApplyRobot) await applyRobot();
     if (!link.live) await refresh();
   } catch (error) {
-    flash(`${what}: ${error.message}`);
+    if (error.status === 404) await checkGone();
+    if (!gone) flash(`${what}: ${error.message}`);
   }
 }
 
@@ -93,11 +128,13 @@ async function refresh() {
   try {
     apply(await api.console());
   } catch (error) {
-    flash(`Could not load the session: ${error.message}`);
+    if (error.status === 404) showGone();
+    else flash(`Could not load the session: ${error.message}`);
   }
 }
 
 async function apply(next) {
+  if (gone) return;
   state = next;
   if (state.prompt_position !== promptsPosition) {
     promptsPosition = state.prompt_position;
@@ -145,6 +182,7 @@ function playedCounts(current) {
 }
 
 async function play(group) {
+  if (gone) return;
   if (board.disabled) {
     flash("The session is over: prompts are off.", "warn");
     return;
@@ -155,7 +193,8 @@ async function play(group) {
   try {
     await api.play(group); // "not sent" shows on the now-playing bar and the timeline
   } catch (error) {
-    flash(`Play failed: ${error.message}`);
+    if (error.status === 404) await checkGone();
+    if (!gone) flash(`Play failed: ${error.message}`);
   } finally {
     sendingGroup = null;
   }
@@ -320,14 +359,15 @@ bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = f
 $("help-open").addEventListener("click", () => $("help-dialog").showModal());
 setInterval(() => state && tickUndo(state), 1000);
 
-connectLive(sessionId, {
+const feed = connectLive(sessionId, {
   onStatus(open) {
     link.live = open;
     if (open) link.server = true;
     showLink();
   },
   onMessage(message) {
-    if (message.type === "console") apply(message);
+    if (message.type === "gone") showGone();
+    else if (message.type === "console") apply(message);
     else if (message.type === "health") health.update(message, expectedBehaviour());
   },
 });
