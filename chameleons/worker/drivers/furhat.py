@@ -140,8 +140,11 @@ class FurhatDriver(Driver):
         self._credit(skipped)
 
     def stop_audio(self) -> None:
+        # Marked as stopping before the request goes out: the robot's end event can come
+        # back on the receiving thread before this one runs again (then it read "played").
+        credit = self.speech.stop()
         self._queue_control({"type": "request.speak.stop"})
-        self._credit(self.speech.stop())
+        self._credit(credit)
 
     def set_face(self, face_id: str) -> None:
         self._select_face(face_id)
