@@ -194,6 +194,11 @@ def run_session(browser: Browser, demo: Demo, shots: Shots) -> None:
     phone.set_default_timeout(TIMEOUT_MS)
     phone.goto(demo.phone_url)
     expect(wizard.locator("#phone-state")).to_have_text("phone connected")
+    # The procedure before the session: consent, then the skippable questions about them.
+    phone.get_by_role("button", name="I agree to take part").click()
+    expect(phone.get_by_role("heading", name="About you")).to_be_visible()
+    phone.get_by_role("button", name=re.compile(r"^Save")).click()
+    expect(phone.get_by_role("heading", name="Welcome!")).to_be_visible()
     # The supervised worker connects a moment after the server; an interaction started
     # before that would leave the robot in the wrong condition.
     worker = wizard.locator("#health .chip[data-check='worker']")
@@ -265,11 +270,15 @@ def answer_questionnaire_page(phone: Page, *, last: bool = False) -> None:
     for question in phone.locator("fieldset.question").all():
         if question.locator("textarea").count():
             question.locator("textarea").fill("The robot seemed attentive.")
-        elif not question.locator("input:checked").count():
+        elif question.locator("input:checked").count():
+            continue
+        elif question.locator("label.point").count():
             question.locator("label.point").nth(4).click()
+        else:  # a choice (the manipulation check): its first answer
+            question.get_by_role("radio").first.check()
     phone.get_by_role("button", name=re.compile(r"^Save")).click()
-    if last:  # the session ends: the phone says thank you instead of "Saved"
-        expect(phone.get_by_role("heading", name="Thank you!")).to_be_visible()
+    if last:  # the session ends: the phone explains the study (the debriefing)
+        expect(phone.get_by_role("heading", name="What this study was about")).to_be_visible()
     else:
         expect(phone.locator("#save-status")).to_have_text("Saved ✓")
 
