@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PYTEST_WORKERS ?= auto
 
-.PHONY: demo test lint fmt bench screenshots clean
+.PHONY: demo test lint fmt bench screenshots clean i18n-extract i18n-compile
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,6 +25,27 @@ test: $(STAMP)
 # The README's screenshots (docs/screenshots/), from a real demo session in Chromium.
 screenshots: $(STAMP)
 	$(BIN)/python scripts/take_screenshots.py
+
+# Languages (README, "Languages"): extract the participant's texts into the templates
+# (.pot) and merge them into every language's .po; then translate the new entries.
+LOCALE := chameleons/locale
+i18n-extract: $(STAMP)
+	$(BIN)/pybabel extract -F babel.cfg --no-location --sort-output \
+	    --project=chameleons -o $(LOCALE)/messages.pot .
+	$(BIN)/pybabel extract -F babel-js.cfg -k t --no-default-keywords --no-location \
+	    --sort-output --project=chameleons -o $(LOCALE)/phone.pot .
+	for lang in $$(ls $(LOCALE) | grep -v '\.pot$$'); do \
+	    for domain in messages phone; do \
+	        $(BIN)/pybabel update --no-fuzzy-matching --ignore-obsolete -D $$domain -l $$lang \
+	            -i $(LOCALE)/$$domain.pot -d $(LOCALE) || exit 1; \
+	    done; \
+	done
+
+# Optional: the app reads the .po files directly; compiled .mo files (newer than their .po)
+# are used instead, and compiling checks the catalogues.
+i18n-compile: $(STAMP)
+	$(BIN)/pybabel compile --statistics -D messages -d $(LOCALE)
+	$(BIN)/pybabel compile --statistics -D phone -d $(LOCALE)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

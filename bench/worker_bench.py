@@ -81,6 +81,7 @@ def worker_jitter(duration: float) -> Row:
         phone = _phone(worker.receivers["livelink"].port, duration + 30)
         try:
             _wait_for(lambda: worker.behaviour.frames.count > 60, 30, "phone input")
+            assert worker.renderer is not None  # the renderer is a thread of this process
             stats = worker.renderer.loop.stats
             first, missed0, frames0 = stats.count, stats.missed, worker.behaviour.frames.count
             cpu0, wall0 = time.process_time(), time.monotonic()

@@ -58,6 +58,9 @@ class Settings(BaseSettings):
     )
     # None: Secure cookies exactly when CHAMELEONS_PUBLIC_URL is https (cookie_secure).
     session_cookie_secure: bool | None = None
+    # Request threads (sync endpoints and dependencies). Never more than the database pool's
+    # connections (chameleons.backend.db.request_threads); None: anyio's 40, capped so.
+    request_threads: int | None = Field(default=None, ge=1)
     # How long a staff login lasts (server-side: logout and deactivation end it at once).
     staff_session_hours: float = Field(default=12.0, gt=0, le=24 * 30)
     # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
@@ -74,9 +77,18 @@ class Settings(BaseSettings):
     # ZeroMQ endpoints between server and workers (loopback unless configured otherwise).
     worker_command_endpoint: str = "tcp://127.0.0.1:5555"
     worker_telemetry_endpoint: str = "tcp://127.0.0.1:5556"
+    # CURVE keys of that link (`chameleons keys create`); default <data_dir>/keys. With keys
+    # the link is authenticated and encrypted; without, server and worker refuse to use an
+    # endpoint that is not on loopback (chameleons.worker.curve).
+    zmq_keys_dir: Path | None = None
+    worker_key_name: str = Field(default="worker", pattern=r"^[A-Za-z0-9_.-]{1,64}$")
 
-    # The server's ZeroMQ link to workers; off only for tests that need no worker.
+    # The server's ZeroMQ link to workers; off for tests that need no worker and for
+    # extra server processes that only serve phones (README: more than one server process).
     bridge_enabled: bool = True
+    # PostgreSQL only: carry live updates to other server processes on the same database
+    # (LISTEN/NOTIFY, chameleons.backend.events.pg_fanout). Costs two connections.
+    live_fanout: bool = True
     # Embedded setup (`chameleons demo`): the server runs and supervises a local worker.
     embedded_worker: bool = False
     embedded_worker_booth: str = "booth-1"
@@ -85,6 +97,10 @@ class Settings(BaseSettings):
     livelink_port: int = Field(default=11111, ge=0, le=65535)  # 0: any free port
     facecapturex_port: int = Field(default=19977, ge=0, le=65535)
     capture_bind_host: str = "0.0.0.0"  # the iPhone is on the LAN by design
+    # The only phone a worker accepts capture from (IP address or host name). Unset: the
+    # first phone that sends after a session starts (or the wizard's "pair again") is
+    # locked in; packets from any other sender are dropped and counted.
+    capture_sender: str | None = None
     # Unit of Live Link head/eye rotations on the wire and in take CSVs: "radians" (what the
     # Live Link Face app sends; evidence in docs/livelink.md), "degrees/180" (an Unreal app's
     # own publisher), "degrees", or a plain factor. The booth check's head-turn step shows it.
@@ -122,6 +138,15 @@ class Settings(BaseSettings):
     health_min_tick_ratio: float = Field(default=0.9, ge=0, le=1)  # of the nominal tick rate
     health_alarm_after_s: float = Field(default=3.0, ge=0)
 
+    # What one session's recordings need on disk, for the booth check's disk-space warning:
+    # recording rate x session length. The default rate covers the participant's stream
+    # (60 fps x 260 bytes a frame) and the robot's (up to 125 Hz), doubled because a
+    # recording's journal and its Parquet file both exist while it is closed.
+    recording_rate_bytes_per_s: int = Field(default=100_000, gt=0)
+    session_length_minutes: float = Field(default=60.0, gt=0)
+    # The actor whose first recorded prompt the booth check plays (None: the first actor).
+    booth_check_actor: str | None = None
+
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None
@@ -138,6 +163,15 @@ class Settings(BaseSettings):
         if self.database_url:
             return self.database_url
         return f"sqlite:///{(self.data_dir / 'chameleons.sqlite3').resolve()}"
+
+    @property
+    def keys_dir(self) -> Path:
+        return (self.zmq_keys_dir or self.data_dir / "keys").expanduser()
+
+    @property
+    def session_disk_bytes(self) -> int:
+        """Free disk space one session's recordings need (the booth check warns below it)."""
+        return int(self.recording_rate_bytes_per_s * self.session_length_minutes * 60)
 
     @property
     def cookie_secure(self) -> bool:

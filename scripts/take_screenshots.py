@@ -316,9 +316,11 @@ def analysis(page: Page, demo: Demo, shots: Shots, rehearsed: bool) -> None:
     query = "?include_rehearsal=true" if rehearsed else ""
     page.goto(f"{demo.base}/pi/analysis{query}")
     expect(page.locator("img").first).to_be_visible()
-    page.wait_for_function(
-        "() => [...document.querySelectorAll('img')].every((i) => i.complete && i.naturalWidth)"
-    )
+    # Not wait_for_function: its in-page eval is refused by the app's CSP (no unsafe-eval).
+    loaded = "[...document.querySelectorAll('img')].every((i) => i.complete && i.naturalWidth)"
+    deadline = time.monotonic() + 60
+    while not page.evaluate(loaded) and time.monotonic() < deadline:
+        page.wait_for_timeout(50)
     shots.take(page, "analysis", height=1100)
     shots.take_element(page.locator("section[aria-labelledby='plots-heading']"), "analysis-plots")
 
@@ -333,8 +335,9 @@ def monitor(page: Page, demo: Demo, shots: Shots) -> None:
 def power(page: Page, demo: Demo, shots: Shots) -> None:
     """The power page after one simulation with its default (the paper's pilot) effects."""
     page.goto(f"{demo.base}/pi/power")
-    page.locator("#simulate").click()
-    expect(page.locator("#power-heading")).to_be_visible()
+    # The simulation runs before the result page loads: wait for that page, not the click.
+    page.locator("#simulate").click(no_wait_after=True)
+    expect(page.locator("#power-heading")).to_be_visible(timeout=180_000)
     shots.take_element(page.locator("#power-result"), "pi-power")
 
 

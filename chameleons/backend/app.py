@@ -10,13 +10,13 @@ from pathlib import Path
 
 import anyio.to_thread
 from fastapi import FastAPI, Request
-from fastapi.responses import FileResponse, RedirectResponse, Response
+from fastapi.responses import FileResponse, PlainTextResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 from starlette.middleware.sessions import SessionMiddleware
 
 from chameleons import __version__
-from chameleons.backend import logredact
+from chameleons.backend import apidocs, logredact
 from chameleons.backend.analysis import pages as analysis_pages
 from chameleons.backend.auth import endpoints as auth_endpoints
 from chameleons.backend.auth import pages as auth_pages
@@ -34,11 +34,14 @@ from chameleons.backend.display import media as display_media
 from chameleons.backend.display import pages as display_pages
 from chameleons.backend.dropouts import endpoints as dropout_endpoints
 from chameleons.backend.events.hub import LiveHub
+from chameleons.backend.events.pg_fanout import fan_out
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
+from chameleons.backend.input_guard import InputGuardMiddleware
 from chameleons.backend.phone import endpoints as phone_endpoints
 from chameleons.backend.phone import pages as phone_pages
 from chameleons.backend.planning import pages as planning_pages
+from chameleons.backend.security_headers import SECURITY_HEADERS, SecurityHeadersMiddleware
 from chameleons.backend.sessions import endpoints as session_endpoints
 from chameleons.backend.sessions import live as session_live
 from chameleons.backend.studies import endpoints as study_endpoints
@@ -49,6 +52,7 @@ from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import pages as wizard_pages
 from chameleons.backend.wizard import typed_speech
 from chameleons.experiment.stats.rounding import fmt, fmt_p
+from chameleons.i18n import jinja as i18n_jinja
 from chameleons.settings import Settings
 
 FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
@@ -57,6 +61,7 @@ FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
 def build_templates() -> Jinja2Templates:
     templates = Jinja2Templates(directory=str(FRONTEND_DIR / "templates"))
     templates.env.globals["csrf_token"] = csrf_token
+    i18n_jinja.install(templates.env)  # the phone pages speak the participant's language
     templates.env.globals["app_version"] = __version__
     # One rounding rule for every number a page shows (see experiment.stats.rounding).
     templates.env.globals["fmt"] = fmt
@@ -75,14 +80,27 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         # Sync endpoints and dependencies run in anyio's thread pool: never more threads
         # than database connections (see chameleons.backend.db.POOL_SIZE).
         limiter = anyio.to_thread.current_default_thread_limiter()
-        limiter.total_tokens = min(limiter.total_tokens, request_threads(engine))
+        wanted = settings.request_threads or limiter.total_tokens
+        limiter.total_tokens = min(wanted, request_threads(engine))
+        app.state.request_limiter = limiter  # read by tests and the benchmark
         async with AsyncExitStack() as stack:
+            if settings.live_fanout:
+                app.state.live_fanout = await stack.enter_async_context(
+                    fan_out(app.state.live_hub, settings.effective_database_url)
+                )
             if settings.bridge_enabled:
                 await stack.enter_async_context(worker_link(app, settings))
             yield
         engine.dispose()
 
-    app = FastAPI(title="Mechanical Chameleons", version=__version__, lifespan=lifespan)
+    # /docs is served by apidocs (its own Content-Security-Policy); ReDoc would repeat it.
+    app = FastAPI(
+        title="Mechanical Chameleons",
+        version=__version__,
+        lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,
+    )
     app.state.settings = settings
     app.state.engine = engine
     app.state.sessionmaker = build_sessionmaker(engine)
@@ -90,6 +108,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.live_hub = LiveHub()
     app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code
     app.state.bridge = None  # set while the worker link runs (lifespan)
+    app.state.live_fanout = None  # PostgreSQL: set while the server runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
     )
@@ -102,6 +121,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         https_only=settings.cookie_secure,
         max_age=int(settings.staff_session_hours * 3600),
     )
+    app.add_middleware(InputGuardMiddleware)  # NUL, NaN, numbers >= 2**63: a 4xx, not a 500
+    # Added last, so it is outermost: errors, refusals and redirects get the headers too.
+    app.add_middleware(SecurityHeadersMiddleware)
+
+    @app.exception_handler(Exception)
+    async def _server_error(_request: Request, _exc: Exception) -> Response:
+        # Starlette answers an unhandled exception outside every middleware (and re-raises
+        # it for the log): this 500 carries the security headers itself, and no details.
+        return PlainTextResponse("Internal Server Error", 500, headers=SECURITY_HEADERS)
 
     @app.exception_handler(PIRequiredError)
     async def _pi_only(request: Request, _exc: PIRequiredError) -> Response:
@@ -120,6 +148,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.mount("/static", StaticFiles(directory=FRONTEND_DIR / "static"), name="static")
     for router in (
         health_endpoints.router,
+        apidocs.router,
         auth_pages.router,
         auth_endpoints.router,
         staff_pages.router,

@@ -11,6 +11,8 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
+from chameleons.backend import write_gate
+
 # How long a SQLite writer waits for the write lock before "database is locked". Writers
 # queue one at a time (BEGIN IMMEDIATE); 50 phones submitting at once on a loaded 2-core
 # machine needed more than the 5 s this was (bench/server_bench.py: 33 of 50 burst
@@ -56,11 +58,15 @@ def write_transaction(db: Session) -> None:
     connection = db.connection()
     driver = connection.connection.driver_connection
     if driver is not None and not driver.in_transaction:
+        write_gate.enter(connection, SQLITE_BUSY_TIMEOUT_S)
         connection.exec_driver_sql("BEGIN IMMEDIATE")
 
 
 def build_engine(url: str) -> Engine:
-    """Create an engine; for SQLite make the directory and set WAL, foreign keys, timeout."""
+    """Create an engine; for SQLite make the directory and set WAL, foreign keys, timeout.
+
+    ``hide_parameters``: a database error in the log shows the SQL but not its bound values,
+    which may be a participant's free text (README: answers and free text are never logged)."""
     parsed = make_url(url)
     pool = {"pool_size": POOL_SIZE, "max_overflow": POOL_OVERFLOW}
     if parsed.get_backend_name() == "sqlite":
@@ -69,12 +75,13 @@ def build_engine(url: str) -> Engine:
             Path(parsed.database or "").parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(url, connect_args={"check_same_thread": False,
                                                   "timeout": SQLITE_BUSY_TIMEOUT_S},
-                               **({} if memory else pool))  # fmt: skip
+                               hide_parameters=True, **({} if memory else pool))  # fmt: skip
         event.listen(engine, "connect", _sqlite_pragmas)
+        write_gate.install(engine)
         return engine
     if parsed.get_backend_name() == "postgresql" and parsed.drivername == "postgresql":
         url = parsed.set(drivername="postgresql+psycopg").render_as_string(hide_password=False)
-    return create_engine(url, pool_pre_ping=True, **pool)
+    return create_engine(url, pool_pre_ping=True, hide_parameters=True, **pool)
 
 
 def request_threads(engine: Engine) -> int:

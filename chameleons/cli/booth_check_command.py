@@ -8,7 +8,7 @@ import time
 import click
 import httpx
 
-HEAD_SECONDS = 8
+HEAD_SECONDS = 12  # the turn and nod, then the robot's copy after the copy delay
 
 
 @click.command("booth-check")

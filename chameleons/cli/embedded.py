@@ -56,7 +56,17 @@ def demo_settings(settings: Settings) -> Settings:
         update["health_max_jitter_p99_ms"] = DEMO_MAX_JITTER_P99_MS
     if not settings.secret_key.get_secret_value():
         update["secret_key"] = SecretStr(_demo_secret(settings.data_dir))
-    return settings.model_copy(update=update)
+    demo = settings.model_copy(update=update)
+    _demo_keys(demo)
+    return demo
+
+
+def _demo_keys(settings: Settings) -> None:
+    """The demo's server and its local worker talk CURVE too: keys made on first start."""
+    from chameleons.worker import curve
+
+    if not curve.have_server_keys(settings.keys_dir):
+        curve.create_keys(settings.keys_dir, settings.worker_key_name)
 
 
 def _demo_secret(data_dir: Path) -> str:

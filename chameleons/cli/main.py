@@ -27,6 +27,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "export": ("export_command", "export",
                "Export participants, interactions, suggestions, questionnaire, scores and "
                "events."),
+    "keys": ("keys_command", "keys",
+             "CURVE keys that authenticate and encrypt the link between server and workers."),
     "plan": ("plan_command", "plan_command",
              "Print the counterbalancing plan for N participants and how balanced it is."),
     "power": ("power_command", "power_command",

@@ -58,7 +58,12 @@ from chameleons.rehearsal.script import SCRIPTS
     default=None,
     help="Study id (default: the newest active study).",
 )
-@click.option("--booth", default=None, help="Booth of the sessions on --server. [booth-1]")
+@click.option(
+    "--booth",
+    default=None,
+    help="Booth of the rehearsal sessions [booth-1]. A booth with a real session open is "
+    "refused unless named here.",
+)
 @click.option(
     "--script",
     type=click.Choice(SCRIPTS),
@@ -86,6 +91,13 @@ from chameleons.rehearsal.script import SCRIPTS
     "(confirmed as a deviation), seeded by --seed.",
 )
 @click.option(
+    "--language",
+    default=None,
+    metavar="CODE",
+    help="The participants' language (one of the study's, e.g. sv); default: the study's "
+    "default. The phone, the study's texts and the console's prompts follow it.",
+)
+@click.option(
     "--simulate-face/--no-simulate-face",
     default=True,
     show_default=True,
@@ -94,7 +106,7 @@ from chameleons.rehearsal.script import SCRIPTS
 def rehearse(
     participants: int, seed: int, pattern: str, server: str | None, username: str | None,
     password: str | None, study_id: int | None, booth: str | None, script: str,
-    drop_out: float, deviate: float, simulate_face: bool,
+    drop_out: float, deviate: float, language: str | None, simulate_face: bool,
 ) -> None:  # fmt: skip
     """Run whole sessions with a scripted wizard and participant, marked as rehearsals.
 
@@ -102,12 +114,15 @@ def rehearse(
     driving the virtual robot. Rehearsals stay out of balance tables, exports and the
     analysis unless asked for (chameleons export --include-rehearsal).
     """
-    options = Options(participants, seed, pattern, script, drop_out=drop_out, deviate=deviate)
+    options = Options(
+        participants, seed, pattern, script, drop_out=drop_out, deviate=deviate, language=language
+    )
     try:
         if server is not None:
             if not username or not password:
                 raise click.UsageError("--server needs --username and --password.")
-            target = Target(server.rstrip("/"), username, password, study_id, booth or "booth-1")
+            target = Target(server.rstrip("/"), username, password, study_id,
+                            booth or "booth-1", booth_chosen=booth is not None)  # fmt: skip
             _report(rehearse_sessions(target, options))
             return
         from chameleons.rehearsal.embedded import embedded_system
@@ -116,7 +131,7 @@ def rehearse(
         # through SystemExit instead, so the embedded system's clean-up runs.
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
         click.echo("Starting an embedded server, worker (virtual robot) and simulated face...")
-        with embedded_system(load_settings(), study_id, simulate_face) as target:
+        with embedded_system(load_settings(), study_id, simulate_face, booth) as target:
             click.echo(f"Server on {target.base_url}; rehearsing {participants} sessions.")
             _report(rehearse_sessions(target, options))
     except RehearsalError as error:

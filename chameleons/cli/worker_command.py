@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from pathlib import Path
@@ -11,7 +12,9 @@ import click
 
 from chameleons.cli.common import load_settings
 from chameleons.settings import Settings
+from chameleons.worker import curve
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
+from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DRIVER_NAMES
 from chameleons.worker.drivers.furhat_check import run_check
 from chameleons.worker.renderer import RenderConfig
@@ -34,6 +37,9 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
                    "e.g. face-1=Isabel; over CHAMELEONS_WORKER_FURHAT_FACES.")  # fmt: skip
 @click.option("--livelink-port", type=int, default=None, help="Live Link Face UDP port (0: any).")
 @click.option("--facecapturex-port", type=int, default=None, help="FaceCaptureX TCP port (0: any).")
+@click.option("--capture-sender", default=None, metavar="ADDRESS",
+              help="Accept face capture only from this phone (IP address or host name); "
+                   "default: the first phone that sends after each session start.")  # fmt: skip
 @click.option("--behaviour", default="still", show_default=True,
               help="Behaviour to start in: still, natural, copy or a registered one.")  # fmt: skip
 @click.option(
@@ -45,18 +51,28 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
                    "without it, a synthetic face.")  # fmt: skip
 @click.option("--control", default=None, help="Server command endpoint (ROUTER) to connect to.")
 @click.option("--telemetry", default=None, help="Server telemetry endpoint (SUB) to connect to.")
+@click.option("--keys-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="CURVE keys of the link to the server (server.key and this worker's "
+                   "pair; `chameleons keys create`). [<data dir>/keys]")  # fmt: skip
 @click.option("--tick-rate", type=float, default=None, help="Renderer rate in Hz. [125]")
 @click.option("--face-rate", type=float, default=None, help="Face parameter rate in Hz. [25]")
 @click.option("--check", is_flag=True,
               help="Log in to the Furhat, list the face mapping against the robot's faces "
                    "and exit (1 when something is wrong).")  # fmt: skip
+@click.option("--renderer-process", is_flag=True,
+              help="Run the renderer and robot driver in a process of their own.")  # fmt: skip
+@click.option("--realtime", is_flag=True,
+              help="Ask for real-time scheduling (SCHED_FIFO) for the renderer.")  # fmt: skip
+@click.option("--renderer-cpu", type=int, default=None,
+              help="Pin the renderer to this CPU (implies --renderer-process).")  # fmt: skip
 @click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
-    livelink_port: int | None,
+    livelink_port: int | None, capture_sender: str | None,
     facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
-    tick_rate: float | None, face_rate: float | None, check: bool, verbose: bool,
+    keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
+    renderer_process: bool, realtime: bool, renderer_cpu: int | None, verbose: bool,
 ) -> None:  # fmt: skip
     """Run the realtime worker of one booth (capture -> behaviour -> renderer -> robot).
 
@@ -68,11 +84,16 @@ def worker(
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
     config = build_config(
         settings, booth=booth, driver=driver, robot_url=robot_url, furhat_faces=furhat_faces,
-        livelink_port=livelink_port,
+        livelink_port=livelink_port, capture_sender=capture_sender,
         facecapturex_port=facecapturex_port, behaviour=behaviour, copy_delay=copy_delay,
-        natural_path=natural_path, control=control, telemetry=telemetry, tick_rate=tick_rate,
+        natural_path=natural_path, control=control, telemetry=telemetry, keys_dir=keys_dir,
+        tick_rate=tick_rate,
         face_rate=face_rate,
     )  # fmt: skip
+    if realtime or renderer_cpu is not None:
+        renderer_process = True  # both are about the renderer's own process
+    config = dataclasses.replace(config, renderer_process=renderer_process,
+                                 renderer_realtime=realtime, renderer_cpu=renderer_cpu)  # fmt: skip
     if check:
         report = run_check(config.robot_url, config.robot_key, config.furhat_faces)
         for line in report.lines():
@@ -121,6 +142,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         command_endpoint=pick("control", "worker_command_endpoint", "tcp://127.0.0.1:5555"),
         telemetry_endpoint=pick("telemetry", "worker_telemetry_endpoint", "tcp://127.0.0.1:5556"),
         capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),
+        capture_sender=pick("capture_sender", "capture_sender", None),
         livelink_port=pick("livelink_port", "livelink_port", 11111),
         facecapturex_port=pick("facecapturex_port", "facecapturex_port", 19977),
         livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "radians"),
@@ -129,7 +151,23 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         behaviour=options["behaviour"], behaviour_params=params, copy_delay=delay,
         render=render,
         crossfade_seconds=float(_setting(settings, "worker_crossfade_seconds", 0.3)),
+        curve=_curve(settings, options),
     )  # fmt: skip
+
+
+def _curve(settings: Settings, options: dict[str, Any]) -> ClientKeys | None:
+    """The worker's CURVE keys when there are any; without, only a loopback link runs."""
+    keys_dir = Path(options.get("keys_dir") or settings.keys_dir)
+    name = settings.worker_key_name
+    endpoints = [options.get("control") or settings.worker_command_endpoint,
+                 options.get("telemetry") or settings.worker_telemetry_endpoint]  # fmt: skip
+    try:
+        if curve.have_client_keys(keys_dir, name):
+            return curve.load_client(keys_dir, name)
+        logging.getLogger(__name__).warning(curve.require_safe(endpoints, who="worker"))
+    except curve.CurveError as exc:
+        raise click.ClickException(str(exc)) from exc
+    return None
 
 
 def parse_face_map(entries: tuple[str, ...] | list[str]) -> dict[str, str]:

@@ -217,6 +217,16 @@ class Study:
     warnings: tuple[str, ...] = field(default=(), hash=False, compare=False)
     # consent and debriefing pages (none for a study that does not declare them)
     procedure: Procedure = field(default_factory=Procedure, hash=False, compare=True)
+    # The participants' languages (texts of this object: the default language's) and the
+    # same study with each other language's texts (chameleons.experiment.languages).
+    languages: tuple[str, ...] = ("en",)
+    default_language: str = "en"
+    localized: dict[str, Study] = field(default_factory=dict, hash=False, compare=False, repr=False)
+
+    def in_language(self, language: str) -> Study:
+        """The study with the texts a participant of ``language`` sees (the default
+        language's for a language the study does not declare)."""
+        return self.localized.get(language, self)
 
     @property
     def condition_ids(self) -> tuple[str, ...]:

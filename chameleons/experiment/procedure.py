@@ -12,9 +12,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from chameleons.experiment.reader import Reader, join
+from chameleons.i18n import N_
 
-DEFAULT_AGREE = "I agree to take part"
-DEFAULT_DECLINE = "I do not want to take part"
+# The phone shows these defaults in the participant's language (chameleons/locale).
+DEFAULT_AGREE = N_("I agree to take part")
+DEFAULT_DECLINE = N_("I do not want to take part")
+DEFAULT_CONSENT_TITLE = N_("Consent to take part")
+DEFAULT_DEBRIEFING_TITLE = N_("About this study")
 
 
 @dataclass(frozen=True)
@@ -60,7 +64,7 @@ def read_procedure(reader: Reader, node: object) -> Procedure:
         reader.check_keys(part, place, ["version", "text"], ["title", "agree", "decline"])
         consent = Consent(
             version=reader.text(part, "version", place),
-            title=reader.text(part, "title", place, default="Consent to take part"),
+            title=reader.text(part, "title", place, default=DEFAULT_CONSENT_TITLE),
             text=_long_text(reader, part, place),
             agree=reader.text(part, "agree", place, default=DEFAULT_AGREE),
             decline=reader.text(part, "decline", place, default=DEFAULT_DECLINE),
@@ -71,7 +75,7 @@ def read_procedure(reader: Reader, node: object) -> Procedure:
         part = reader.mapping(body["debriefing"], place)
         reader.check_keys(part, place, ["text"], ["title"])
         debriefing = Debriefing(
-            title=reader.text(part, "title", place, default="About this study"),
+            title=reader.text(part, "title", place, default=DEFAULT_DEBRIEFING_TITLE),
             text=_long_text(reader, part, place),
         )
     return Procedure(consent, debriefing)

@@ -19,7 +19,7 @@ from typing import Any
 
 import yaml
 
-from chameleons.experiment import personas, sections
+from chameleons.experiment import languages, personas, sections
 from chameleons.experiment.lines import line_index, line_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.procedure import procedure_config, read_procedure
@@ -46,6 +46,8 @@ TOP_LEVEL_OPTIONAL = [
     "personas",
     "questionnaires",
     "procedure",
+    "languages",
+    "default_language",
 ]
 SUGGESTION_RULES = ("best_move", "up_only")
 # A snapshot stored before the rule was a setting was collected under the up-only rule.
@@ -142,7 +144,10 @@ _DuplicateKeyLoader.add_constructor(
 
 
 def _parse_yaml(text: str, source: str) -> tuple[Any, list[str]]:
-    loader = _DuplicateKeyLoader(text)
+    try:  # the reader refuses control characters as the loader is made, not when it reads
+        loader = _DuplicateKeyLoader(text)
+    except yaml.YAMLError as exc:
+        raise StudyError([f"not valid YAML: {exc}"], source) from exc
     loader.duplicates = []
     try:
         document = loader.get_single_data()
@@ -167,6 +172,40 @@ def _build(
     if not isinstance(document, dict):
         raise StudyError(reader.problems, source)
     reader.check_keys(top, "", TOP_LEVEL_REQUIRED, TOP_LEVEL_OPTIONAL)
+    declared, default = languages.read_languages(reader, top)
+    languages.check(reader, top, declared)
+    resolved = languages.resolve(top, default, default)
+    parts, name_genders = _read_parts(reader, resolved, behaviours, snapshot)
+    if reader.problems:
+        raise StudyError(reader.problems, source)
+    others = {
+        language: _read_parts(
+            Reader(), languages.resolve(top, language, default), behaviours, snapshot
+        )[0]  # the same document with other texts: no new problems
+        for language in declared
+        if language != default
+    }
+    configs = {lang: _config_of(p, name_genders) for lang, p in {default: parts, **others}.items()}
+    config = languages.merge(configs, tuple(configs))
+    if "languages" in top:  # a study without them keeps the hash it had before
+        config = {**config, "languages": list(declared), "default_language": default}
+    digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
+    warnings = tuple(duplicate_wording(parts["questionnaires"]))
+    common = {
+        "config": config,
+        "content_hash": digest,
+        "name_genders": name_genders,
+        "languages": declared,
+        "default_language": default,
+    }
+    localized = {lang: Study(**others[lang], **common) for lang in others}
+    return Study(**parts, **common, warnings=warnings, localized=localized)
+
+
+def _read_parts(
+    reader: Reader, top: dict[str, Any], behaviours: sections.Behaviours, snapshot: bool
+) -> tuple[dict[str, Any], dict[str, str]]:
+    """Every section of one language's document (problems go to ``reader``)."""
     design = reader.mapping(top.get("design", {}), "design")
     reader.check_keys(design, "design", [], ["alternate_tasks"])
     tasks = sections.read_tasks(reader, top.get("tasks", {}))
@@ -195,18 +234,7 @@ def _build(
     _check_design_fits(reader, parts)
     if not reader.problems:
         personas.check_fits(reader, parts, name_genders)
-    if reader.problems:
-        raise StudyError(reader.problems, source)
-    config = _config_of(parts, name_genders)
-    digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
-    warnings = tuple(duplicate_wording(parts["questionnaires"]))
-    return Study(
-        **parts,
-        config=config,
-        content_hash=digest,
-        name_genders=name_genders,
-        warnings=warnings,
-    )
+    return parts, name_genders
 
 
 def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> str:

@@ -137,3 +137,6 @@ class ActorProfile:
     personality: str | None = None
     description: str = ""
     voice: Mapping[str, str | int | float] = field(default_factory=dict)
+    # The language the actor's prompts are in (prompts/<actor>/: English unless it says;
+    # prompts/<lang>/<actor>/ holds the same actor's prompts in another language).
+    language: str = "en"

@@ -6,6 +6,7 @@ there it must be well-formed, so a typo does not silently drop a setting.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,10 @@ import yaml
 from chameleons.prompts.model import ActorProfile
 
 GENDERS = ("male", "female", "other")
-_KNOWN_KEYS = frozenset({"display_name", "gender", "personality", "description", "voice"})
+_KNOWN_KEYS = frozenset(
+    {"display_name", "gender", "personality", "description", "voice", "language"}
+)
+_LANGUAGE = re.compile(r"^[a-z]{2,3}(-[A-Za-z0-9]{2,8})?$")
 
 
 def load_profile(path: Path, actor: str) -> tuple[ActorProfile, list[str]]:
@@ -41,6 +45,7 @@ def load_profile(path: Path, actor: str) -> tuple[ActorProfile, list[str]]:
         personality=data.get("personality"),
         description=str(data.get("description") or "").strip(),
         voice=dict(data.get("voice") or {}),
+        language=str(data.get("language") or "en"),
     ), []
 
 
@@ -52,6 +57,9 @@ def _check_values(path: Path, data: dict[str, Any]) -> list[str]:
     for key in ("display_name", "personality", "description"):
         if data.get(key) is not None and not isinstance(data[key], str):
             problems.append(f"{path}: {key} must be text")
+    language = data.get("language")
+    if language is not None and not (isinstance(language, str) and _LANGUAGE.match(language)):
+        problems.append(f"{path}: language must be a language code such as en or sv")
     voice = data.get("voice")
     if voice is not None and not (
         isinstance(voice, dict)

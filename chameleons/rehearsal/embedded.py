@@ -175,11 +175,18 @@ def _bound_socket() -> socket.socket:
 
 @contextmanager
 def embedded_system(
-    base: Settings, study_id: int | None = None, simulate_face: bool = True
+    base: Settings,
+    study_id: int | None = None,
+    simulate_face: bool = True,
+    booth: str | None = None,
 ) -> Iterator[Target]:
-    """Start everything, yield where to rehearse, stop everything (also on Ctrl-C)."""
+    """Start everything, yield where to rehearse, stop everything (also on Ctrl-C).
+    ``booth``: the local worker's booth (default: the settings' embedded worker booth);
+    naming it lets the rehearsal use a booth with a real session open."""
     sock = _bound_socket()
     settings = rehearsal_settings(base, sock.getsockname()[1])
+    if booth is not None:
+        settings = settings.model_copy(update={"embedded_worker_booth": booth})
     prepared = prepare(settings, study_id)
     app = create_app(settings)
     server = ServerThread(app, sock)
@@ -191,7 +198,8 @@ def embedded_system(
             simulator = start_face_simulator(settings, settings.livelink_port)
         spec = study_from_config(prepared.config)
         yield Target(settings.effective_public_url, BOT_USERNAME, prepared.password,
-                     prepared.study_id, settings.embedded_worker_booth, local=True,
+                     prepared.study_id, settings.embedded_worker_booth,
+                     booth_chosen=booth is not None, local=True,
                      studies=(spec,))  # fmt: skip
     finally:
         if simulator is not None:

@@ -42,6 +42,9 @@ class Target:
     password: str
     study_id: int | None = None  # None: the server's newest active study
     booth: str = "booth-1"
+    # The booth was named (--booth): rehearse there even when a real session is open on it
+    # (with a warning); by default such a booth is refused (see ``check_booth``).
+    booth_chosen: bool = False
     local: bool = False  # a server on this machine (no HTTP proxies)
     studies: Sequence[Study] = ()  # configurations whose reverse-keyed items are known
 
@@ -55,6 +58,7 @@ class Options:
     display: bool = True  # also be the virtual robot's display page
     drop_out: float = 0.0  # share of sessions that drop out (see .situations)
     deviate: float = 0.0  # share of sessions with a confirmed repeated condition
+    language: str | None = None  # the participants' language; None: the study's default
 
 
 @dataclass
@@ -78,7 +82,8 @@ class Summary:
         lines = [
             f"Rehearsed {sessions} ({people}, {span}) of study "
             f"{self.study_id} ({self.study_name}) in {self.seconds:.1f} s ({per:.1f} s each); "
-            f"pattern {self.options.pattern}, seed {self.options.seed}.",
+            f"pattern {self.options.pattern}, seed {self.options.seed}"
+            f"{f', language {self.options.language}' if self.options.language else ''}.",
             f"Prompts: {tally.prompts_played} played through the worker, "
             f"{tally.prompts_not_sent} not sent; robot set up {tally.robot_applied} times, "
             f"{tally.robot_not_applied} not.",
@@ -136,6 +141,38 @@ def pick_study(staff: StaffApi, study_id: int | None) -> Json:
     return found[0]
 
 
+OPEN_STATES = ("pending", "running", "final_questionnaire")
+
+
+def real_session_on(staff: StaffApi, booth: str) -> Json | None:
+    """The oldest real (not rehearsal) session open on ``booth``, in any study, or None."""
+    found = [
+        session
+        for state in OPEN_STATES
+        for session in staff.get(f"/api/sessions?state={state}")
+        if session["booth"] == booth and not session["is_rehearsal"]
+    ]
+    return min(found, key=lambda s: s["id"]) if found else None
+
+
+def check_booth(staff: StaffApi, target: Target, say: Progress) -> None:
+    """Refuse a booth where a participant may be sitting now (the rehearsal would drive its
+    robot and display), unless the booth was named on purpose (then a warning)."""
+    busy = real_session_on(staff, target.booth)
+    if busy is None:
+        return
+    which = (
+        f"Booth {target.booth} has a real session open (session {busy['id']}, participant "
+        f"{busy['participant_code']}, {busy['state'].replace('_', ' ')})"
+    )
+    if not target.booth_chosen:
+        raise RehearsalError(
+            f"{which}: rehearse on another booth with --booth NAME, or name this one "
+            f"(--booth {target.booth}) to rehearse there anyway."
+        )
+    say(f"Warning: {which}; rehearsing there as --booth {target.booth} asked.")
+
+
 def rehearse(target: Target, options: Options, progress: Progress | None = None) -> Summary:
     if options.pattern not in PATTERNS:
         raise RehearsalError(f"Unknown answer pattern {options.pattern!r}.")
@@ -148,6 +185,7 @@ def rehearse(target: Target, options: Options, progress: Progress | None = None)
     ):
         staff = _log_in(http, target)
         study = pick_study(staff, target.study_id)
+        check_booth(staff, target, say)
         display = _open_display(target, http, say) if options.display else None
         try:
             summary = _sessions(target, options, staff, phone_http, study, say)
@@ -159,6 +197,13 @@ def rehearse(target: Target, options: Options, progress: Progress | None = None)
         summary.display = dict(display.received) if display is not None else {}
     summary.seconds = time.monotonic() - started
     return summary
+
+
+def _create(staff: StaffApi, study_id: int, booth: str, language: str | None) -> WizardBot:
+    try:
+        return WizardBot.create(staff, study_id, booth=booth, rehearsal=True, language=language)
+    except ApiError as error:  # e.g. a language the study does not have: say so, stop
+        raise RehearsalError(f"Cannot open a session: {error.detail}") from error
 
 
 def _log_in(http: httpx.Client, target: Target) -> StaffApi:
@@ -199,7 +244,7 @@ def _sessions(
     for number in range(1, options.participants + 1):
         persona = Persona.draw(pattern, random.Random(rng.getrandbits(64)))
         wizard_rng = random.Random(rng.getrandbits(64))
-        bot = WizardBot.create(staff, study["id"], booth=target.booth, rehearsal=True)
+        bot = _create(staff, study["id"], target.booth, options.language)
         count = int(bot.snapshot["interaction_count"])
         situation = draw(situations, options.drop_out, options.deviate, count)
         wizard = ConsoleWizard(bot, options.script, tally, wizard_rng)

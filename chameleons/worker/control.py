@@ -41,6 +41,7 @@ STOP_RECORDING: Final = "stop_recording"
 STATUS: Final = "status"
 SPEECH_EVENT: Final = "speech_event"
 RETRY_ROBOT: Final = "retry_robot"  # try the robot again after a refused login
+RESET_PAIRING: Final = "reset_pairing"  # the capture pairs with the next phone that sends
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -57,6 +58,7 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     STOP_RECORDING: {"interaction_id": ((str, int), False)},
     STATUS: {},
     RETRY_ROBOT: {},
+    RESET_PAIRING: {},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
                    "time": (_NUMBER, False)},
 }  # fmt: skip

@@ -46,6 +46,7 @@ from chameleons.worker.control import (
     parse_command,
     telemetry_topic,
 )
+from chameleons.worker.curve import ClientKeys, apply_client
 from chameleons.worker.envelope import EnvelopeError, Message, deserialize
 from chameleons.worker.stage import (
     DISPLAY_PREFIX,
@@ -65,6 +66,7 @@ ROUTES: dict[str, str] = {
 }  # fmt: skip
 ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
 StatsSource = Callable[[], Mapping[str, Any]]
+LocalHandler = Callable[[Mapping[str, Any]], Mapping[str, Any]]  # body -> result
 STAGE_WAIT = 2.0  # seconds a command waits for its stage to connect
 RETRY_INTERVAL = 0.01
 
@@ -77,6 +79,7 @@ class HubConfig:
     hello_interval: float = 2.0
     heartbeat_interval: float = 1.0
     info: Mapping[str, Any] = field(default_factory=dict)  # driver, ports... for hello
+    curve: ClientKeys | None = None  # CURVE keys of the link to the server (None: plain)
 
 
 class ControlHub:
@@ -85,8 +88,11 @@ class ControlHub:
     def __init__(
         self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints, config: HubConfig,
         *, ingest_stats: StatsSource | None = None,
+        local: Mapping[str, LocalHandler] | None = None,
     ) -> None:  # fmt: skip
         self.context, self.endpoints, self.config = context, endpoints, config
+        # Commands the hub answers itself (the capture receivers are not a stage).
+        self.local: dict[str, LocalHandler] = dict(local or {})
         self.instance = uuid.uuid4().hex[:12]
         self.started = time.monotonic()
         self.ingest_stats = ingest_stats
@@ -141,6 +147,9 @@ class ControlHub:
         sub = ctx.socket(zmq.SUB)
         for socket in (server, uplink, stages, sub):
             socket.setsockopt(zmq.LINGER, 0)
+        if self.config.curve is not None:
+            for socket in (server, uplink):
+                apply_client(socket, self.config.curve)
         server.connect(self.config.command_endpoint)
         uplink.connect(self.config.telemetry_endpoint)
         stages.bind(endpoints.stage_control)
@@ -168,6 +177,14 @@ class ControlHub:
                 self.commands["ok"] += 1
                 send_message(server, make_ack(command, self.status(), source=self.name))
                 return
+            if command.type in self.local:
+                result = self.local[command.type](command.body)
+                self.commands["ok"] += 1
+                send_message(server, make_ack(command, dict(result), source=self.name))
+                return
+            if command.type not in ROUTES:
+                raise CommandError("unsupported", f"this worker does not handle {command.type}",
+                                   seq=command.seq, command=command.type)  # fmt: skip
             self._forward(command, frames, stages)
         except CommandError as exc:
             self.errors[f"command_{exc.reason}"] += 1
@@ -251,6 +268,8 @@ class ControlHub:
             "robot_face": {k: driver.get(k) for k in ROBOT_FACE_FIELDS if k in driver},
             "speaking": renderer.get("speaking", False), "prompt_id": renderer.get("prompt_id"),
             "recording": self._stage("recorder"),
+            # The copy delay measured movement to movement (booth check; None: no movement).
+            "movement_delay": self._stage("recorder").get("movement_delay"),
             "drops": {"ingest": ingest.get("drops", {}), "behaviour": behaviour.get("errors", {}),
                       "renderer": renderer.get("errors", {}),
                       "driver": driver.get("dropped", 0), "hub": dict(self.errors)},

@@ -8,6 +8,13 @@ a worker restarted mid-interaction and the server re-sent the command — the re
 on in ``...-part2`` (``-part3``...) and a journal the crash left behind is recovered first.
 ``stop_recording`` closes both and answers with their paths and frame counts; an
 ``event.recording`` event carries the same for the server to index.
+
+A recording that cannot be written (read-only folder, full disk) is never silent: the
+stage keeps ``problem`` (one sentence, :func:`write_problem`) in its stats, which the
+heartbeat carries to the wizard's *Recording* chip, and publishes one ``recording_failed``
+event per interaction for the server to flag it. A stream whose write failed is abandoned
+(its chunks written before stay recoverable); later frames are counted in ``frames_lost``.
+The problem stays until a recording starts cleanly again.
 """
 
 from __future__ import annotations
@@ -20,16 +27,19 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import pyarrow as pa
 import zmq
 
 from chameleons.worker.control import START_RECORDING, STOP_RECORDING, CommandError
+from chameleons.worker.delay_probe import DelayProbe
 from chameleons.worker.envelope import EnvelopeError, Message, message_frame
-from chameleons.worker.frames import FaceFrame
+from chameleons.worker.frames import N_BLENDSHAPES, FaceFrame
 from chameleons.worker.recording import (
     FrameRecorder,
     RecordingError,
     journal_path,
     recover_recording,
+    write_problem,
 )
 from chameleons.worker.stage import (
     PARTICIPANT_TOPIC,
@@ -78,6 +88,10 @@ class RecorderStage:
         self.errors: Counter[str] = Counter()
         self.interaction: str | None = None
         self.recorders: dict[str, FrameRecorder] = {}
+        self.failed: set[str] = set()  # streams abandoned after a write error
+        self.frames_lost = 0
+        self.problem: str | None = None
+        self.probe = DelayProbe()
         self._pub: zmq.Socket[bytes] | None = None
 
     def run(self, stop: threading.Event) -> None:
@@ -118,21 +132,57 @@ class RecorderStage:
         assert self._pub is not None
         send_message(self._pub, message)
 
-    def _record(self, message: Message) -> None:
-        if not self.recorders:
-            return
+    def _probe(self, message: Message) -> None:
+        """Feed the copy-delay probe (booth check): captured yaw at capture time, the
+        robot's yaw at send time."""
         try:
             if message.topic == PARTICIPANT_TOPIC:
-                self.recorders["participant"].write(message_frame(message))
+                frame = message_frame(message)
+                self.probe.captured(frame.capture_time, float(frame.head[0]))
+            else:
+                self.probe.sent(message.time, float(message.array()[N_BLENDSHAPES]))
+        except (EnvelopeError, KeyError, TypeError, ValueError, IndexError):
+            pass  # counted by _record when recording; the probe just skips it
+
+    def _record(self, message: Message) -> None:
+        self._probe(message)
+        if not self.recorders:
+            return
+        stream = "participant" if message.topic == PARTICIPANT_TOPIC else "agent"
+        if stream in self.failed:
+            self.frames_lost += 1
+            return
+        try:
+            if stream == "participant":
+                self.recorders[stream].write(message_frame(message))
             else:
                 vector = message.array()
                 due = float(message.body["t"])
-                self.recorders["agent"].write(FaceFrame.from_vector(
+                self.recorders[stream].write(FaceFrame.from_vector(
                     vector, due, message.time, "agent"))  # fmt: skip
         except (EnvelopeError, KeyError, TypeError, ValueError) as exc:
             self.errors[getattr(exc, "reason", "bad_frame")] += 1
-        except OSError:
-            self.errors["write_failed"] += 1
+        except (OSError, pa.ArrowException) as exc:
+            self._write_failed(stream, exc)
+
+    def _write_failed(self, stream: str, exc: OSError | pa.ArrowException) -> None:
+        """Abandon the stream, keep why, and tell the server once per interaction."""
+        self.errors["write_failed"] += 1
+        recorder = self.recorders[stream]
+        recorder.abandon()
+        self.failed.add(stream)
+        error = exc if isinstance(exc, OSError) else OSError(str(exc))
+        log.error("recording %s of interaction %s failed: %s", stream, self.interaction, exc)
+        self._report(stream, write_problem(error, recorder.path.parent))
+
+    def _report(self, stream: str, problem: str) -> None:
+        """Keep the first problem of the interaction and tell the server about it."""
+        if self.problem is not None:
+            return
+        self.problem = problem
+        self._send(Message("event.recording", "recording_failed", 0, self.name,
+                           time.monotonic(), {"interaction_id": self.interaction,
+                                              "stream": stream, "reason": problem}))  # fmt: skip
 
     def _start(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
         interaction = str(body["interaction_id"])
@@ -146,10 +196,14 @@ class RecorderStage:
             for stream, path in paths.items():
                 metadata = {"interaction_id": interaction, "stream": stream, "booth": self.booth}
                 self.recorders[stream] = FrameRecorder(path, metadata=metadata)
-        except (OSError, ValueError) as exc:
+        except OSError as exc:
+            self._close_all()
+            self.problem = write_problem(exc, directory)
+            raise CommandError("recording_failed", self.problem) from exc
+        except ValueError as exc:
             self._close_all()
             raise CommandError("recording_failed", str(exc)) from exc
-        self.interaction = interaction
+        self.interaction, self.problem, self.frames_lost = interaction, None, 0
         return self._files()
 
     def _stop(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -163,18 +217,31 @@ class RecorderStage:
             return {"interaction_id": None, "files": {}}
         files, frames = {}, {}
         for stream, recorder in self.recorders.items():
-            try:
-                files[stream] = str(recorder.close())
-            except OSError:
-                self.errors["close_failed"] += 1
-                files[stream] = str(recorder.journal)
+            files[stream] = self._close_one(stream, recorder)
             frames[stream] = recorder.frames_written
-        result = {"interaction_id": self.interaction, "files": files, "frames": frames}
+        result: dict[str, Any] = {"interaction_id": self.interaction, "files": files,
+                                  "frames": frames}  # fmt: skip
+        if self.problem is not None:
+            result.update(problem=self.problem, frames_lost=self.frames_lost)
         now = time.monotonic()
         self._send(Message("event.recording", "recording_stopped", 0, self.name, now,
                            {"worker_time": now, "wall_time": time.time(), **result}))  # fmt: skip
-        self.recorders, self.interaction = {}, None
+        self.recorders, self.interaction, self.failed = {}, None, set()
         return result
+
+    def _close_one(self, stream: str, recorder: FrameRecorder) -> str:
+        """The Parquet file, or the journal when the disk refuses the final write."""
+        try:
+            if stream in self.failed:
+                recorder.abandon()
+                return str(recover_recording(recorder.path))
+            return str(recorder.close())
+        except (OSError, RecordingError, pa.ArrowException) as exc:
+            self.errors["close_failed"] += 1
+            recorder.abandon()
+            if isinstance(exc, OSError):
+                self._report(stream, write_problem(exc, recorder.path.parent))
+            return str(recorder.journal)
 
     def _files(self) -> dict[str, Any]:
         return {"interaction_id": self.interaction,
@@ -183,4 +250,6 @@ class RecorderStage:
     def status(self) -> dict[str, Any]:
         frames = {s: r.frames_written for s, r in self.recorders.items()}
         return {**self._files(), "frames": frames, "active": bool(self.recorders),
-                "errors": dict(self.errors)}  # fmt: skip
+                "errors": dict(self.errors), "problem": self.problem,
+                "frames_lost": self.frames_lost,
+                "movement_delay": self.probe.measure(time.monotonic())}  # fmt: skip

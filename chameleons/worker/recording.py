@@ -17,6 +17,8 @@ with the format version and the caller's metadata (interaction, stream, ...).
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
 import re
@@ -44,6 +46,21 @@ _ROW_GROUP_ROWS = 65_536  # the final file needs no small row groups any more
 
 class RecordingError(ValueError):
     """A recording that cannot be read."""
+
+
+FULL_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+READ_ONLY_ERRNOS = frozenset({errno.EROFS, errno.EACCES, errno.EPERM})
+
+
+def write_problem(exc: OSError, where: str | Path) -> str:
+    """One sentence a wizard can act on, for a recording that cannot be written to ``where``
+    (shown on the *Recording* health chip and in the timeline, never the raw exception)."""
+    if exc.errno in FULL_ERRNOS:
+        return f"The disk is full where recordings are written ({where}): recording stopped."
+    if exc.errno in READ_ONLY_ERRNOS:
+        return f"The recordings folder {where} is read-only: nothing is being recorded."
+    reason = exc.strerror or type(exc).__name__
+    return f"Recordings cannot be written to {where} ({reason}): recording stopped."
 
 
 def recording_schema(metadata: dict[str, Any] | None = None) -> pa.Schema:
@@ -110,6 +127,18 @@ class FrameRecorder:
         self.frames_written += len(self._times)
         self._times, self._values = [], []
 
+    def abandon(self) -> None:
+        """Stop after a write error: drop what is buffered and close the journal quietly
+        (the chunks written before the error stay recoverable)."""
+        self._times, self._values = [], []
+        if self._file is None:
+            return
+        for close in (self._writer.close, self._file.close):
+            # The disk that failed the write fails the close too.
+            with contextlib.suppress(OSError, pa.ArrowException):
+                close()
+        self._file = None
+
     def close(self) -> Path:
         """Flush, write the Parquet file, remove the journal; returns the Parquet path."""
         if self._file is None:
@@ -161,8 +190,13 @@ def recover_recording(path: str | Path) -> Path:
         return path
     table = _read_journal(journal)
     partial = path.with_name(path.name + ".partial")
-    with pq.ParquetWriter(partial, table.schema, compression="zstd") as writer:
-        writer.write_table(table, row_group_size=_ROW_GROUP_ROWS)
+    try:
+        with pq.ParquetWriter(partial, table.schema, compression="zstd") as writer:
+            writer.write_table(table, row_group_size=_ROW_GROUP_ROWS)
+    except (OSError, pa.ArrowException):
+        with contextlib.suppress(OSError):  # a full disk: keep the journal, no debris
+            partial.unlink(missing_ok=True)
+        raise
     os.replace(partial, path)  # never a half-written Parquet file under the real name
     journal.unlink()
     return path

@@ -16,6 +16,7 @@ import threading
 import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from types import FrameType
 from typing import Any, Protocol
@@ -23,10 +24,20 @@ from typing import Any, Protocol
 import zmq
 
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
-from chameleons.worker.drivers import DEFAULT_URL, DriverOptions, Publish, create_driver
+from chameleons.worker.control import RESET_PAIRING
+from chameleons.worker.curve import ClientKeys
+from chameleons.worker.drivers import DEFAULT_URL
 from chameleons.worker.hub import ControlHub, HubConfig
+from chameleons.worker.ingest.pairing import SenderLock
 from chameleons.worker.playback import PlaybackStage
 from chameleons.worker.recorder_stage import RecorderStage
+from chameleons.worker.render_process import START_TIMEOUT as PROCESS_START_TIMEOUT
+from chameleons.worker.render_process import (
+    RendererProcess,
+    cleanup,
+    make_driver,
+    process_endpoints,
+)
 from chameleons.worker.render_stage import RendererStage
 from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints, ParticipantBus
@@ -63,6 +74,7 @@ class WorkerConfig:
     command_endpoint: str = "tcp://127.0.0.1:5555"
     telemetry_endpoint: str = "tcp://127.0.0.1:5556"
     capture_host: str = "0.0.0.0"
+    capture_sender: str | None = None  # None: the first sender after a reset
     livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
     facecapturex_port: int | None = 19977
     livelink_rotation_scale: str = "radians"
@@ -75,7 +87,13 @@ class WorkerConfig:
     crossfade_seconds: float = 0.3
     history_seconds: float = 12.0
     lookahead_ticks: int = 5
-    endpoints: Endpoints | None = None  # None: inproc, unique to this worker
+    endpoints: Endpoints | None = None  # None: inproc (ipc with renderer_process), unique
+    curve: ClientKeys | None = None  # CURVE keys of the link to the server (None: plain)
+    # The renderer and driver in a child process (chameleons.worker.render_process), with
+    # SCHED_FIFO and a CPU of its own where the system permits.
+    renderer_process: bool = False
+    renderer_realtime: bool = False
+    renderer_cpu: int | None = None
 
     def initial_params(self) -> dict[str, Any]:
         if self.behaviour == "copy":
@@ -97,12 +115,17 @@ class Worker:
         self.config = config
         self._own_context = context is None
         self.context: zmq.Context[zmq.Socket[bytes]] = context or zmq.Context()
-        self.endpoints = config.endpoints or Endpoints.inproc(
-            f"{config.booth}-{uuid.uuid4().hex[:8]}"
-        )
+        self._own_endpoints = config.endpoints is None and config.renderer_process
+        if config.endpoints is not None:
+            self.endpoints = config.endpoints
+        elif config.renderer_process:
+            self.endpoints = process_endpoints(config.booth)
+        else:
+            self.endpoints = Endpoints.inproc(f"{config.booth}-{uuid.uuid4().hex[:8]}")
         self.stop_event = threading.Event()
         self.failed = threading.Event()
         self.receivers: dict[str, Receiver] = {}
+        self.pairing = SenderLock(config.capture_sender)
         self._threads: list[threading.Thread] = []
         self.bus = ParticipantBus(self.context, self.endpoints)
         self.behaviour = BehaviourStage(self.context, self.endpoints, BehaviourStageConfig(
@@ -112,22 +135,24 @@ class Worker:
             initial_params=config.initial_params(), locations=config,
         ))  # fmt: skip
         self.playback = PlaybackStage(self.context, self.endpoints)
-        self.renderer = RendererStage(self.context, self.endpoints, self._make_driver,
-                                      config.render)  # fmt: skip
+        # In-process (the default) the renderer is a stage thread like the others.
+        self.renderer: RendererStage | None = None
+        renderer: RendererStage | RendererProcess
+        if config.renderer_process:
+            renderer = self.renderer_process = RendererProcess(config, self.endpoints)
+        else:
+            renderer = self.renderer = RendererStage(
+                self.context, self.endpoints, partial(make_driver, config), config.render
+            )
         self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth)
         self.hub = ControlHub(self.context, self.endpoints, HubConfig(
             config.booth, config.command_endpoint, config.telemetry_endpoint,
-            info={"driver": config.driver, "behaviour": config.behaviour},
-        ), ingest_stats=self.ingest_stats)  # fmt: skip
-        self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, self.renderer,
+            info={"driver": config.driver, "behaviour": config.behaviour}, curve=config.curve,
+        ), ingest_stats=self.ingest_stats,
+            local={RESET_PAIRING: lambda _body: self.pairing.reset()})  # fmt: skip
+        self._renderer_ready = renderer.ready
+        self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
-
-    def _make_driver(self, publish: Publish) -> Any:
-        cfg = self.config
-        options = DriverOptions(booth=cfg.booth, robot_url=cfg.robot_url, robot_key=cfg.robot_key,
-                                record_path=cfg.data_dir / f"driver-{cfg.booth}.jsonl",
-                                furhat_faces=cfg.furhat_faces)  # fmt: skip
-        return create_driver(cfg.driver, options, publish)
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self) -> Worker:
@@ -143,7 +168,8 @@ class Worker:
         except OSError:
             self.stop()
             raise
-        if not self.renderer.ready.wait(START_TIMEOUT) and not self.failed.is_set():
+        timeout = PROCESS_START_TIMEOUT if self.config.renderer_process else START_TIMEOUT
+        if not self._renderer_ready.wait(timeout) and not self.failed.is_set():
             self.stop()
             raise RuntimeError("the renderer did not start ticking")
         return self
@@ -166,6 +192,7 @@ class Worker:
             "host": cfg.capture_host, "publish_endpoint": self.endpoints.capture,
             "context": self.context,
             "transform": FrameTransform(cfg.mounting_rotation_deg, cfg.mirror),
+            "pairing": self.pairing,
         }  # fmt: skip
         if cfg.livelink_port is not None:
             self.receivers["livelink"] = LiveLinkReceiver(
@@ -188,7 +215,8 @@ class Worker:
         heads = [s["head_range"] for s in snapshots.values() if s.get("head_range")]
         head_range = max(heads, key=lambda h: h["frames"]) if heads else None
         return {"input_fps": fps, "drops": drops, "receivers": snapshots,
-                "no_face": no_face, "problem": problem, "head_range": head_range}  # fmt: skip
+                "no_face": no_face, "problem": problem, "head_range": head_range,
+                "pairing": self.pairing.snapshot()}  # fmt: skip
 
     def stop(self, timeout: float = 5.0) -> None:
         self.stop_event.set()
@@ -201,6 +229,8 @@ class Worker:
             thread.join(timeout)
         if self._own_context:
             self.context.term()
+        if self._own_endpoints:
+            cleanup(self.endpoints)
 
     def __enter__(self) -> Worker:
         return self.start()

@@ -154,13 +154,16 @@ class LiveLinkSender:
     """UDP datagrams, frame numbers on a timecode clock (frames since local midnight)."""
 
     def __init__(self, host: str, port: int, *, fps: float = 60.0,
-                 rotation_factor: float = DEFAULT_ROTATION_FACTOR) -> None:  # fmt: skip
+                 rotation_factor: float = DEFAULT_ROTATION_FACTOR,
+                 source_host: str | None = None) -> None:  # fmt: skip
         self.address, self.rotation_factor = (host, port), rotation_factor
         self.rate = (round(fps), 1) if float(fps).is_integer() else (round(fps * 1000), 1000)
         now = datetime.now()
         self._start = (now - now.replace(hour=0, minute=0, second=0, microsecond=0)).total_seconds()
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
         self._sock = socket.socket(family, socket.SOCK_DGRAM)
+        if source_host is not None:  # send from this address (e.g. 127.0.0.2: another phone)
+            self._sock.bind((source_host, 0))
 
     def send(self, sample: FaceSample) -> None:
         frames = (self._start + sample.time) * self.rate[0] / self.rate[1]

@@ -26,11 +26,13 @@ VALUES = {
     "study_id": "1", "session_id": "1", "token": "not-a-token", "code": "P001",
     "measure": "trust", "fmt": "svg", "recording_id": "1", "booth": "booth-1",
     "actor": "m1", "relative": "audio/x.mp3", "name": "0123abcd.wav", "account_id": "1",
+    "device": "0123456789abcdef",
 }  # fmt: skip
 # Well-formed bodies, so the token check (not validation) is what answers.
 BODIES = {
     "/api/phone/{token}/ranking": {"client_id": "c" * 16, "position": 1, "ranking": ["water"]},
     "/api/phone/{token}/consent": {"client_id": "c" * 16, "agree": True},
+    "/api/phone/{token}/language": {"client_id": "c" * 16, "language": "sv"},
     "/api/phone/{token}/questionnaire": {
         "client_id": "c" * 16, "position": 1, "questionnaire": "trust", "answers": {"x": 1},
     },

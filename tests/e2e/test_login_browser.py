@@ -12,17 +12,6 @@ from tests.support.live_server import LiveServer
 pytestmark = pytest.mark.browser
 
 
-@pytest.fixture
-def database_url(sqlite_template: object, tmp_path: object) -> str:
-    """Browser tests exercise the UI; one backend (SQLite) is enough here."""
-    import shutil
-    from pathlib import Path
-
-    path = Path(str(tmp_path)) / "browser.sqlite3"
-    shutil.copyfile(str(sqlite_template), path)
-    return f"sqlite:///{path}"
-
-
 def test_staff_page_redirects_to_login_when_logged_out(live_server: LiveServer, page: Page) -> None:
     page.goto(live_server.url + "/")
     expect(page).to_have_url(live_server.url + "/login?next=/")

@@ -11,12 +11,14 @@ import sys
 import time
 from pathlib import Path
 
+import httpx
 import pytest
 from click.testing import CliRunner
 from sqlalchemy import select
 
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.models import Participant, Session, StaffUser
+from chameleons.backend.sessions.bot import StaffApi
 from chameleons.cli.main import cli
 from chameleons.rehearsal.embedded import BOT_USERNAME, embedded_system
 from chameleons.settings import Settings
@@ -154,3 +156,33 @@ def test_ctrl_c_or_sigterm_stops_everything_it_started(tmp_path: Path, stop: str
             os.kill(pid, signal.SIGKILL)  # what a failed run left behind
         if process.stdout is not None:
             process.stdout.close()
+
+
+def test_a_booth_with_a_real_session_open_is_refused_unless_named(tmp_path: Path) -> None:
+    settings = Settings(data_dir=tmp_path / "data", secret_key=secrets.token_urlsafe(32),
+                        _env_file=None)  # fmt: skip
+    runner = CliRunner()
+    with (
+        embedded_system(settings, simulate_face=False) as target,
+        httpx.Client(base_url=target.base_url, trust_env=False) as http,
+    ):
+        staff = StaffApi(http).login(target.username, target.password)
+        real = staff.post("/api/sessions", {"study_id": target.study_id, "booth": target.booth})
+        code = real["participant"]["code"]
+        login = ["--server", target.base_url, "--username", target.username,
+                 "--password", target.password]  # fmt: skip
+        args = ["rehearse", "-n", "1", "--script", "silent", *login]
+        refused = runner.invoke(cli, args)
+        assert refused.exit_code == 1, refused.output
+        assert refused.output.strip().splitlines() == [
+            f"Error: Booth {target.booth} has a real session open (session {real['id']}, "
+            f"participant {code}, pending): rehearse on another booth with --booth NAME, or "
+            f"name this one (--booth {target.booth}) to rehearse there anyway."
+        ]
+        assert len(_sessions(settings)) == 1  # nothing was rehearsed
+
+        named = runner.invoke(cli, [*args, "--booth", target.booth])
+        assert named.exit_code == 0, named.output
+        assert f"Warning: Booth {target.booth} has a real session open" in named.output
+        assert "Rehearsed 1 session (1 participant, R001)" in named.output
+    assert _sessions(settings) == [(code, "pending", False), ("R001", "complete", True)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -73,3 +74,19 @@ def phone_context(browser: Browser) -> Iterator[BrowserContext]:
     )
     yield ctx
     ctx.close()
+
+
+def wait_for_js(page: Page, expression: str, timeout: float = 30_000) -> None:
+    """Wait until ``expression`` is truthy in the page.
+
+    Playwright's ``wait_for_function`` compiles its predicate with ``eval`` inside the
+    page, which the app's Content-Security-Policy (no 'unsafe-eval') refuses; ``evaluate``
+    goes through the DevTools protocol, which the policy does not govern. So this polls
+    ``evaluate`` until the condition holds (a readiness poll with a deadline, not a fixed
+    wait), letting Playwright dispatch the page's events in between.
+    """
+    deadline = time.monotonic() + timeout / 1000
+    while not page.evaluate(expression):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"{expression!r} still false after {timeout / 1000:.0f} s")
+        page.wait_for_timeout(20)

@@ -23,6 +23,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.models import (
+    BoothCheck,
     Event,
     Interaction,
     Participant,
@@ -74,6 +75,18 @@ def create_plan(
     db.add_all(rows)
     db.flush()
     return rows
+
+
+def booth_check(session: Session, at: datetime) -> BoothCheck:
+    """The booth check a technician ran before the participant sat down (all steps pass)."""
+    steps = [{"id": step, "status": "pass", "value": "", "figures": {}}
+             for step in ("face", "head", "robot", "copy", "speech", "disk")]  # fmt: skip
+    return BoothCheck(
+        booth=session.booth, study_id=session.study_id, session_id=session.id, checked_at=at,
+        passed=True, steps=steps, face_fps=59.9, capture_to_send_ms=8.5, head_yaw_deg=38.0,
+        head_pitch_deg=14.0, copy_delay_s=4.0, measured_delay_s=4.02, speech_start_ms=180.0,
+        speech_ok=True, disk_free_bytes=50 * 1000**3,
+    )  # fmt: skip
 
 
 def populate(
@@ -156,6 +169,7 @@ def add_completed_participant(
     )
     db.add(session)
     db.flush()
+    db.add(booth_check(session, start - timedelta(minutes=2)))
     if result is not None:
         result.session_ids.append(session.id)
     _event(db, study, session, None, "session_started", start, {"booth": session.booth})

@@ -30,6 +30,7 @@ VALID = {
     "status": {},
     "speech_event": {"event": "start", "prompt_id": "p1"},
     "retry_robot": {},
+    "reset_pairing": {},
 }
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 import pytest
 from click.testing import CliRunner
 
 from chameleons.cli.worker_command import build_config, worker
 from chameleons.settings import Settings
+from chameleons.worker.curve import create_keys
 
 
 def test_defaults_copy_4_000_seconds_at_125_and_25_hz() -> None:
@@ -18,17 +21,24 @@ def test_defaults_copy_4_000_seconds_at_125_and_25_hz() -> None:
     assert config.command_endpoint == "tcp://127.0.0.1:5555"
 
 
-def test_options_win_over_settings(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_options_win_over_settings(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setenv("CHAMELEONS_WORKER_COPY_DELAY", "2.5")
     monkeypatch.setenv("CHAMELEONS_WORKER_DRIVER", "furhat")
+    monkeypatch.setenv("CHAMELEONS_DATA_DIR", str(tmp_path / "data"))  # no keys there
     settings = Settings()
     from_settings = build_config(settings, behaviour="copy")
     assert from_settings.copy_delay == 2.5
     assert from_settings.driver == "furhat"
+    # A server on the network: allowed with CURVE keys only (none: refused, clearly).
+    with pytest.raises(click.ClickException, match="chameleons keys create"):
+        build_config(settings, behaviour="copy", control="tcp://10.0.0.2:5555")
+    create_keys(tmp_path / "keys")
     config = build_config(settings, behaviour="copy", copy_delay=1.0, driver="null",
-                          booth="b7", control="tcp://10.0.0.2:5555")  # fmt: skip
+                          booth="b7", control="tcp://10.0.0.2:5555",
+                          keys_dir=tmp_path / "keys")  # fmt: skip
     assert (config.copy_delay, config.driver, config.booth) == (1.0, "null", "b7")
     assert config.command_endpoint == "tcp://10.0.0.2:5555"
+    assert config.curve is not None
 
 
 def test_a_negative_delay_is_refused() -> None:

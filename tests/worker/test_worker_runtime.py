@@ -114,7 +114,9 @@ def test_recording_writes_participant_and_agent_streams(
 ) -> None:
     ack = peer.command(BOOTH, "start_recording", {"interaction_id": 7, "directory": str(tmp_path)})
     assert ack.ok
-    peer.wait(lambda: worker.renderer.loop.stats.count > 40)  # some agent frames went out
+    renderer = worker.renderer
+    assert renderer is not None
+    peer.wait(lambda: renderer.loop.stats.count > 40)  # some agent frames went out
     stopped = peer.command(BOOTH, "stop_recording", {"interaction_id": 7})
     assert stopped.ok
     files = stopped.result["files"]
@@ -149,8 +151,9 @@ def test_the_same_stages_run_over_ipc_sockets(
             assert peer.command(
                 BOOTH, "set_behaviour", {"name": "natural", "params": {"seed": 1}}
             ).ok
-            peer.wait(lambda: running.renderer.core is not None
-                      and running.renderer.core.keyframes_in > 20)  # fmt: skip
+            renderer = running.renderer
+            assert renderer is not None
+            peer.wait(lambda: renderer.core is not None and renderer.core.keyframes_in > 20)
             assert sorted(p.name for p in directory.iterdir())[0].endswith(".sock")
     finally:
         shutil.rmtree(directory, ignore_errors=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, HTTPException, Path, Query, Request, status
+from fastapi import HTTPException, Path, Query, Request, status
 from fastapi.responses import HTMLResponse, PlainTextResponse, Response
 from sqlalchemy.orm import Session as DbSession
 
@@ -27,6 +27,7 @@ from chameleons.backend.dashboard.context import page_context, study_or_404
 from chameleons.backend.dependencies import DbSession as Db
 from chameleons.backend.dependencies import Templates
 from chameleons.backend.export.selection import StudyNotFoundError
+from chameleons.backend.routing import make_router
 from chameleons.experiment.stats import (
     DEFAULT_RULE,
     DEFAULT_VIEW,
@@ -47,7 +48,7 @@ from chameleons.experiment.stats.render_models import (
 )
 from chameleons.experiment.stats.rounding import RULE
 
-router = APIRouter(tags=["analysis"])
+router = make_router(tags=["analysis"])
 MAX_PERMUTATIONS = 100_000
 Permutations = Annotated[int | None, Query(ge=1, le=MAX_PERMUTATIONS)]
 ViewQuery = Annotated[View, Query(description="as_planned (intention to treat) or as_run")]

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, HTTPException, status
+from fastapi import Depends, HTTPException, status
 
 from chameleons.backend.auth import service
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentPI, CurrentStaff
 from chameleons.backend.auth.schemas import StaffUserCreate, StaffUserRead
 from chameleons.backend.dependencies import DbSession
+from chameleons.backend.routing import make_router
 
-router = APIRouter(prefix="/api/staff", tags=["staff"])
+router = make_router(prefix="/api/staff", tags=["staff"])
 
 
 @router.get("/me")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, Request, status
+from fastapi import Depends, Form, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from chameleons.backend.auth import service, sessions
@@ -12,8 +12,9 @@ from chameleons.backend.auth.csrf import rotate_csrf_token, verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.dependencies import DbSession, Templates
+from chameleons.backend.routing import make_router
 
-router = APIRouter(tags=["auth"])
+router = make_router(tags=["auth"])
 
 
 def _safe_next(next_path: str | None) -> str:

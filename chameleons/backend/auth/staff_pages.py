@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
+from fastapi import Depends, Form, HTTPException, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from pydantic import ValidationError
 from sqlalchemy import select
@@ -16,8 +16,9 @@ from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.models import StaffUser
+from chameleons.backend.routing import make_router
 
-router = APIRouter(tags=["auth"])
+router = make_router(tags=["auth"])
 CSRF = [Depends(verify_csrf)]
 
 

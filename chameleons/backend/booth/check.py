@@ -13,24 +13,33 @@ with the session's events.
   wrong way is a sign or mirror error; one far beyond 90 degrees a unit error (radians read
   as degrees/180 copies a head turn about three times too large).
 - **Robot**: connected (for the virtual robot: a display page open and playing).
-- **Robot copies**: the copy behaviour runs, with its configured delay and the measured
-  capture-to-send latency.
-- **Disk**: free space where recordings are written; below the limit is a warning.
+- **Robot copies**: the copy behaviour runs; its configured delay against the delay the
+  worker measured movement to movement (:mod:`chameleons.worker.delay_probe`), within
+  ``MAX_DELAY_ERROR_S``.
+- **Test prompt**: the robot says a test prompt; its speech start and end must come back
+  from the robot (for the virtual robot: from the display page) (:mod:`.speech_test`).
+- **Disk**: the recordings folder can be written, and its free space covers a session
+  (``Settings.session_disk_bytes``: recording rate x session length, both settings); less
+  is a warning, a folder that cannot be written a failure.
 """
 
 from __future__ import annotations
 
 import shutil
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from chameleons.backend.withdrawal.files import RECORDINGS_DIR
 from chameleons.backend.wizard import health
+from chameleons.worker.recording import write_problem
 
 MIN_TURN_DEG, MAX_TURN_DEG = 20.0, 90.0
 MIN_NOD_DEG, MAX_NOD_DEG = 8.0, 60.0
 MAX_LATENCY_MS = 100.0
-MIN_FREE_BYTES = 5 * 1024**3
+MAX_DELAY_ERROR_S = 0.25  # measured against configured copy delay
+MIN_FREE_BYTES = 360 * 1000**2  # the settings' default: 100 kB/s for 60 minutes
 PASS, FAIL, WARN = "pass", "fail", "warn"
 CHECKED = "booth.checked"
 
@@ -87,37 +96,75 @@ def robot(telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None)
 
 
 def copies(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The configured copy delay against the one measured movement to movement (the
+    worker's probe: captured head yaw against the yaw sent to the robot)."""
     label = "Robot copies the head"
     if telemetry is None:
         return step("copy", label, FAIL, "no worker for this booth")
     behaviour = telemetry.get("behaviour")
     params = telemetry.get("behaviour_params")
     delay = _number(params.get("delay")) if isinstance(params, Mapping) else None
-    latency = _number(telemetry.get("capture_to_send_ms"))
     if behaviour != "copy" or delay is None:
         return step("copy", label, WARN, f"the robot runs {behaviour or 'nothing'}, not copy",
                     behaviour=behaviour)  # fmt: skip
-    measured = delay + (latency or 0.0) / 1000.0
-    return step("copy", label, PASS, f"delay {delay:.3f} s configured, {measured:.3f} s "
-                "measured (with capture to send)", delay_s=delay,
-                measured_s=round(measured, 3))  # fmt: skip
+    probe = telemetry.get("movement_delay")
+    measured = _number(probe.get("delay_s")) if isinstance(probe, Mapping) else None
+    if measured is None:
+        return step("copy", label, FAIL, f"delay {delay:.3f} s configured; no copy of a head "
+                    "movement measured (turn the head, wait for the robot)",
+                    delay_s=delay, measured_s=None)  # fmt: skip
+    off = measured - delay
+    status = PASS if abs(off) <= MAX_DELAY_ERROR_S else FAIL
+    return step("copy", label, status, f"delay {delay:.3f} s configured, {measured:.3f} s "
+                f"measured movement to movement ({off * 1000:+.0f} ms)", delay_s=delay,
+                measured_s=measured,
+                correlation=_number(probe.get("correlation")) if isinstance(probe, Mapping)
+                else None)  # fmt: skip
+
+
+def speech(result: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The test prompt: the robot (or the virtual robot's page) reported its speech start
+    and end (:mod:`.speech_test`)."""
+    label = "Robot says a test prompt"
+    if result is None:
+        return step("speech", label, WARN, "not run")
+    started, ended = result.get("start_ms"), result.get("ended")
+    figures = {"start_ms": started, "ended": ended, "prompt_id": result.get("prompt_id")}
+    if result.get("problem"):
+        return step("speech", label, FAIL, str(result["problem"]), **figures)
+    if started is None:
+        return step("speech", label, FAIL, "the robot never started speaking", **figures)
+    if not ended:
+        return step("speech", label, FAIL, f"started after {started:.0f} ms, never ended",
+                    **figures)  # fmt: skip
+    return step("speech", label, PASS, f"started after {started:.0f} ms and ended", **figures)
 
 
 def disk(data_dir: Path, minimum: int = MIN_FREE_BYTES) -> dict[str, Any]:
-    where = data_dir if data_dir.exists() else data_dir.parent
+    label = "Disk space for recordings"
+    folder = data_dir / RECORDINGS_DIR
+    where = next((p for p in (folder, data_dir, data_dir.parent) if p.exists()), Path("."))
     free = shutil.disk_usage(where).free
-    gigabytes = free / 1024**3
+    needed = f"{minimum / 1000**2:,.0f} MB"
+    try:  # root may write anywhere but a read-only mount: try it rather than ask
+        with tempfile.TemporaryFile(dir=where, prefix=".booth-check-"):
+            pass
+    except OSError as exc:
+        return step("disk", label, FAIL, write_problem(exc, where), free_bytes=free,
+                    needed_bytes=minimum)  # fmt: skip
     status = PASS if free >= minimum else WARN
-    value = f"{gigabytes:.1f} GB free" + ("" if status == PASS else
-                                          f", below {minimum / 1024**3:.0f} GB")  # fmt: skip
-    return step("disk", "Disk space for recordings", status, value, free_bytes=free)
+    value = f"{free / 1000**3:.1f} GB free" + (
+        f" (a session needs about {needed})" if status == PASS
+        else f", below the {needed} a session needs")  # fmt: skip
+    return step("disk", label, status, value, free_bytes=free, needed_bytes=minimum)
 
 
 def run(
-    telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None, data_dir: Path
-) -> dict[str, Any]:
+    telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None, data_dir: Path,
+    disk_needed: int = MIN_FREE_BYTES, spoken: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:  # fmt: skip
     steps = [face_stream(telemetry), head_turn(telemetry), robot(telemetry, display),
-             copies(telemetry), disk(data_dir)]  # fmt: skip
+             copies(telemetry), speech(spoken), disk(data_dir, disk_needed)]  # fmt: skip
     return {"passed": all(s["status"] != FAIL for s in steps), "steps": steps}
 
 

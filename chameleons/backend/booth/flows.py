@@ -10,10 +10,16 @@
   Recording rows (from the worker's answer, plus a scan of the directory that recovers crash
   journals); a ``recording_stopped`` event from the worker (e.g. the recorder closing on a
   clean worker stop) is indexed too;
+- a recording the disk refuses (read-only folder, full disk: the worker's
+  ``recording_failed`` event, or an ``OSError`` while indexing) is logged as
+  ``recording.failed`` with one sentence of reason, once per interaction and cause; the
+  dashboard flags it and the export carries it (``interactions.recording_problem``);
 - the bridge's ``worker.<booth>`` messages and the driver's robot-state events become
   ``worker.lost`` / ``worker.restarted`` / ``worker.connected`` / ``robot.disconnected`` /
   ``robot.connected`` events of the session running on that booth, so the dashboard's
   outage flags see them;
+- ``session.started``: the booth's face capture is told to pair with the next phone that
+  sends (``capture.pairing_reset``, :mod:`chameleons.backend.wizard.capture`);
 - a booth's worker connecting (``worker_connected``, ``worker_restarted``) while an
   interaction runs there: whatever the worker has not acknowledged of that interaction's
   set-up and recording is sent now (an interaction started before the worker came up would
@@ -46,10 +52,11 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.events.unit_of_work import write_session
 from chameleons.backend.sessions.ending import ENDED_EARLY
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
-from chameleons.backend.wizard import robot, worker_link
+from chameleons.backend.wizard import capture, robot, worker_link
 from chameleons.backend.wizard.service import Outcome
 from chameleons.worker.control import START_RECORDING, STOP_RECORDING
 from chameleons.worker.envelope import Message
+from chameleons.worker.recording import write_problem
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -66,6 +73,8 @@ ROBOT_KINDS = {"disconnected": "robot.disconnected", "closed": "robot.disconnect
                "connected": "robot.connected", "auth_refused": "robot.auth_refused",
                "auth_timeout": "robot.auth_timeout"}  # fmt: skip
 AUTH_STATES = frozenset({"auth_refused", "auth_timeout"})
+RECORDING_FAILED = "recording.failed"
+SESSION_STARTED = "session.started"
 
 
 @dataclass(frozen=True)
@@ -144,6 +153,11 @@ class BoothFlow:
     # --- listeners (on the loop; they only queue) --------------------------------------------
     def _on_committed(self, _channel: str, message: dict[str, Any]) -> None:
         event = message.get("event") if message.get("type") == "event" else None
+        if isinstance(event, dict) and event.get("kind") == SESSION_STARTED:
+            # A new participant: the booth's capture pairs with the next phone that sends.
+            session_id = int(event["session_id"])
+            job = partial(capture.reset_pairing, self.state, session_id, SOURCE, log_unsent=False)
+            self._enqueue(f"session:{session_id}", job)  # type: ignore[arg-type]
         if not isinstance(event, dict) or event.get("interaction_id") is None:
             return
         interaction_id, kind = int(event["interaction_id"]), event.get("kind")
@@ -181,6 +195,8 @@ class BoothFlow:
                               partial(self._log_outage, booth, kind, payload, when))  # fmt: skip
         elif message.type == "recording_stopped":
             self._enqueue(f"booth:{booth}", partial(self._route_reported, dict(body)))
+        elif message.type == "recording_failed":
+            self._enqueue(f"booth:{booth}", partial(self._route_failed, dict(body)))
 
     def _on_telemetry(self, message: Message) -> None:
         """A refused login is reported once, possibly before the server's subscription took:
@@ -315,6 +331,18 @@ class BoothFlow:
             job = partial(self._index_reported, slot, body)
             self._enqueue(f"session:{slot.session_id}", job)
 
+    async def _route_failed(self, body: dict[str, Any]) -> None:
+        try:
+            interaction_id = int(body.get("interaction_id"))  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return
+        slot = await self._read(slot_of, interaction_id)
+        if slot is not None:
+            reason = str(body.get("reason") or "The recording could not be written.")
+            job = partial(self._log, slot, RECORDING_FAILED,
+                          {"reason": reason, "stream": body.get("stream"), "source": "worker"})
+            self._enqueue(f"session:{slot.session_id}", job)
+
     async def _index_reported(self, slot: Slot, body: dict[str, Any]) -> None:
         rows = await self._index(slot, body, None)
         if rows:
@@ -324,12 +352,22 @@ class BoothFlow:
         self, slot: Slot, reported: dict[str, Any] | None, scan: Path | None
     ) -> list[dict[str, Any]]:
         data_dir = service.data_dir_of(self.state)
+        problems: list[str] = []
 
         def work(db: Session) -> list[dict[str, Any]]:
-            added = service.index_recordings(db, slot.interaction_id, data_dir, reported, scan)
+            added = service.index_recordings(
+                db, slot.interaction_id, data_dir, reported, scan, problems
+            )
             return service.describe(added)
 
-        return await self._write(work)
+        try:
+            rows = await self._write(work)
+        except OSError as exc:  # e.g. an unreadable folder: report it, never crash the job
+            rows = []
+            problems.append(write_problem(exc, scan or data_dir))
+        for problem in problems:
+            await self._log(slot, RECORDING_FAILED, {"reason": problem, "source": "server"})
+        return rows
 
     async def _log_outage(
         self, booth: str, kind: str, payload: dict[str, Any], worker_time: float | None

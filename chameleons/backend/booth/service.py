@@ -23,7 +23,12 @@ from sqlalchemy.orm import Session
 from chameleons.backend.booth import repository
 from chameleons.backend.models import Recording
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR, recording_file
-from chameleons.worker.recording import RecordingError, journal_path, recover_recording
+from chameleons.worker.recording import (
+    RecordingError,
+    journal_path,
+    recover_recording,
+    write_problem,
+)
 
 log = logging.getLogger(__name__)
 STREAMS = ("participant", "agent")
@@ -64,9 +69,12 @@ def _interaction_files(interaction_id: int) -> re.Pattern[str]:
     )
 
 
-def files_in(directory: Path, interaction_id: int) -> dict[Path, str]:
+def files_in(
+    directory: Path, interaction_id: int, problems: list[str] | None = None
+) -> dict[Path, str]:
     """The interaction's recordings in ``directory`` (Parquet path -> stream); a journal a
-    crash left behind is recovered into its Parquet file first."""
+    crash left behind is recovered into its Parquet file first. A journal the disk does not
+    let us recover (full, read-only) stays as it is and is told in ``problems``."""
     pattern = _interaction_files(interaction_id)
     found: dict[Path, str] = {}
     if not directory.is_dir():
@@ -82,17 +90,29 @@ def files_in(directory: Path, interaction_id: int) -> dict[Path, str]:
             except RecordingError as exc:  # cut before its first chunk: nothing to keep
                 log.warning("recording journal %s not recoverable: %s", entry, exc)
                 continue
+            except OSError as exc:
+                _tell(problems, write_problem(exc, directory), entry)
+                continue
         if target.exists():
             found[target] = match.group(1)
     return found
 
 
-def file_facts(path: Path) -> tuple[int, int] | None:
+def _tell(problems: list[str] | None, sentence: str, path: Path) -> None:
+    log.warning("recording %s not indexed: %s", path, sentence)
+    if problems is not None and sentence not in problems:
+        problems.append(sentence)
+
+
+def file_facts(path: Path, problems: list[str] | None = None) -> tuple[int, int] | None:
     """(frames, bytes) of a Parquet recording the server can read; None when it cannot."""
     if not path.exists() and journal_path(path).exists():
         try:
             recover_recording(path)
         except RecordingError:
+            return None
+        except OSError as exc:
+            _tell(problems, write_problem(exc, path.parent), path)
             return None
     try:
         frames = pq.ParquetFile(path).metadata.num_rows
@@ -107,11 +127,13 @@ def index_recordings(
     data_dir: Path,
     reported: dict[str, Any] | None = None,
     scan: Path | None = None,
+    problems: list[str] | None = None,
 ) -> list[Recording]:
     """Index the files the worker reported (``{"files": {stream: path}, "frames": {...}}``)
     and, with ``scan``, every file of the interaction in that directory. Files already
-    indexed are skipped, so the same stop may be reported twice. Returns the new rows."""
-    candidates = dict(files_in(scan, interaction_id)) if scan is not None else {}
+    indexed are skipped, so the same stop may be reported twice. Returns the new rows; what
+    the disk did not allow is told in ``problems`` (sentences), never raised."""
+    candidates = dict(files_in(scan, interaction_id, problems)) if scan is not None else {}
     reported = reported or {}
     worker_frames: dict[str, int] = {}
     for stream, raw in (reported.get("files") or {}).items():
@@ -126,7 +148,7 @@ def index_recordings(
         stored = stored_path(data_dir, path)
         if stored in known:
             continue
-        facts = file_facts(path)
+        facts = file_facts(path, problems)
         frames, size = facts if facts is not None else (worker_frames.get(str(path), 0), 0)
         row = Recording(
             interaction_id=interaction_id, stream=stream, path=stored, frames=frames,

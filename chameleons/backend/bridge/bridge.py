@@ -25,13 +25,16 @@ import itertools
 import logging
 import time
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
 import zmq
 import zmq.asyncio
+from zmq.auth.asyncio import AsyncioAuthenticator
 
 from chameleons.backend.bridge.state import BoothState, WorkerInfo
 from chameleons.backend.bridge.subscriptions import Subscription
+from chameleons.worker import curve as curve_keys
 from chameleons.worker.control import (
     ACK_TOPIC,
     HELLO_TOPIC,
@@ -64,11 +67,17 @@ class Bridge:
         self, command_endpoint: str = "tcp://127.0.0.1:5555",
         telemetry_endpoint: str = "tcp://127.0.0.1:5556", *,
         context: zmq.asyncio.Context | None = None, stale_after: float = 3.0,
-        replay_state: bool = True,
+        replay_state: bool = True, curve: curve_keys.ServerKeys | None = None,
     ) -> None:  # fmt: skip
         self.command_endpoint, self.telemetry_endpoint = command_endpoint, telemetry_endpoint
         self.stale_after, self.replay_state = stale_after, replay_state
+        self.curve = curve
+        # CURVE needs the context's own authenticator (one per context): a context of its
+        # own, made at start (a bridge never started holds nothing).
+        self._given_context = context
+        self._own_context = False
         self._context = context or zmq.asyncio.Context.instance()
+        self._authenticator: AsyncioAuthenticator | None = None
         self._router: zmq.asyncio.Socket | None = None
         self._sub: zmq.asyncio.Socket | None = None
         self._tasks: list[asyncio.Task[None]] = []
@@ -83,11 +92,21 @@ class Bridge:
 
     @classmethod
     def from_settings(cls, settings: Any) -> Bridge:
-        return cls(settings.worker_command_endpoint, settings.worker_telemetry_endpoint)
+        """With the keys dir's server keys: CURVE. Without: loopback endpoints only (said
+        in the log), anything else a :class:`~chameleons.worker.curve.CurveError`."""
+        endpoints = [settings.worker_command_endpoint, settings.worker_telemetry_endpoint]
+        keys_dir = Path(settings.keys_dir)
+        if curve_keys.have_server_keys(keys_dir):
+            log.info("worker link: CURVE with the keys in %s", keys_dir)
+            return cls(*endpoints, curve=curve_keys.load_server(keys_dir))
+        log.warning(curve_keys.require_safe(endpoints, who="server"))
+        return cls(*endpoints)
 
     # --- lifecycle ---------------------------------------------------------------------------
     async def start(self) -> None:
         """Bind both sockets (a ``*`` port is resolved into the endpoint attributes)."""
+        if self.curve is not None and self._given_context is None:
+            self._context, self._own_context = zmq.asyncio.Context(), True
         router = self._context.socket(zmq.ROUTER)
         router.setsockopt(zmq.ROUTER_MANDATORY, 1)  # an absent worker is an error at once
         router.setsockopt(zmq.ROUTER_HANDOVER, 1)  # a restarted worker takes over its identity
@@ -95,6 +114,13 @@ class Bridge:
         sub.setsockopt(zmq.SUBSCRIBE, b"")
         for socket in (router, sub):
             socket.setsockopt(zmq.LINGER, 0)
+        if self.curve is not None:
+            # Only workers whose public key is authorized get past the handshake.
+            self._authenticator = AsyncioAuthenticator(self._context)
+            self._authenticator.start()
+            self._authenticator.configure_curve(domain="*", location=str(self.curve.authorized))
+            for socket in (router, sub):
+                curve_keys.apply_server(socket, self.curve)
         router.bind(self.command_endpoint)
         sub.bind(self.telemetry_endpoint)
         self.command_endpoint = router.getsockopt_string(zmq.LAST_ENDPOINT)
@@ -117,6 +143,12 @@ class Bridge:
             if socket is not None:
                 socket.close(linger=0)
         self._router = self._sub = None
+        if self._authenticator is not None:
+            self._authenticator.stop()
+            self._authenticator = None
+        if self._own_context:
+            self._own_context = False
+            self._context.term()
         for subscription in list(self._subscriptions):
             subscription.close()
 

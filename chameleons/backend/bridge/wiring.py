@@ -35,6 +35,7 @@ def embedded_worker_args(settings: Settings) -> list[str]:
         "--driver", "virtual",
         "--livelink-port", str(settings.livelink_port),
         "--facecapturex-port", str(settings.facecapturex_port),
+        "--keys-dir", str(settings.keys_dir.resolve()),
     ]  # fmt: skip
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from typing import Any
 
-from fastapi import APIRouter, Request
+from fastapi import Request
 from fastapi.responses import HTMLResponse, Response
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSessionType
@@ -27,11 +27,12 @@ from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.models import Interaction, Participant, Session, Study
+from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.snapshot import phone_presence_key
 from chameleons.backend.wizard import health, worker_link
 from chameleons.backend.wizard.live import display_presence
 
-router = APIRouter(tags=["dashboard"])
+router = make_router(tags=["dashboard"])
 OPEN_STATES = ("pending", "running")
 LAST_EVENTS = 4
 
@@ -69,6 +70,8 @@ def _session_view(db: DbSessionType, session: Session, hub: LiveHub) -> dict[str
         "step": interaction.state if interaction and session.state == "running" else None,
         "condition": interaction.condition if interaction else None,
         "phone_connected": hub.present(phone_presence_key(session.id)) > 0,
+        "phones": hub.present(phone_presence_key(session.id)),
+        "paused": session.paused_at is not None,
         "events": [events.to_dict(e) for e in reversed(recent)],
     }
 

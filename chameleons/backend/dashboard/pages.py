@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, HTTPException, Request, status
+from fastapi import HTTPException, Request, status
 from fastapi.responses import FileResponse, HTMLResponse, Response
 
 from chameleons.backend.auth.dependencies import CurrentPI
@@ -14,13 +14,16 @@ from chameleons.backend.dashboard.progress import live_balance, plan_progress
 from chameleons.backend.dashboard.sessions import session_detail, session_summaries
 from chameleons.backend.dashboard.suggestion_mix import suggestion_mix
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
+from chameleons.backend.export.preview import PREVIEW_ROWS
+from chameleons.backend.export.preview import preview as export_preview
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
+from chameleons.backend.routing import make_router
 from chameleons.backend.withdrawal.files import recording_file
 from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.study import study_from_config
 
-router = APIRouter(tags=["dashboard"])
+router = make_router(tags=["dashboard"])
 FLAG_LABELS = {
     "not_started": "not started",
     "ended_early": "ended early",
@@ -32,8 +35,10 @@ FLAG_LABELS = {
     "not_voiced": "prompt not voiced",
     "latency": "slow wizard/worker",
     "typed_speech": "typed speech",
+    "recording": "recording failed",
 }
-BAD_FLAGS = ("deviation", "outage", "ended_early", "excluded", "partial", "not_voiced")
+BAD_FLAGS = ("deviation", "outage", "ended_early", "excluded", "partial", "not_voiced",
+             "recording")  # fmt: skip
 
 
 def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str, Any]:
@@ -136,6 +141,7 @@ def export_page(
     request: Request, user: CurrentPI, db: DbSession, templates: Templates, study: int | None = None
 ) -> Response:
     found = study_or_404(db, study)
-    return templates.TemplateResponse(
-        request, "pi/export.html", page_context(request, user, found, "export")
-    )
+    context = page_context(request, user, found, "export")
+    context["preview"] = export_preview(db, found.id)
+    context["preview_rows"] = PREVIEW_ROWS
+    return templates.TemplateResponse(request, "pi/export.html", context)

@@ -9,7 +9,10 @@
   played: ``prompt.not_voiced``, ``prompt.not_played``, or ``prompt.speech_end`` with a
   reason such as ``autoplay_blocked``);
 - typed_speech: the wizard typed a sentence for the robot because no prompt fitted (a
-  deviation from the scripted prompts, with its text).
+  deviation from the scripted prompts, with its text);
+- recording: the interaction's face recording failed (``recording.failed``: read-only
+  folder, full disk), or never started because the worker refused it; one flag per
+  interaction, with the first reason.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.queries import decisions, interaction_status
+from chameleons.backend.export.queries import decisions, interaction_status, recording_failure
 from chameleons.backend.models import Event, Interaction, Participant, Session
 from chameleons.backend.sessions.states import END_REASONS
 
@@ -67,6 +70,19 @@ def run_flags(
             add(session.id, "excluded", None, text, None)
     _not_voiced(events, {i.id: i.position for i in interactions}, add)
     _typed_speech(events, add)
+    _recording(events, {i.id: i.position for i in interactions}, add)
+
+
+def _recording(events: list[Event], positions: dict[int, int], add: AddFlag) -> None:
+    seen: set[int] = set()
+    for event in events:
+        reason = recording_failure(event)
+        if reason is None or event.session_id is None or event.interaction_id in seen:
+            continue
+        seen.add(event.interaction_id or -1)
+        position = positions.get(event.interaction_id or -1)
+        where = f"interaction {position}" if position else "session"
+        add(event.session_id, "recording", position, f"{where}: not recorded: {reason}", event.id)
 
 
 def _typed_speech(events: list[Event], add: AddFlag) -> None:

@@ -13,7 +13,7 @@ import json
 from typing import Any
 from urllib.parse import urlsplit
 
-from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from fastapi import WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import sessions as staff_sessions
@@ -28,8 +28,9 @@ from chameleons.backend.display.protocol import (
 )
 from chameleons.backend.display.tokens import is_valid_booth
 from chameleons.backend.events import guard
+from chameleons.backend.routing import make_router
 
-router = APIRouter(tags=["display"])
+router = make_router(tags=["display"])
 
 POLICY_VIOLATION = 1008
 

@@ -26,16 +26,17 @@ from pathlib import Path, PurePosixPath
 from typing import Annotated, Final
 from urllib.parse import quote, unquote, urlsplit, urlunsplit
 
-from fastapi import APIRouter, FastAPI, HTTPException, Query, Request, status
+from fastapi import FastAPI, HTTPException, Query, Request, status
 from fastapi.responses import FileResponse
 
 from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.db import session_scope
 from chameleons.backend.display.tokens import check_token, media_token, signing_key
+from chameleons.backend.routing import make_router
 from chameleons.backend.wizard.catalogues import prompts_root
 from chameleons.settings import Settings
 
-router = APIRouter(tags=["display"])
+router = make_router(tags=["display"])
 
 MEDIA_TYPES: Final = {
     ".mp3": "audio/mpeg", ".ogg": "audio/ogg", ".opus": "audio/ogg", ".wav": "audio/wav",

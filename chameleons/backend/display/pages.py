@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, HTTPException, Query, Request, status
+from fastapi import Depends, HTTPException, Query, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from sqlalchemy import select
 
@@ -21,8 +21,9 @@ from chameleons.backend.display.tokens import (
     signing_key,
 )
 from chameleons.backend.models import Session
+from chameleons.backend.routing import make_router
 
-router = APIRouter(tags=["display"])
+router = make_router(tags=["display"])
 
 DEFAULT_BOOTH = "booth-1"
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
+from fastapi import Depends, Form, HTTPException, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from pydantic import BaseModel, Field
 
@@ -15,9 +15,10 @@ from chameleons.backend.dashboard.context import flash, page_context, study_or_4
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.dropouts import service
 from chameleons.backend.dropouts.service import MAX_REASON
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import FlowError, NotFoundError, http_errors
 
-router = APIRouter(tags=["dropouts"])
+router = make_router(tags=["dropouts"])
 CSRF = [Depends(verify_csrf)]
 
 

@@ -12,9 +12,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections import Counter, defaultdict
 from collections.abc import AsyncIterator, Callable, Iterator
-from typing import Any
+from typing import Any, Protocol
 
 log = logging.getLogger(__name__)
 Message = dict[str, Any]
@@ -53,13 +54,31 @@ class Subscription:
         return pending
 
 
+class Relay(Protocol):
+    """Carries this process's messages to other server processes (events.pg_fanout)."""
+
+    def send(self, channel: str, message: Message) -> None: ...
+
+    def send_presence(self) -> None: ...
+
+
 class LiveHub:
     def __init__(self, queue_size: int = 256) -> None:
         self._queue_size = queue_size
         self._loop: asyncio.AbstractEventLoop | None = None
         self._subscribers: dict[str, set[Subscription]] = defaultdict(set)
         self._present: Counter[str] = Counter()
+        self._details: dict[str, dict[int, Message]] = defaultdict(dict)
         self._listeners: list[Listener] = []
+        self._relay: Relay | None = None
+        # Other processes' presence maps, each counted until its expiry (monotonic time).
+        self._peers: dict[str, tuple[dict[str, int], float]] = {}
+        self._peer_details: dict[str, dict[str, list[Message]]] = {}
+
+    def attach_relay(self, relay: Relay | None) -> None:
+        """Also send every message published here through ``relay`` (from the loop)."""
+        self._loop = asyncio.get_running_loop()
+        self._relay = relay
 
     def add_listener(self, listener: Listener) -> Callable[[], None]:
         """Call ``listener(channel, message)`` for every message published on any channel,
@@ -85,10 +104,19 @@ class LiveHub:
         except RuntimeError:
             running = None
         if running is loop:
-            self._deliver(channel, message)
+            self._publish_here(channel, message)
             return
         with contextlib.suppress(RuntimeError):  # the loop closed meanwhile: nobody listens
-            loop.call_soon_threadsafe(self._deliver, channel, message)
+            loop.call_soon_threadsafe(self._publish_here, channel, message)
+
+    def deliver(self, channel: str, message: Message) -> None:
+        """A message another process published (on the loop): to subscribers and listeners."""
+        self._deliver(channel, message)
+
+    def _publish_here(self, channel: str, message: Message) -> None:
+        self._deliver(channel, message)
+        if self._relay is not None:
+            self._relay.send(channel, message)
 
     def subscriber_count(self, channel: str) -> int:
         return len(self._subscribers.get(channel, ()))
@@ -108,18 +136,65 @@ class LiveHub:
                     del self._subscribers[channel]
 
     @contextlib.contextmanager
-    def presence(self, key: str) -> Iterator[None]:
-        """Count a connection (e.g. the participant's phone) while it lasts."""
+    def presence(self, key: str, detail: Message | None = None) -> Iterator[None]:
+        """Count a connection (e.g. the participant's phone) while it lasts; ``detail``
+        (e.g. which phone, since when) is listed by ``present_details`` meanwhile."""
         self._present[key] += 1
+        handle = id(detail)
+        if detail is not None:
+            self._details[key][handle] = detail
+        self._presence_changed()
         try:
             yield
         finally:
             self._present[key] -= 1
             if self._present[key] <= 0:
                 del self._present[key]
+            details = self._details.get(key)
+            if details is not None:
+                details.pop(handle, None)
+                if not details:
+                    del self._details[key]
+            self._presence_changed()
 
     def present(self, key: str) -> int:
-        return self._present.get(key, 0)
+        """Connections counted here and, within their expiry, in other processes."""
+        now = time.monotonic()
+        remote = sum(m.get(key, 0) for m, expiry in self._peers.values() if expiry > now)
+        return self._present.get(key, 0) + remote
+
+    def local_presence(self) -> dict[str, int]:
+        return dict(self._present)
+
+    def local_details(self) -> dict[str, list[Message]]:
+        return {key: list(details.values()) for key, details in self._details.items()}
+
+    def peer_presence(
+        self,
+        origin: str,
+        present: dict[str, int],
+        expiry: float,
+        details: dict[str, list[Message]] | None = None,
+    ) -> None:
+        self._peers[origin] = (present, expiry)
+        self._peer_details[origin] = details or {}
+
+    def _presence_changed(self) -> None:
+        if self._relay is not None:
+            self._relay.send_presence()
+
+    def present_details(self, key: str) -> list[Message]:
+        """The details of the connections present under ``key`` here and (within their
+        expiry) in other processes, oldest first by their ``connected_at``."""
+        now = time.monotonic()
+        remote = [
+            detail
+            for origin, (_, expiry) in self._peers.items()
+            if expiry > now
+            for detail in self._peer_details.get(origin, {}).get(key, [])
+        ]
+        here = list(self._details.get(key, {}).values())
+        return sorted([*here, *remote], key=lambda d: str(d.get("connected_at", "")))
 
     def _deliver(self, channel: str, message: Message) -> None:
         for subscription in list(self._subscribers.get(channel, ())):

@@ -13,7 +13,10 @@ from chameleons.experiment.model import Study as StudySpec
 
 ColumnType = Literal["string", "integer", "number", "boolean", "datetime"]
 LIST_SEPARATOR = ";"
-TIME_NOTE = "ISO 8601 in UTC with millisecond precision, e.g. 2026-03-02T09:00:00.000+00:00"
+TIME_NOTE = (
+    "ISO 8601 in UTC with millisecond precision, e.g. 2026-03-02T09:00:00.000+00:00; in"
+    " data.xlsx an Excel date-time in UTC (Excel stores no time zone)"
+)
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,10 @@ def _accepted(spec: StudySpec, what: str) -> Column:
     )
 
 
+def _language(description: str, spec: StudySpec) -> Column:
+    return Column("language", "string", description, ", ".join(spec.languages))
+
+
 def participants_table(spec: StudySpec) -> TableSpec:
     return TableSpec(
         "participants",
@@ -126,6 +133,7 @@ def participants_table(spec: StudySpec) -> TableSpec:
             Column("rehearsal", "boolean", "Marked as a staff rehearsal, not a real participant."),
             _session(),
             Column("booth", "string", "Booth the session ran in."),
+            _language("The participant's language: phone pages, study texts and prompts.", spec),
             Column(
                 "session_state",
                 "string",
@@ -153,6 +161,13 @@ def participants_table(spec: StudySpec) -> TableSpec:
                 "string",
                 "The wizard's note on ending early. POSSIBLY IDENTIFYING (free text).",
                 identifying=True,
+            ),
+            Column("pause_count", "integer", "How often the wizard paused the session."),
+            Column(
+                "paused_s",
+                "number",
+                "Seconds the session was paused in total (included in duration_s; each pause"
+                " and its reason is in events: session.paused, session.resumed).",
             ),
             *_exclusion_columns(),
             _time("excluded_at", "When the PI excluded the participant"),
@@ -231,6 +246,12 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "Which recording natural replayed (clip name, or the participant, interaction "
                 "and recording id it was yoked to).",
             ),
+            Column(
+                "recording_problem",
+                "string",
+                "Why the face recording of this interaction failed or never started (e.g. a "
+                "full disk or a read-only recordings folder); empty when it was recorded.",
+            ),
         ),
     )
 
@@ -300,6 +321,7 @@ def questionnaire_table(spec: StudySpec) -> TableSpec:
                 ", ".join(q.id for q in spec.questionnaires),
             ),
             Column("version", "string", "Wording version the answer was given to."),
+            _language("Language of the wording (one version id covers every language).", spec),
             Column("item", "string", "Item id within the questionnaire."),
             Column(
                 "reverse_keyed",
@@ -422,6 +444,45 @@ def events_table(spec: StudySpec) -> TableSpec:
     )
 
 
+def booth_checks_table(spec: StudySpec) -> TableSpec:
+    status = "pass, fail, warn (empty: the step did not exist then)"
+    steps = (
+        ("face", "Face stream (frames arrive, capture to robot latency)"),
+        ("head", "Turn your head left, then nod (sign and size of yaw and pitch)"),
+        ("robot", "Robot connected (virtual robot: display page open and playing)"),
+        ("copy", "Robot copies the head: measured copy delay within 0.25 s of the configured"),
+        ("speech", "Robot says a test prompt and reports its speech start and end"),
+        ("disk", "Recordings folder writable, free space for a session"),
+    )
+    return TableSpec(
+        "booth_checks",
+        "One row per booth check run for a session (the check a technician runs before each"
+        " participant), in time order.",
+        (
+            _participant(),
+            _session(),
+            Column("booth", "string", "Booth id."),
+            _time("checked_at", "When the check ran"),
+            Column("passed", "boolean", "No step failed (warnings allowed)."),
+            *(Column(f"{step}_status", "string", f"{what}.", status) for step, what in steps),
+            Column("face_fps", "number", "Face frames per second arriving from the phone."),
+            Column("capture_to_send_ms", "number", "Capture to send latency (ms)."),
+            Column("head_yaw_deg", "number", "Largest head yaw measured (degrees, left > 0)."),
+            Column("head_pitch_deg", "number", "Largest head pitch measured (degrees, down > 0)."),
+            Column("copy_delay_s", "number", "Configured copy delay (s)."),
+            Column(
+                "measured_delay_s",
+                "number",
+                "Copy delay measured movement to movement: the participant's captured head"
+                " yaw against the yaw sent to the robot, by cross-correlation (s).",
+            ),
+            Column("speech_start_ms", "number", "Test prompt: command to speech start (ms)."),
+            Column("speech_ok", "boolean", "Test prompt: the robot reported start and end."),
+            Column("disk_free_bytes", "integer", "Free space for recordings (bytes)."),
+        ),
+    )
+
+
 TABLE_BUILDERS = (
     participants_table,
     interactions_table,
@@ -429,8 +490,10 @@ TABLE_BUILDERS = (
     questionnaire_table,
     scores_table,
     events_table,
+    booth_checks_table,
 )
-TABLE_NAMES = ("participants", "interactions", "suggestions", "questionnaire", "scores", "events")
+TABLE_NAMES = ("participants", "interactions", "suggestions", "questionnaire", "scores", "events",
+               "booth_checks")  # fmt: skip
 
 
 def table_specs(spec: StudySpec) -> list[TableSpec]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, HTTPException, Query, Request, status
+from fastapi import HTTPException, Query, Request, status
 from fastapi.responses import StreamingResponse
 from sqlalchemy.orm import Session as DbSession
 from sqlalchemy.orm import sessionmaker
@@ -12,9 +12,10 @@ from sqlalchemy.orm import sessionmaker
 from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.export.selection import StudyNotFoundError
 from chameleons.backend.export.service import ExportFormat, ExportRequest, stream_zip
+from chameleons.backend.routing import make_router
 from chameleons.prompts.locations import prompts_root
 
-router = APIRouter(prefix="/api/pi", tags=["export"])
+router = make_router(prefix="/api/pi", tags=["export"])
 
 
 @router.get("/export.zip", response_class=StreamingResponse)

@@ -10,7 +10,7 @@ from typing import Any
 from sqlalchemy import ColumnElement, Select, false, select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.models import Interaction, Participant, Session, Suggestion
+from chameleons.backend.models import Event, Interaction, Participant, Session, Suggestion
 
 BATCH = 1000
 
@@ -110,3 +110,34 @@ def counted_interactions(
         InteractionRecord(interaction, session, participant, counts[interaction.id])
         for interaction, session, participant in found
     ]
+
+
+RECORDING_FAILED = "recording.failed"
+
+
+def recording_failure(event: Event) -> str | None:
+    """The sentence of a failed recording, for an event that tells one (else None)."""
+    payload: dict[str, Any] = event.payload or {}
+    if event.kind == RECORDING_FAILED:
+        return str(payload.get("reason") or "the recording failed")
+    if event.kind == "recording.not_started" and payload.get("reason") == "recording_failed":
+        return str(payload.get("detail") or "the recording did not start")
+    return None
+
+
+def recording_problems(db: DbSession, study_id: int) -> dict[int, str]:
+    """Interaction id -> the first reason its recording failed, for one study."""
+    query = (
+        select(Event)
+        .join(Session, Session.id == Event.session_id)
+        .where(Session.study_id == study_id,
+               Event.kind.in_([RECORDING_FAILED, "recording.not_started"]),
+               Event.interaction_id.is_not(None))
+        .order_by(Event.id)
+    )  # fmt: skip
+    found: dict[int, str] = {}
+    for event in db.scalars(query):
+        reason = recording_failure(event)
+        if reason is not None and event.interaction_id is not None:
+            found.setdefault(event.interaction_id, reason)
+    return found

@@ -20,6 +20,7 @@ from chameleons.backend.export.queries import (
     BATCH,
     counted_interactions,
     joined,
+    recording_problems,
     session_filter,
 )
 from chameleons.backend.export.scoring import error_score
@@ -67,6 +68,7 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
             "rehearsal": participant.is_rehearsal or session.is_rehearsal,
             "session": session.id,
             "booth": session.booth,
+            "language": session.language,
             "session_state": session.state,
             "consent_at": iso(session.consent_at or participant.consent_at),
             "started_at": iso(session.started_at),
@@ -75,6 +77,8 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
             "ended_at": iso(session.ended_at),
             "end_reason": session.end_reason,
             "end_note": session.end_note,
+            "pause_count": session.pause_count,
+            "paused_s": round(session.paused_seconds, 3),
             "excluded": participant.excluded_at is not None,
             "exclusion_reason": participant.exclusion_reason,
             "excluded_at": iso(participant.excluded_at),
@@ -88,6 +92,7 @@ def interaction_rows(
 ) -> Iterator[Row]:
     actors = {actor.id: actor for actor in spec.actors}
     behaviours = {condition.id: condition.behaviour for condition in spec.conditions}
+    problems = recording_problems(db, study.id)
     for record in counted_interactions(db, study.id, include_rehearsal):
         interaction = record.interaction
         actor = actors.get(interaction.actor)
@@ -118,6 +123,7 @@ def interaction_rows(
             "behaviour": behaviours.get(interaction.condition),
             "natural_source": interaction.natural_source,
             "natural_recording": interaction.natural_recording,
+            "recording_problem": problems.get(interaction.id),
         }
 
 
@@ -131,9 +137,7 @@ def suggestion_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Ite
     query = joined(query, study.id, include_rehearsal).order_by(
         Participant.code, Session.id, Interaction.position, Suggestion.index
     )
-    for suggestion, session_id, position, condition, code in db.execute(
-        query.execution_options(yield_per=BATCH)
-    ):
+    for suggestion, session_id, position, condition, code in _streamed(db, query):
         yield {
             "participant": code,
             "session": session_id,
@@ -185,7 +189,7 @@ def questionnaire_rows(
     reverse = _reverse_keyed(spec)
     robots = _robot_conditions(db, study, spec)
     query = (
-        select(QuestionnaireResponse, Interaction.condition, Participant.code)
+        select(QuestionnaireResponse, Interaction.condition, Participant.code, Session.language)
         .join(Session, Session.id == QuestionnaireResponse.session_id)
         .outerjoin(Interaction, Interaction.id == QuestionnaireResponse.interaction_id)
     )
@@ -196,7 +200,7 @@ def questionnaire_rows(
         QuestionnaireResponse.position,
         QuestionnaireResponse.id,
     )
-    for answer, condition, code in db.execute(query.execution_options(yield_per=BATCH)):
+    for answer, condition, code, language in _streamed(db, query):
         points = reverse.get((answer.questionnaire, answer.item))
         scored = answer.value
         if scored is not None and points is not None:
@@ -208,6 +212,7 @@ def questionnaire_rows(
             "condition": condition,
             "questionnaire": answer.questionnaire,
             "version": answer.version,
+            "language": language,
             "item": answer.item,
             "reverse_keyed": points is not None,
             "value": answer.value,
@@ -227,7 +232,7 @@ def event_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Iterator
         .outerjoin(Interaction, Interaction.id == Event.interaction_id)
     )
     query = joined(query, study.id, include_rehearsal).order_by(Event.server_time, Event.id)
-    for event, code, position in db.execute(query.execution_options(yield_per=BATCH)):
+    for event, code, position in _streamed(db, query):
         yield {
             "event": event.id,
             "participant": code,
@@ -239,3 +244,10 @@ def event_rows(db: DbSession, study: Study, include_rehearsal: bool) -> Iterator
             "worker_time": event.worker_time,
             "payload": json.dumps(event.payload, sort_keys=True, ensure_ascii=False),
         }
+
+
+def _streamed(db: DbSession, query: Any) -> Iterator[Any]:
+    """The query's rows in batches (a server-side cursor on PostgreSQL), its cursor closed
+    also when the reader stops early (the export page previews only the first rows)."""
+    with db.execute(query.execution_options(yield_per=BATCH)) as result:
+        yield from result

@@ -22,6 +22,7 @@ from chameleons import __version__
 from chameleons.backend.export import rows as table_rows
 from chameleons.backend.export import writers
 from chameleons.backend.export.analysis_r import analysis_script
+from chameleons.backend.export.booth_rows import booth_check_rows
 from chameleons.backend.export.columns import (
     CODEBOOK_COLUMNS,
     LIST_SEPARATOR,
@@ -91,7 +92,7 @@ class ExportPlan:
         }
 
 
-def _table_source(db: DbSession, plan: ExportPlan, name: str) -> Callable[[], Iterable[Row]]:
+def table_source(db: DbSession, plan: ExportPlan, name: str) -> Callable[[], Iterable[Row]]:
     study, spec, rehearsal = plan.study, plan.spec, plan.request.include_rehearsal
     sources: dict[str, Callable[[], Iterable[Row]]] = {
         "participants": lambda: table_rows.participant_rows(db, study, rehearsal),
@@ -100,6 +101,7 @@ def _table_source(db: DbSession, plan: ExportPlan, name: str) -> Callable[[], It
         "questionnaire": lambda: table_rows.questionnaire_rows(db, study, spec, rehearsal),
         "scores": lambda: score_rows(db, study, spec, rehearsal),
         "events": lambda: table_rows.event_rows(db, study, rehearsal),
+        "booth_checks": lambda: booth_check_rows(db, study, rehearsal),
     }
     return sources[name]
 
@@ -151,7 +153,7 @@ def plan_export(db: DbSession, request: ExportRequest) -> ExportPlan:
 
 
 def _add_table_parts(db: DbSession, plan: ExportPlan, table: TableSpec) -> None:
-    source = _table_source(db, plan, table.name)
+    source = table_source(db, plan, table.name)
     counter = plan.row_counts.setdefault(table.name, [0])
     columns = table.column_names
     text = _guarded(plan.request, [c.name for c in table.columns if c.type == "string"])
@@ -193,9 +195,10 @@ def _statfile_part(
 
 def _xlsx_part(db: DbSession, plan: ExportPlan, specs: list[TableSpec]) -> Part:
     def write(stream: IO[bytes]) -> Iterator[None]:
-        sheets = [(t.name, t.column_names, _table_source(db, plan, t.name)()) for t in specs]
+        sheets = [(t.name, t.column_names, table_source(db, plan, t.name)()) for t in specs]
         sheets.append(("codebook", list(CODEBOOK_COLUMNS), codebook_rows(specs)))
-        yield from writers.write_xlsx(stream, sheets)
+        times = {t.name: [c.name for c in t.columns if c.type == "datetime"] for t in specs}
+        yield from writers.write_xlsx(stream, sheets, times)
 
     return Part("data.xlsx", write, needs_seek=True)
 
@@ -208,7 +211,8 @@ def _readme(plan: ExportPlan, specs: list[TableSpec]) -> str:
         "datapackage.json (a Frictionless Data Package) gives each table's types, allowed",
         "values and keys for tools: frictionless validate datapackage.json.",
         f"Rehearsal sessions are {'included' if plan.request.include_rehearsal else 'excluded'}.",
-        "Times are ISO 8601 in UTC. Missing values are empty cells. Lists (rankings) are item",
+        "Times are ISO 8601 in UTC (data.xlsx: Excel date-times, in UTC).",
+        "Missing values are empty cells. Lists (rankings) are item",
         f"ids joined by '{LIST_SEPARATOR}', rank 1 first. Columns marked possibly_identifying",
         "in the codebook (free-text answers) must be reviewed before sharing the data.",
         *_formula_note(plan),

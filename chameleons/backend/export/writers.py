@@ -10,7 +10,8 @@ from __future__ import annotations
 import csv
 import io
 import json
-from collections.abc import Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from datetime import UTC, datetime
 from itertools import islice
 from typing import IO, TYPE_CHECKING, Any
 
@@ -138,24 +139,62 @@ def write_parquet(
 
 
 def write_xlsx(
-    stream: IO[bytes], sheets: list[tuple[str, list[str], Iterable[Row]]]
+    stream: IO[bytes],
+    sheets: list[tuple[str, list[str], Iterable[Row]]],
+    time_columns: Mapping[str, Collection[str]] | None = None,
 ) -> Iterator[None]:
-    """One workbook, one sheet per table (times stay ISO text: Excel has no time zones).
+    """One workbook, one sheet per table.
 
-    Every string is written as a text cell (``t="inlineStr"``, never a formula): openpyxl
-    would otherwise store a string starting with ``=`` as a live formula."""
+    The columns named in ``time_columns[sheet]`` (ISO 8601 text in the rows) become real
+    Excel date-times, in UTC: Excel has no time zones, so the aware time is converted to UTC
+    and stored without one (the codebook says the column is UTC). Every string is written
+    as a text cell (``t="inlineStr"``, never a formula): openpyxl would otherwise store a
+    string starting with ``=`` as a live formula."""
     from openpyxl import Workbook  # imported here: only Excel exports need it
 
     workbook = Workbook(write_only=True)
     for title, columns, rows in sheets:
         sheet = workbook.create_sheet(title=title[:31])
         sheet.append([_text_cell(sheet, name) for name in columns])
+        times = set((time_columns or {}).get(title, ()))
         for batch in _batches(rows):
             for row in batch:
-                sheet.append([_xlsx_value(sheet, row.get(name)) for name in columns])
+                sheet.append(
+                    [
+                        _time_cell(sheet, row.get(name))
+                        if name in times
+                        else _xlsx_value(sheet, row.get(name))
+                        for name in columns
+                    ]
+                )
             yield
     workbook.save(stream)
     yield
+
+
+XLSX_TIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
+
+
+def utc_naive(value: Any) -> datetime | None:
+    """An ISO 8601 time (or datetime) as a naive datetime in UTC; None when empty. A
+    naive input is taken as UTC already (SQLite returns stored UTC times without a zone)."""
+    if value is None or value == "":
+        return None
+    moment = value if isinstance(value, datetime) else datetime.fromisoformat(str(value))
+    if moment.tzinfo is not None:
+        moment = moment.astimezone(UTC).replace(tzinfo=None)
+    return moment
+
+
+def _time_cell(sheet: Any, value: Any) -> Any:
+    from openpyxl.cell import WriteOnlyCell
+
+    moment = utc_naive(value)
+    if moment is None:
+        return None
+    cell = WriteOnlyCell(sheet, value=moment)
+    cell.number_format = XLSX_TIME_FORMAT
+    return cell
 
 
 def _text_cell(sheet: Any, text: str) -> Any:

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Request
+from fastapi import Request
 from fastapi.responses import JSONResponse
 from sqlalchemy import Engine
 from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons import __version__
 from chameleons.backend.migrate import current_revision, head_revision
+from chameleons.backend.routing import make_router
 
-router = APIRouter(tags=["health"])
+router = make_router(tags=["health"])
 
 
 @router.get("/healthz")

@@ -1,6 +1,7 @@
 """SQLAlchemy models, one per module; importing this package registers them all."""
 
 from chameleons.backend.models.base import Base
+from chameleons.backend.models.booth_check import BoothCheck
 from chameleons.backend.models.display_link import DisplayLink
 from chameleons.backend.models.event import Event
 from chameleons.backend.models.interaction import Interaction
@@ -16,6 +17,7 @@ from chameleons.backend.models.suggestion import Suggestion
 
 __all__ = [
     "Base",
+    "BoothCheck",
     "DisplayLink",
     "Event",
     "Interaction",

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import contextlib
 
-from fastapi import APIRouter, WebSocket
+from fastapi import WebSocket
 from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -16,22 +16,28 @@ from chameleons.backend.events import live
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import WriteDb, write_session
+from chameleons.backend.phone import devices
+from chameleons.backend.phone.language import language_of, phone_errors
 from chameleons.backend.phone.schemas import (
     ConsentSubmission,
+    LanguageSubmission,
     QuestionnaireSubmission,
     RankingSubmission,
 )
 from chameleons.backend.phone.submissions import Receipt, submit
 from chameleons.backend.phone.view import PhoneState, phone_state
+from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.answers import submit_questionnaire, submit_ranking
 from chameleons.backend.sessions.consent import record_consent
 from chameleons.backend.sessions.flow import load_by_token
+from chameleons.backend.sessions.language import choose_language
 from chameleons.backend.sessions.snapshot import phone_presence_key
-from chameleons.backend.studies.errors import GoneError, NotFoundError, http_errors
+from chameleons.backend.studies.errors import GoneError, NotFoundError
+from chameleons.i18n import N_
 
-router = APIRouter(tags=["phone"])
-ENDED_MESSAGE = "This session has ended. Thank you for taking part!"
-DECLINED_MESSAGE = (
+router = make_router(tags=["phone"])
+ENDED_MESSAGE = N_("This session has ended. Thank you for taking part!")
+DECLINED_MESSAGE = N_(
     "You have chosen not to take part, and nothing about you has been kept. Thank you for "
     "your time; please give the phone back to the experimenter."
 )
@@ -39,7 +45,7 @@ DECLINED_MESSAGE = (
 
 @router.get("/api/phone/{token}/state")
 def get_state(token: str, db: DbSession) -> PhoneState:
-    with http_errors():
+    with phone_errors(language_of(db, token)):
         flow = load_by_token(db, token, lock=False)
         if flow.session.state in ("complete", "ended"):
             raise GoneError(ENDED_MESSAGE)
@@ -48,7 +54,7 @@ def get_state(token: str, db: DbSession) -> PhoneState:
 
 @router.post("/api/phone/{token}/ranking")
 def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
-    with http_errors():
+    with phone_errors(language_of(db, token)):
         return submit(
             db,
             token,
@@ -59,16 +65,28 @@ def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
 
 @router.post("/api/phone/{token}/consent")
 def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
-    with http_errors():
+    with phone_errors(language_of(db, token)):
         return submit(
             db, token, data.client_id, lambda flow: record_consent(flow, data.client_id, data.agree)
+        )
+
+
+@router.post("/api/phone/{token}/language")
+def post_language(token: str, data: LanguageSubmission, db: WriteDb) -> Receipt:
+    """The participant's language, before consent; the phone reloads its page in it."""
+    with phone_errors(language_of(db, token)):
+        return submit(
+            db,
+            token,
+            data.client_id,
+            lambda flow: choose_language(flow, data.client_id, data.language),
         )
 
 
 @router.post("/api/phone/{token}/questionnaire")
 def post_questionnaire(token: str, data: QuestionnaireSubmission, db: WriteDb) -> Receipt:
     answers = {key: value for key, value in data.answers.items() if value is not None}
-    with http_errors():
+    with phone_errors(language_of(db, token)):
         return submit(
             db,
             token,
@@ -86,21 +104,30 @@ def _read_state(factory: sessionmaker[Session], hub: LiveHub, token: str) -> tup
         return flow.session.id, {"type": "state", "state": phone_state(flow)}
 
 
-def _log_connection(factory: sessionmaker[Session], hub: LiveHub, token: str, kind: str) -> None:
+def _log_connection(
+    factory: sessionmaker[Session], hub: LiveHub, token: str, kind: str, device: Message
+) -> None:
     with write_session(factory, hub) as db:
         flow = load_by_token(db, token, lock=False)
         if flow.session.state not in ("complete", "ended"):
+            phones = hub.present(phone_presence_key(flow.session.id))
             events.record(
                 db,
                 kind,
                 source="participant",
                 study_id=flow.session.study_id,
                 session_id=flow.session.id,
+                payload={"device": device["id"], "label": device["label"], "phones": phones},
             )
         else:
             # Nothing is logged after the end, but the console's phone chip must still
             # learn that the phone came or went: a change without an event.
             hub.publish(session_channel(flow.session.id), {"type": "presence", "kind": kind})
+
+
+async def _send_away(websocket: WebSocket) -> None:
+    await live.send_json(websocket, {"type": "sent_away", "message": devices.SENT_AWAY_MESSAGE})
+    await websocket.close(code=devices.SENT_AWAY_CODE)
 
 
 @router.websocket("/ws/p/{token}")
@@ -113,13 +140,23 @@ async def phone_socket(websocket: WebSocket, token: str) -> None:
         await websocket.close(code=4404)
         return
     await websocket.accept()
+    device = devices.detail(
+        devices.device_id(websocket.query_params.get("device")),
+        websocket.headers.get("user-agent", ""),
+    )
+    if devices.refused(websocket.app.state, hub, session_id, device["id"]):
+        await _send_away(websocket)
+        return
     async with hub.subscribe(session_channel(session_id)) as subscription:
         await live.send_json(websocket, first)
         if first["state"]["view"] == "ended":
             await websocket.close(code=4410)
             return
 
-        async def on_change(_messages: list[Message]) -> bool:
+        async def on_change(messages: list[Message]) -> bool:
+            if devices.is_sent_away(messages, device["id"]):
+                await _send_away(websocket)  # the wizard disconnected this phone
+                return True
             # Whatever was published, the phone gets only its own whitelisted view.
             _id, message = await run_in_threadpool(_read_state, factory, hub, token)
             await live.send_json(websocket, message)
@@ -128,11 +165,14 @@ async def phone_socket(websocket: WebSocket, token: str) -> None:
                 return True
             return False
 
+        async def log(kind: str, device: Message) -> None:
+            await run_in_threadpool(_log_connection, factory, hub, token, kind, device)
+
         try:
-            with hub.presence(phone_presence_key(session_id)):
-                await run_in_threadpool(_log_connection, factory, hub, token, "phone.connected")
+            with hub.presence(phone_presence_key(session_id), device):
+                await log("phone.connected", device)
                 await live.serve(websocket, subscription, on_change)
         finally:
             # Out of the presence count first, so the wizard's snapshot says "disconnected".
             with contextlib.suppress(Exception):  # the server may be shutting down
-                await run_in_threadpool(_log_connection, factory, hub, token, "phone.disconnected")
+                await log("phone.disconnected", device)

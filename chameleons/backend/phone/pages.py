@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Form, Request, status
+from fastapi import Form, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from sqlalchemy import select
 
@@ -13,12 +13,15 @@ from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.phone.endpoints import DECLINED_MESSAGE, ENDED_MESSAGE
+from chameleons.backend.phone.language import browser_language, page_context
 from chameleons.backend.phone.view import ended_view, phone_state
+from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.flow import load_by_token
 from chameleons.backend.sessions.service import SHORT_CODE_ALPHABET, SHORT_CODE_LENGTH
 from chameleons.backend.studies.errors import NotFoundError
+from chameleons.i18n import N_, gettext
 
-router = APIRouter(tags=["phone"])
+router = make_router(tags=["phone"])
 # Participants' pages must not be cached or indexed, and never sent to other sites.
 PRIVATE_HEADERS = {
     "Cache-Control": "no-store",
@@ -28,10 +31,11 @@ PRIVATE_HEADERS = {
 
 
 def _message(request: Request, templates: Templates, title: str, text: str, code: int) -> Response:
+    language = browser_language(request)
     return templates.TemplateResponse(
         request,
         "phone/message.html",
-        {"title": title, "text": text},
+        {"title": gettext(language, title), "text": text, **page_context(language)},
         status_code=code,
         headers=PRIVATE_HEADERS,
     )
@@ -42,19 +46,22 @@ def session_page(token: str, request: Request, db: DbSession, templates: Templat
     try:
         flow = load_by_token(db, token, lock=False)
     except NotFoundError as exc:
-        return _message(
-            request, templates, "Link not valid", exc.message, status.HTTP_404_NOT_FOUND
-        )
+        text = gettext(browser_language(request), exc.template, **exc.params)
+        return _message(request, templates, N_("Link not valid"), text, status.HTTP_404_NOT_FOUND)
     if flow.session.state in ("complete", "ended"):
         # A reload after the end shows the same last page (the debriefing, if any).
         last = ended_view(flow)
+        language = flow.session.language
         return templates.TemplateResponse(
             request,
             "phone/message.html",
             {
-                "title": "Thank you!",
-                "text": DECLINED_MESSAGE if last.get("declined") else ENDED_MESSAGE,
+                "title": gettext(language, N_("Thank you!")),
+                "text": gettext(
+                    language, DECLINED_MESSAGE if last.get("declined") else ENDED_MESSAGE
+                ),
                 "debriefing": last.get("debriefing"),
+                **page_context(language),
             },
             status_code=status.HTTP_410_GONE,
             headers=PRIVATE_HEADERS,
@@ -62,7 +69,7 @@ def session_page(token: str, request: Request, db: DbSession, templates: Templat
     return templates.TemplateResponse(
         request,
         "phone/session.html",
-        {"token": token, "state": phone_state(flow)},
+        {"token": token, "state": phone_state(flow), **page_context(flow.session.language)},
         headers=PRIVATE_HEADERS,
     )
 
@@ -73,10 +80,15 @@ def join_form(request: Request, templates: Templates) -> Response:
 
 
 def _join(request: Request, templates: Templates, error: str | None, code: int) -> Response:
+    language = browser_language(request)
     return templates.TemplateResponse(
         request,
         "phone/join.html",
-        {"error": error, "length": SHORT_CODE_LENGTH},
+        {
+            "error": error,
+            "length": SHORT_CODE_LENGTH,
+            **page_context(language),
+        },
         status_code=code,
         headers=PRIVATE_HEADERS,
     )
@@ -98,7 +110,12 @@ def join(
     key = f"join:{request.client.host if request.client else 'unknown'}"
     wait = throttle.retry_after(key)
     if wait > 0:
-        text = f"Too many wrong codes. Please wait {int(wait) + 1} seconds and try again."
+        seconds = int(wait) + 1
+        text = gettext(
+            browser_language(request),
+            N_("Too many wrong codes. Please wait {seconds} seconds and try again."),
+            seconds=seconds,
+        )
         return _join(request, templates, text, status.HTTP_429_TOO_MANY_REQUESTS)
     cleaned = normalise_code(code)
     session = (
@@ -108,7 +125,10 @@ def join(
     )
     if session is None or session.state in ("complete", "ended"):
         throttle.record_failure(key)
-        text = "That code does not belong to a running session. Please check it and try again."
+        text = gettext(
+            browser_language(request),
+            N_("That code does not belong to a running session. Please check it and try again."),
+        )
         return _join(request, templates, text, status.HTTP_404_NOT_FOUND)
     throttle.reset(key)
     return RedirectResponse(f"/p/{session.phone_token}", status_code=status.HTTP_303_SEE_OTHER)

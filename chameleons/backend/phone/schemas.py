@@ -25,6 +25,11 @@ class QuestionnaireSubmission(BaseModel):
     answers: dict[str, Any] = Field(max_length=200)
 
 
+class LanguageSubmission(BaseModel):
+    client_id: str = ClientId
+    language: str = Field(max_length=16, description="One of the study's languages")
+
+
 class ConsentSubmission(BaseModel):
     client_id: str = ClientId
     agree: bool = Field(description="true: takes part; false: declines (the session ends)")

@@ -19,17 +19,29 @@ from chameleons.backend.sessions.answers import (
 )
 from chameleons.backend.sessions.consent import BEFORE_POSITION, CONSENT_DECLINED
 from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.sessions.language import may_choose_language
 from chameleons.backend.studies.specs import item_key
-from chameleons.experiment.model import Questionnaire, QuestionnaireItem
+from chameleons.experiment.model import Questionnaire, QuestionnaireItem, Study
 from chameleons.experiment.procedure import paragraphs
+from chameleons.i18n import N_, SOURCE_LANGUAGE, gettext, language_name
 
 PhoneState = dict[str, Any]
+
+
+def texts(flow: Flow) -> Study:
+    """The study with the texts in the session's language (what the participant reads)."""
+    return flow.spec.in_language(flow.session.language)
 
 
 def phone_state(flow: Flow) -> PhoneState:
     state = _view(flow)
     state["version"] = events.last_id(flow.db, flow.session.id)
     state["of"] = len(flow.interactions)
+    state["language"] = flow.session.language
+    if may_choose_language(flow):  # offered on the first page, before consent
+        state["languages"] = [
+            {"code": code, "name": language_name(code)} for code in flow.spec.languages
+        ]
     return state
 
 
@@ -37,6 +49,8 @@ def _view(flow: Flow) -> PhoneState:
     session = flow.session
     if session.state in ("complete", "ended"):
         return ended_view(flow)
+    if session.paused_at is not None:
+        return {"view": "paused", "position": session.current_position}
     if session.state == "pending":
         return _before(flow)
     if session.state == "final_questionnaire":
@@ -62,25 +76,30 @@ def ended_view(flow: Flow) -> PhoneState:
     session = flow.session
     if session.end_reason == CONSENT_DECLINED:
         return {"view": "ended", "declined": True}
-    debriefing = flow.spec.procedure.debriefing
+    debriefing = texts(flow).procedure.debriefing
     if debriefing is None or session.started_at is None:
         return {"view": "ended"}
-    shown = {"title": debriefing.title, "paragraphs": paragraphs(debriefing.text)}
+    language = session.language
+    shown = {
+        "title": gettext(language, debriefing.title),
+        "paragraphs": paragraphs(debriefing.text),
+    }
     return {"view": "ended", "debriefing": shown}
 
 
 def _before(flow: Flow) -> PhoneState:
     """Before the session starts: consent first, then the questions about the participant
     (demographics), then the welcome page until the wizard starts."""
-    consent = flow.spec.procedure.consent
+    consent = texts(flow).procedure.consent
     if consent is not None and flow.session.consent_at is None:
+        language = flow.session.language  # a default title or button comes translated
         return {
             "view": "consent",
             "consent": {
-                "title": consent.title,
+                "title": gettext(language, consent.title),
                 "paragraphs": paragraphs(consent.text),
-                "agree": consent.agree,
-                "decline": consent.decline,
+                "agree": gettext(language, consent.agree),
+                "decline": gettext(language, consent.decline),
             },
         }
     if questionnaires_for(flow, BEFORE_POSITION):
@@ -91,7 +110,7 @@ def _before(flow: Flow) -> PhoneState:
 
 
 def _task(flow: Flow, interaction: Interaction) -> PhoneState:
-    task = flow.spec.task(interaction.task)
+    task = texts(flow).task(interaction.task)
     return {
         "task_name": task.name,
         "introduction": task.introduction,
@@ -117,11 +136,17 @@ def _questionnaire(flow: Flow, position: int, robot_name: str | None) -> PhoneSt
         "robot_name": robot_name,
         "page": pages.index(page) + 1,
         "pages": len(pages),
-        "questionnaire": questionnaire_wording(page, [i.robot_name for i in flow.interactions]),
+        "questionnaire": questionnaire_wording(
+            texts(flow).questionnaire(page.id),
+            [i.robot_name for i in flow.interactions],
+            flow.session.language,
+        ),
     }
 
 
-def questionnaire_wording(questionnaire: Questionnaire, robots: list[str]) -> PhoneState:
+def questionnaire_wording(
+    questionnaire: Questionnaire, robots: list[str], language: str = SOURCE_LANGUAGE
+) -> PhoneState:
     """The questions as the phone shows them; a robot item offers the robots the participant
     met, by name in the order met (the position is the answer), and "don't know"."""
     return {
@@ -138,17 +163,17 @@ def questionnaire_wording(questionnaire: Questionnaire, robots: list[str]) -> Ph
                 "left": item.left,
                 "right": item.right,
                 "required": item.required,
-                "options": _options(item, robots),
+                "options": _options(item, robots, language),
             }
             for item in questionnaire.items
         ],
     }
 
 
-def _options(item: QuestionnaireItem, robots: list[str]) -> list[dict[str, Any]]:
+def _options(item: QuestionnaireItem, robots: list[str], language: str) -> list[dict[str, Any]]:
     if item.type == "choice":
         return [{"id": option.id, "label": option.label} for option in item.options]
     if item.type == "robot":
         named = [{"id": n, "label": name} for n, name in enumerate(robots, start=1)]
-        return [*named, {"id": DONT_KNOW, "label": "I don't know"}]
+        return [*named, {"id": DONT_KNOW, "label": gettext(language, N_("I don't know"))}]
     return []

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from fastapi import APIRouter, HTTPException, Request, status
+from fastapi import HTTPException, Request, status
 from fastapi.responses import HTMLResponse, JSONResponse, PlainTextResponse, Response
 
 from chameleons.backend.auth.dependencies import CurrentPI
@@ -24,6 +24,7 @@ from chameleons.backend.planning.service import (
     power_result,
     preregistration_markdown,
 )
+from chameleons.backend.routing import make_router
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.stats.power import TEST_LABELS, TESTS, PowerError
 from chameleons.experiment.stats.power_render import pilot_assumptions
@@ -31,7 +32,7 @@ from chameleons.experiment.stats.power_service import PowerRequest
 from chameleons.experiment.stats.render_models import number_text
 from chameleons.experiment.study import study_from_config
 
-router = APIRouter(tags=["planning"])
+router = make_router(tags=["planning"])
 UNPROCESSABLE = 422  # the values cannot be used (Starlette renamed the constant)
 MAX_REPLICATES = 5000
 MAX_MODEL_REPLICATES = 500

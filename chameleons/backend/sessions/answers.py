@@ -16,8 +16,10 @@ from sqlalchemy import select
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse
 from chameleons.backend.sessions.consent import BEFORE_POSITION, waiting_before_start
 from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.sessions.pausing import refuse_phone_if_paused
 from chameleons.backend.studies.errors import ConflictError, GoneError, InvalidInputError
 from chameleons.experiment.model import Questionnaire, QuestionnaireItem
+from chameleons.i18n import N_
 
 MAX_TEXT_LENGTH = 5000
 FINAL_POSITION = 0
@@ -28,9 +30,9 @@ def submit_ranking(flow: Flow, client_id: str, position: int, ranking: list[str]
     _check_open(flow)
     interaction = flow.interaction(position)
     if interaction.initial_ranking is not None:
-        raise ConflictError("Your ranking for this round was already saved.")
+        raise ConflictError(N_("Your ranking for this round was already saved."))
     if flow.session.state != "running" or interaction.state != "ranking":
-        raise ConflictError("The ranking is not open at the moment.")
+        raise ConflictError(N_("The ranking is not open at the moment."))
     _check_permutation(ranking, interaction.presented_order)
     interaction.initial_ranking = list(ranking)
     interaction.current_ranking = list(ranking)
@@ -48,7 +50,8 @@ def _check_permutation(ranking: list[str], presented: list[Any]) -> None:
     expected = [str(item) for item in presented]
     if len(ranking) != len(expected) or sorted(ranking) != sorted(expected):
         raise InvalidInputError(
-            f"The ranking must contain each of the {len(expected)} items exactly once."
+            N_("The ranking must contain each of the {count} items exactly once."),
+            count=len(expected),
         )
 
 
@@ -76,9 +79,9 @@ def submit_questionnaire(
         (q for q in questionnaires_for(flow, position) if q.id == questionnaire_id), None
     )
     if questionnaire is None:
-        raise InvalidInputError("These questions do not belong to this part of the study.")
+        raise InvalidInputError(N_("These questions do not belong to this part of the study."))
     if questionnaire.id in answered(flow, position):
-        raise ConflictError("You have already answered these questions.")
+        raise ConflictError(N_("You have already answered these questions."))
     values = _validated(questionnaire, answers, len(flow.interactions))
     for item_id, value in values.items():
         # A skipped optional item is stored as skipped (empty in the export), so the
@@ -119,23 +122,24 @@ def submit_questionnaire(
 
 def _check_open(flow: Flow) -> None:
     if flow.session.state in ("complete", "ended"):
-        raise GoneError("This session has ended. Thank you for taking part!")
+        raise GoneError(N_("This session has ended. Thank you for taking part!"))
+    refuse_phone_if_paused(flow)
 
 
 def _questionnaire_target(flow: Flow, position: int) -> Interaction | None:
     if position == BEFORE_POSITION:
         if flow.session.state != "pending" or waiting_before_start(flow) == "consent":
-            raise ConflictError("These questions are not open at the moment.")
+            raise ConflictError(N_("These questions are not open at the moment."))
         return None
     if position == FINAL_POSITION:
         if flow.session.state != "final_questionnaire":
-            raise ConflictError("The final questions are not open yet.")
+            raise ConflictError(N_("The final questions are not open yet."))
         return None
     interaction = flow.interaction(position)
     if flow.session.state != "running" or interaction.state != "questionnaire":
         if interaction.state == "done":
-            raise ConflictError("You have already answered these questions.")
-        raise ConflictError("These questions are not open at the moment.")
+            raise ConflictError(N_("You have already answered these questions."))
+        raise ConflictError(N_("These questions are not open at the moment."))
     return interaction
 
 
@@ -146,7 +150,7 @@ def _validated(
     known = {item.id for item in questionnaire.items}
     unknown = sorted(set(answers) - known)
     if unknown:
-        raise InvalidInputError(f"Unknown question(s): {', '.join(unknown)}.")
+        raise InvalidInputError(N_("Unknown question(s): {ids}."), ids=", ".join(unknown))
     values: dict[str, int | str | None] = {}
     for number, item in enumerate(questionnaire.items, start=1):
         values[item.id] = _value(questionnaire, item, number, answers.get(item.id), robots)
@@ -158,7 +162,7 @@ def _value(
 ) -> int | str | None:
     if raw is None or (isinstance(raw, str) and not raw.strip()):
         if item.required:
-            raise InvalidInputError(f"Please answer question {number}.")
+            raise InvalidInputError(N_("Please answer question {number}."), number=number)
         return None
     if item.type in ("choice", "robot"):
         return _chosen(item, number, raw, robots)
@@ -166,15 +170,19 @@ def _value(
         points = questionnaire.points
         if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= points:
             raise InvalidInputError(
-                f"The answer to question {number} must be a whole number from 1 to {points}."
+                N_("The answer to question {number} must be a whole number from 1 to {points}."),
+                number=number,
+                points=points,
             )
         return int(raw)
     if not isinstance(raw, str):
-        raise InvalidInputError(f"The answer to question {number} must be text.")
+        raise InvalidInputError(N_("The answer to question {number} must be text."), number=number)
     text = raw.strip()
     if len(text) > MAX_TEXT_LENGTH:
         raise InvalidInputError(
-            f"The answer to question {number} is longer than {MAX_TEXT_LENGTH} characters."
+            N_("The answer to question {number} is longer than {limit} characters."),
+            number=number,
+            limit=MAX_TEXT_LENGTH,
         )
     return text
 
@@ -185,11 +193,15 @@ def _chosen(item: QuestionnaireItem, number: int, raw: Any, robots: int) -> int 
     if item.type == "choice":
         if isinstance(raw, str) and raw in {option.id for option in item.options}:
             return str(raw)
-        raise InvalidInputError(f"Please choose one of the answers to question {number}.")
+        raise InvalidInputError(
+            N_("Please choose one of the answers to question {number}."), number=number
+        )
     if raw == DONT_KNOW:
         return DONT_KNOW
     if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= robots:
-        raise InvalidInputError(f"Please choose one of the robots in question {number}.")
+        raise InvalidInputError(
+            N_("Please choose one of the robots in question {number}."), number=number
+        )
     return int(raw)
 
 

@@ -92,12 +92,14 @@ class WizardBot:
         participant_code: str | None = None,
         booth: str = "booth-1",
         rehearsal: bool = False,
+        language: str | None = None,
     ) -> WizardBot:
         body = {
             "study_id": study_id,
             "participant_code": participant_code,
             "booth": booth,
             "rehearsal": rehearsal,
+            "language": language,
         }
         snapshot = staff.post("/api/sessions", body)
         return cls(staff, snapshot["id"], snapshot)
@@ -201,6 +203,10 @@ class ParticipantBot:
             "answers": answers,
         }
         return self._send("questionnaire", body)
+
+    def choose_language(self, language: str) -> Json:
+        """The language buttons of the phone's first page (before consent)."""
+        return self._send("language", {"client_id": new_client_id(), "language": language})
 
     def consent(self, agree: bool = True, client_id: str | None = None) -> Json:
         body = {"client_id": client_id or new_client_id(), "agree": agree}

@@ -18,6 +18,7 @@ from sqlalchemy import select
 from chameleons.backend.models import Event, QuestionnaireResponse
 from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.studies.errors import ConflictError, GoneError
+from chameleons.i18n import N_
 
 CONSENT_DECLINED = "consent_declined"
 BEFORE_POSITION = -1  # questionnaires answered before the interactions (demographics)
@@ -27,13 +28,13 @@ def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
     consent = flow.spec.procedure.consent
     session = flow.session
     if session.state in ("complete", "ended"):
-        raise GoneError("This session has ended. Thank you!")
+        raise GoneError(N_("This session has ended. Thank you!"))
     if consent is None:
-        raise ConflictError("This study does not ask for consent on the phone.")
+        raise ConflictError(N_("This study does not ask for consent on the phone."))
     if session.consent_at is not None:
-        raise ConflictError("Your consent was already recorded.")
+        raise ConflictError(N_("Your consent was already recorded."))
     if session.state != "pending":
-        raise ConflictError("The session has already started.")
+        raise ConflictError(N_("The session has already started."))
     now = datetime.now(UTC)
     payload: dict[str, object] = {"version": consent.version}
     if agree:

@@ -12,11 +12,11 @@ from datetime import UTC, datetime
 
 from chameleons.backend.models import Interaction
 from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.sessions.pausing import close_pause
+from chameleons.backend.sessions.reasons import check_reason
 from chameleons.backend.sessions.states import END_REASONS
-from chameleons.backend.studies.errors import InvalidInputError
 
 ENDED_EARLY = "session.ended_early"
-MAX_NOTE = 1000
 RUNNING_STEPS = ("discussion", "ranking", "negotiation", "questionnaire")
 
 
@@ -24,15 +24,7 @@ def end_early(
     flow: Flow, reason: str, note: str = "", worker_time: float | None = None
 ) -> Interaction | None:
     """End the session now; returns the interaction that was running, if one was."""
-    if reason not in END_REASONS:
-        raise InvalidInputError(
-            f"{reason!r} is not a reason to end a session; use one of {', '.join(END_REASONS)}."
-        )
-    note = note.strip()
-    if reason == "other" and not note:
-        raise InvalidInputError("Say in a few words why the session ends (reason: other).")
-    if len(note) > MAX_NOTE:
-        raise InvalidInputError(f"The note is longer than {MAX_NOTE} characters.")
+    note = check_reason(END_REASONS, reason, note, "end a session", "the session ends")
     state = flow.session.state
     if state == "complete":
         raise flow.refuse("The session is already complete: there is nothing to end.")
@@ -40,6 +32,7 @@ def end_early(
         raise flow.refuse("The session has already been ended.")
     running = _running(flow)
     now = datetime.now(UTC)
+    paused = close_pause(flow, now)
     flow.session.state = "ended"
     flow.session.ended_at = now
     flow.session.end_reason = reason
@@ -57,6 +50,7 @@ def end_early(
             "from_state": state,
             "position": running.position if running else None,
             "step": running.state if running else None,
+            "paused_s": paused,
         },
     )
     return running

@@ -1,7 +1,8 @@
 """The wizard's JSON API: create and drive a session. Any logged-in staff member may;
 unsafe methods need the ``X-CSRF-Token`` header.
 
-    POST /api/sessions                {study_id, participant_code?, booth?, rehearsal?} -> 201
+    POST /api/sessions                {study_id, participant_code?, booth?, rehearsal?,
+                                       language?}                        -> 201
     GET  /api/sessions?study_id=&state=                                  -> [summary]
     GET  /api/sessions/{id}                                              -> snapshot
     POST /api/sessions/{id}/start     {worker_time?}                     -> snapshot
@@ -10,8 +11,11 @@ unsafe methods need the ``X-CSRF-Token`` header.
     POST /api/sessions/{id}/undo      {position, index}                  -> snapshot
     POST /api/sessions/{id}/condition {condition, position?, confirm_deviation?, worker_time?}
     POST /api/sessions/{id}/end       {reason, note?, worker_time?}      -> snapshot
+    POST /api/sessions/{id}/pause     {reason, note?}                    -> snapshot
+    POST /api/sessions/{id}/resume    {}                                 -> snapshot
     POST /api/sessions/{id}/events    {kind, payload?, position?, worker_time?} -> 201 event
     POST /api/sessions/{id}/notes     {text}                             -> 201 event
+    POST /api/sessions/{id}/phones/{device}/disconnect                   -> snapshot
     GET  /api/sessions/{id}/events?after=&limit=                         -> [event]
     GET  /api/sessions/{id}/phone-qr.svg                                 -> image/svg+xml
     WS   /ws/sessions/{id}            (see ``live.py``)
@@ -27,7 +31,7 @@ from __future__ import annotations
 import io
 
 import segno
-from fastapi import APIRouter, Depends, Request, Response, status
+from fastapi import Depends, Request, Response, status
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -39,7 +43,9 @@ from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.events.unit_of_work import Hub, WriteDb
 from chameleons.backend.models import Participant
 from chameleons.backend.models import Session as SessionRow
-from chameleons.backend.sessions import ending, negotiation, service
+from chameleons.backend.phone import devices
+from chameleons.backend.routing import make_router
+from chameleons.backend.sessions import ending, negotiation, pausing, service
 from chameleons.backend.sessions.flow import Flow, load
 from chameleons.backend.sessions.schemas import (
     AdvanceRequest,
@@ -47,17 +53,18 @@ from chameleons.backend.sessions.schemas import (
     DecisionRequest,
     EndRequest,
     NoteRequest,
+    PauseRequest,
     SessionCreate,
     SessionSummary,
     StartRequest,
     UndoRequest,
     WizardNoteCreate,
 )
-from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import http_errors
 
-router = APIRouter(prefix="/api/sessions", tags=["sessions"])
+router = make_router(prefix="/api/sessions", tags=["sessions"])
 WRITE = [Depends(verify_csrf)]
 Snapshot = dict[str, object]
 
@@ -68,8 +75,7 @@ def base_url(request: Request) -> str:
 
 
 def snapshot_of(flow: Flow, request: Request, hub: LiveHub) -> Snapshot:
-    connections = hub.present(phone_presence_key(flow.session.id))
-    return session_snapshot(flow, base_url(request), connections)
+    return session_snapshot(flow, base_url(request), devices.phones(hub, flow.session.id))
 
 
 @router.post("", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
@@ -82,7 +88,7 @@ def create_session(
             participant = studies.register_participant(db, study, data.rehearsal)
         else:
             participant = studies.participant_by_code(db, study, data.participant_code)
-        flow = service.create_session(db, study, participant, data.booth)
+        flow = service.create_session(db, study, participant, data.booth, data.language)
         return snapshot_of(flow, request, hub)
 
 
@@ -194,6 +200,25 @@ def end_early(
         return snapshot_of(flow, request, hub)
 
 
+@router.post("/{session_id}/pause", dependencies=WRITE)
+def pause(
+    session_id: int, data: PauseRequest, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    """Pause with a reason: nothing moves on, the phone shows a short-pause page."""
+    with http_errors():
+        flow = load(db, session_id)
+        pausing.pause(flow, data.reason, data.note)
+        return snapshot_of(flow, request, hub)
+
+
+@router.post("/{session_id}/resume", dependencies=WRITE)
+def resume(session_id: int, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub) -> Snapshot:
+    with http_errors():
+        flow = load(db, session_id)
+        pausing.resume(flow)
+        return snapshot_of(flow, request, hub)
+
+
 @router.post("/{session_id}/events", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
 def add_note(
     session_id: int, data: NoteRequest, _u: CurrentStaff, db: WriteDb
@@ -212,6 +237,17 @@ def add_wizard_note(
     with http_errors():
         flow = load(db, session_id)
         return events.to_dict(service.add_wizard_note(flow, data.text))
+
+
+@router.post("/{session_id}/phones/{device}/disconnect", dependencies=WRITE)
+def disconnect_phone(
+    session_id: int, device: str, request: Request, _u: CurrentStaff, db: WriteDb, hub: Hub
+) -> Snapshot:
+    """Send one of two (or more) phones on the participant's link away; it says so."""
+    with http_errors():
+        flow = load(db, session_id)
+        devices.send_away(request.app.state, hub, flow, device)
+        return snapshot_of(flow, request, hub)
 
 
 @router.get("/{session_id}/events")

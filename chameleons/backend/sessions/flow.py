@@ -27,6 +27,7 @@ from chameleons.backend.sessions.states import (
 from chameleons.backend.studies.errors import ConflictError, InvalidInputError, NotFoundError
 from chameleons.backend.studies.specs import spec_of
 from chameleons.experiment.model import Study
+from chameleons.i18n import N_
 
 
 def as_utc(moment: datetime) -> datetime:
@@ -119,7 +120,7 @@ def load_by_token(db: Session, token: str, *, lock: bool = True) -> Flow:
         query = query.with_for_update()
     session = db.scalars(query).first()
     if session is None:
-        raise NotFoundError("This link is not valid. Please ask the experimenter for help.")
+        raise NotFoundError(N_("This link is not valid. Please ask the experimenter for help."))
     return _flow(db, session)
 
 
@@ -146,6 +147,8 @@ def undo_deadline(suggestion: Suggestion) -> datetime | None:
 
 def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
     state = flow.session.state
+    if flow.session.paused_at is not None and state not in ("complete", "ended"):
+        return [{"action": "resume"}]  # (ending early stays possible, as from any state)
     if state == "pending":
         from chameleons.backend.sessions.consent import waiting_before_start
 

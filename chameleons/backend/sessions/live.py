@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, WebSocket
+from fastapi import WebSocket
 from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -18,11 +18,13 @@ from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.phone import devices
+from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.flow import load
-from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.errors import NotFoundError
 
-router = APIRouter(tags=["sessions"])
+router = make_router(tags=["sessions"])
 
 
 def _is_staff(factory: sessionmaker[Session], cookie: dict[str, Any]) -> bool:
@@ -35,8 +37,8 @@ def _snapshot(
 ) -> Message:
     with write_session(factory, hub) as db:
         flow = load(db, session_id, lock=False)
-        connections = hub.present(phone_presence_key(session_id))
-        return {"type": "snapshot", "session": session_snapshot(flow, base_url, connections)}
+        phones = devices.phones(hub, session_id)
+        return {"type": "snapshot", "session": session_snapshot(flow, base_url, phones)}
 
 
 @router.websocket("/ws/sessions/{session_id}")

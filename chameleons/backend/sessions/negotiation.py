@@ -12,6 +12,7 @@ from datetime import UTC, datetime
 
 from chameleons.backend.models import Interaction, Suggestion
 from chameleons.backend.sessions.flow import Flow, as_utc, undo_deadline
+from chameleons.backend.sessions.pausing import refuse_if_paused
 from chameleons.backend.sessions.policy import accept, move, propose
 from chameleons.backend.studies.errors import InvalidInputError
 
@@ -133,6 +134,7 @@ def undo(flow: Flow, position: int, index: int, now: datetime | None = None) -> 
 def _negotiating(flow: Flow, position: int, doing: str) -> Interaction:
     if flow.session.state != "running":
         raise flow.refuse(f"Cannot {doing}: the session is {flow.session.state}.")
+    refuse_if_paused(flow, f"to {doing}")
     interaction = flow.interaction(position)
     if interaction.state != "negotiation":
         raise flow.refuse(

@@ -4,16 +4,23 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_validator
 
+from chameleons.backend.input_guard import MAX_ROW_ID
+
 WorkerTime = Field(default=None, description="The worker's clock for this action, if known")
 
 
 class SessionCreate(BaseModel):
-    study_id: int
+    study_id: int = Field(ge=1, le=MAX_ROW_ID)
     participant_code: str | None = Field(
         default=None, max_length=32, description="Omitted: register a new participant"
     )
     booth: str = Field(default="booth-1", min_length=1, max_length=64)
     rehearsal: bool = False
+    language: str | None = Field(
+        default=None,
+        max_length=16,
+        description="One of the study's languages; omitted: its default",
+    )
 
 
 class StartRequest(BaseModel):
@@ -47,6 +54,14 @@ class ConditionRequest(BaseModel):
         "(refused with 409 otherwise); it is logged as a deviation.",
     )
     worker_time: float | None = WorkerTime
+
+
+class PauseRequest(BaseModel):
+    reason: str = Field(
+        max_length=32,
+        description="participant_break, technical_failure, interruption or other",
+    )
+    note: str = Field(default="", max_length=1000, description="Required for 'other'")
 
 
 class EndRequest(BaseModel):

@@ -19,6 +19,7 @@ from chameleons.backend.sessions import negotiation
 from chameleons.backend.sessions.answers import finish_interaction_if_answered
 from chameleons.backend.sessions.consent import waiting_before_start
 from chameleons.backend.sessions.flow import Flow, load
+from chameleons.backend.sessions.pausing import refuse_if_paused
 from chameleons.backend.sessions.states import NEXT_STEP, WIZARD_STEPS
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import (
@@ -26,6 +27,8 @@ from chameleons.backend.studies.errors import (
     ConflictError,
     InvalidInputError,
 )
+from chameleons.backend.studies.specs import spec_of
+from chameleons.experiment.model import Study
 
 # No 0/O, 1/I/L, 2/Z, 5/S, 8/B: easy to read aloud and to type on a phone.
 SHORT_CODE_ALPHABET = "ACDEFGHJKMNPQRTUVWXY34679"
@@ -44,8 +47,14 @@ def new_short_code(db: Session) -> str:
 
 
 def create_session(
-    db: Session, study: StudyRow, participant: Participant, booth: str = "booth-1"
+    db: Session,
+    study: StudyRow,
+    participant: Participant,
+    booth: str = "booth-1",
+    language: str | None = None,
 ) -> Flow:
+    """The participant's session on ``booth``, in ``language`` (the study's default when
+    none is given; the phone may still change it before consent)."""
     if participant.study_id != study.id:
         raise InvalidInputError(f"Participant {participant.code} belongs to another study.")
     existing = db.scalars(
@@ -57,7 +66,9 @@ def create_session(
             "a participant runs through the study once."
         )
     row = _row_for(db, study, participant)
+    chosen = session_language(spec_of(study), language)
     session = SessionRow(
+        language=chosen,
         study_id=study.id,
         participant_id=participant.id,
         plan_row_id=row.id,
@@ -82,9 +93,21 @@ def create_session(
             "row_number": row.row_number,
             "booth": booth,
             "rehearsal": participant.is_rehearsal,
+            "language": chosen,
         },
     )
     return flow
+
+
+def session_language(spec: Study, language: str | None) -> str:
+    """``language`` when the study declares it, the study's default when none is given."""
+    if not language:
+        return spec.default_language
+    if language not in spec.languages:
+        raise InvalidInputError(
+            f"The study has no language {language!r} (its languages: {', '.join(spec.languages)})."
+        )
+    return language
 
 
 def _row_for(db: Session, study: StudyRow, participant: Participant) -> PlanRow:
@@ -141,6 +164,7 @@ def advance(flow: Flow, position: int, to: str, worker_time: float | None = None
         raise flow.refuse("The session has not started yet.")
     if state != "running":
         raise flow.refuse(f"The interactions are over (the session is {state}).")
+    refuse_if_paused(flow, f"moving interaction {position} to {to}")
     interaction = flow.interaction(position)
     _check_is_current(flow, interaction, to)
     if interaction.state == to:

@@ -8,6 +8,7 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.models import Interaction, Suggestion
 from chameleons.backend.sessions.answers import FINAL_POSITION, answered, questionnaires_for
 from chameleons.backend.sessions.flow import Flow, allowed_actions, undo_deadline
+from chameleons.backend.sessions.pausing import paused_view
 from chameleons.backend.sessions.states import allowed_sentence
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.model import Condition
@@ -20,7 +21,8 @@ def phone_presence_key(session_id: int) -> str:
 _time = events.iso
 
 
-def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[str, Any]:
+def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) -> dict[str, Any]:
+    """``phones``: the phones on the link now, oldest first (``phone.devices.phones``)."""
     session = flow.session
     actions = allowed_actions(flow)
     return {
@@ -32,17 +34,23 @@ def session_snapshot(flow: Flow, base_url: str, phone_connections: int) -> dict[
         "interaction_count": len(flow.interactions),
         "booth": session.booth,
         "is_rehearsal": session.is_rehearsal,
+        "language": session.language,
+        "languages": list(flow.spec.languages),
         "created_at": _time(session.created_at),
         "started_at": _time(session.started_at),
         "completed_at": _time(session.completed_at),
+        "paused": paused_view(flow),
+        "pause_count": session.pause_count,
+        "paused_seconds": session.paused_seconds,
         "participant": {"id": flow.participant.id, "code": flow.participant.code},
         "phone": {
             "url": f"{base_url}/p/{session.phone_token}",
             "join_url": f"{base_url}/join",
             "short_code": session.short_code,
             "qr_svg": f"/api/sessions/{session.id}/phone-qr.svg",
-            "connected": phone_connections > 0,
-            "connections": phone_connections,
+            "connected": bool(phones),
+            "connections": len(phones),
+            "devices": phones,
         },
         "conditions": list(flow.spec.condition_ids),
         "suggestions_per_interaction": flow.spec.suggestions_per_interaction,

@@ -3,9 +3,10 @@
 Per interaction: pending -> discussion -> ranking -> negotiation -> questionnaire -> done.
 The wizard moves an interaction up to ``questionnaire``; the participant's last
 questionnaire answer makes it ``done``. A session is pending -> running ->
-final_questionnaire -> complete; the participant's final answers complete it. The wizard can
-end a session early from any state but complete: it becomes ``ended`` (with a reason), its
-interactions stay as far as they got, and nothing more happens in it.
+final_questionnaire -> complete; the participant's final answers complete it. A running
+session may be paused and resumed (``pausing.py``): its state stays, nothing moves on.
+The wizard can end a session early from any state but complete: it becomes ``ended``
+(with a reason), its interactions stay as far as they got, and nothing more happens in it.
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ def describe(action: Action) -> str:
     position = action.get("position")
     if kind == "start":
         return "start the session"
+    if kind == "resume":
+        return "resume the paused session"
     if kind == "advance":
         return f"move interaction {position} to {action['to']}"
     if kind == "decide":

@@ -5,7 +5,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from fastapi import APIRouter, Depends, HTTPException, status
+from fastapi import Depends, HTTPException, status
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
@@ -15,6 +15,7 @@ from chameleons.backend.dependencies import DbSession
 from chameleons.backend.events.unit_of_work import WriteDb
 from chameleons.backend.models import Participant, PlanRow
 from chameleons.backend.models import Study as StudyRow
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies import service
 from chameleons.backend.studies.errors import http_errors
 from chameleons.backend.studies.schemas import (
@@ -29,7 +30,7 @@ from chameleons.backend.studies.specs import spec_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.study import StudyError, load_default_study, load_study
 
-router = APIRouter(prefix="/api/studies", tags=["studies"])
+router = make_router(prefix="/api/studies", tags=["studies"])
 WRITE = [Depends(verify_csrf)]
 
 

@@ -12,11 +12,16 @@ from fastapi import HTTPException, status
 
 
 class FlowError(Exception):
+    """``message`` may have ``{name}`` placeholders filled from ``params``: the phone shows
+    the sentence translated (``template`` is the message id of its catalogue)."""
+
     status_code = status.HTTP_400_BAD_REQUEST
 
-    def __init__(self, message: str) -> None:
-        super().__init__(message)
-        self.message = message
+    def __init__(self, message: str, **params: object) -> None:
+        self.template = message
+        self.params = params
+        self.message = message.format(**params) if params else message
+        super().__init__(self.message)
 
 
 class NotFoundError(FlowError):

@@ -7,18 +7,19 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
+from fastapi import Depends, Form, HTTPException, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentPI, CurrentStaff
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.events.unit_of_work import WriteDb
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies import service
 from chameleons.backend.studies.endpoints import spec_from_yaml, study_read
 from chameleons.backend.studies.errors import FlowError
 
-router = APIRouter(tags=["studies"])
+router = make_router(tags=["studies"])
 
 
 def _render(

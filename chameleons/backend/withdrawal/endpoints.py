@@ -6,7 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
+from fastapi import Depends, Form, HTTPException, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from pydantic import BaseModel
 from sqlalchemy import func, select
@@ -16,6 +16,7 @@ from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.dashboard.context import flash, page_context, study_or_404, study_query
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
 from chameleons.backend.models import Interaction, Recording, Session
+from chameleons.backend.routing import make_router
 from chameleons.backend.withdrawal.rehearsal import RehearsalError, set_rehearsal
 from chameleons.backend.withdrawal.scrub import scrub_database
 from chameleons.backend.withdrawal.service import (
@@ -26,7 +27,7 @@ from chameleons.backend.withdrawal.service import (
     withdraw_participant,
 )
 
-router = APIRouter(tags=["withdrawal"])
+router = make_router(tags=["withdrawal"])
 CSRF = [Depends(verify_csrf)]
 
 
@@ -101,7 +102,10 @@ def withdraw_submit(
     except ParticipantNotFoundError as exc:
         raise _http_error(exc) from exc
     except WithdrawalError as exc:
-        participant = find_participant(db, found.id, code)
+        try:  # a wrong confirmation for a code that names nobody is a 404, not a 500
+            participant = find_participant(db, found.id, code)
+        except ParticipantNotFoundError as missing:
+            raise _http_error(missing) from missing
         context = page_context(
             request, user, found, "overview", code=code,
             recordings=_recording_count(db, participant.id), error=str(exc),

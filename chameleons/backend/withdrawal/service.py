@@ -21,6 +21,7 @@ from sqlalchemy.orm import Session as DbSession
 from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.events.repository import announce_gone
 from chameleons.backend.models import (
+    BoothCheck,
     Event,
     Interaction,
     Participant,
@@ -172,6 +173,7 @@ def _delete_rows(
     db.execute(delete(Event).where(Event.session_id.in_(session_ids)))
     db.execute(delete(Event).where(Event.interaction_id.in_(interaction_ids)))
     db.execute(delete(Recording).where(Recording.interaction_id.in_(interaction_ids)))
+    db.execute(delete(BoothCheck).where(BoothCheck.session_id.in_(session_ids)))
     db.execute(delete(Suggestion).where(Suggestion.interaction_id.in_(interaction_ids)))
     db.execute(
         delete(QuestionnaireResponse).where(QuestionnaireResponse.session_id.in_(session_ids))

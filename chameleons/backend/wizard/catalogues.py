@@ -3,6 +3,8 @@
 The lead may put ready catalogues on ``app.state.prompt_catalogues`` (actor -> Catalogue);
 otherwise they are loaded from ``settings.prompts_dir`` when that setting exists, else from
 ``<data_dir>/prompts`` when it holds actors, else from the repository's ``prompts/``.
+A session's language picks ``<root>/<lang>/<actor>/`` (see ``chameleons.prompts.languages``):
+the console then offers only the prompts recorded in that language.
 """
 
 from __future__ import annotations
@@ -12,9 +14,16 @@ from pathlib import Path
 from typing import Any
 
 from chameleons.prompts import Catalogue, CatalogueError, load_catalogue
+from chameleons.prompts.languages import empty_catalogue, language_directory, missing_groups
 from chameleons.prompts.locations import REPOSITORY_PROMPTS, prompts_root
 
-__all__ = ["REPOSITORY_PROMPTS", "MissingCatalogueError", "catalogue_for", "prompts_root"]
+__all__ = [
+    "REPOSITORY_PROMPTS",
+    "MissingCatalogueError",
+    "catalogue_for",
+    "missing_in_language",
+    "prompts_root",
+]
 _LOCK = threading.Lock()
 
 
@@ -22,8 +31,32 @@ class MissingCatalogueError(LookupError):
     """No usable catalogue for an actor; the message says where the console looked."""
 
 
-def catalogue_for(state: Any, actor: str) -> Catalogue:
-    """The actor's catalogue from ``app.state`` (loaded on first use)."""
+def catalogue_for(state: Any, actor: str, language: str | None = None) -> Catalogue:
+    """The actor's catalogue from ``app.state`` (loaded on first use); with ``language``,
+    only its prompts in that language (none when it has no catalogue in it)."""
+    base = _base_catalogue(state, actor)
+    if language is None or language == base.profile.language:
+        return base
+    root = prompts_root(state.settings)
+    with _LOCK:
+        cache: dict[tuple[str, str], Catalogue] | None = getattr(state, "language_catalogues", None)
+        if cache is None:
+            cache = state.language_catalogues = {}
+        if (language, actor) not in cache:
+            directory = language_directory(root, language, actor)
+            cache[language, actor] = (
+                empty_catalogue(base, language) if directory is None else _load(directory, actor)
+            )
+        return cache[language, actor]
+
+
+def missing_in_language(state: Any, actor: str, language: str) -> list[str]:
+    """The actor's prompt groups that have no recording in ``language``."""
+    base = _base_catalogue(state, actor)
+    return missing_groups(base, catalogue_for(state, actor, language))
+
+
+def _base_catalogue(state: Any, actor: str) -> Catalogue:
     ready: dict[str, Catalogue] | None = getattr(state, "prompt_catalogues", None)
     if ready is not None and actor in ready:
         return ready[actor]
@@ -32,12 +65,11 @@ def catalogue_for(state: Any, actor: str) -> Catalogue:
         if cache is None:
             cache = state.wizard_catalogues = {}
         if actor not in cache:
-            cache[actor] = _load(prompts_root(state.settings), actor)
+            cache[actor] = _load(prompts_root(state.settings) / actor, actor)
         return cache[actor]
 
 
-def _load(root: Path, actor: str) -> Catalogue:
-    directory = root / actor
+def _load(directory: Path, actor: str) -> Catalogue:
     try:
         return load_catalogue(directory)
     except CatalogueError as error:

@@ -14,9 +14,10 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub
+from chameleons.backend.phone import devices
 from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.sessions.flow import load as load_flow
-from chameleons.backend.sessions.snapshot import phone_presence_key, session_snapshot
+from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.backend.wizard import layout
 from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
@@ -29,7 +30,7 @@ def console_state(db: Session, app_state: Any, session_id: int, base_url: str) -
     """Raises the session flow's ``NotFoundError`` for an unknown session."""
     flow = load_flow(db, session_id, lock=False)
     hub: LiveHub = app_state.live_hub
-    snapshot = session_snapshot(flow, base_url, hub.present(phone_presence_key(session_id)))
+    snapshot = session_snapshot(flow, base_url, devices.phones(hub, session_id))
     position = prompt_position(flow)
     timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
     return {
@@ -59,7 +60,7 @@ def _suggestion_prompts(app_state: Any, snapshot: dict[str, Any], position: int)
     if pending is None or interaction["state"] != "negotiation":
         return []
     try:
-        catalogue = catalogue_for(app_state, interaction["actor"])
+        catalogue = catalogue_for(app_state, interaction["actor"], snapshot.get("language"))
     except MissingCatalogueError:
         return []
     ranking = interaction["current_ranking"] or interaction["initial_ranking"] or []

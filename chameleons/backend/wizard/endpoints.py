@@ -8,18 +8,23 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Depends, HTTPException, Query, Request, status
+from fastapi import Depends, HTTPException, Query, Request, status
 from pydantic import BaseModel, Field, field_validator
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.dependencies import DbSession
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import http_errors
-from chameleons.backend.wizard import layout, playback, repository, robot, typed_speech
-from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
+from chameleons.backend.wizard import capture, layout, playback, repository, robot, typed_speech
+from chameleons.backend.wizard.catalogues import (
+    MissingCatalogueError,
+    catalogue_for,
+    missing_in_language,
+)
 from chameleons.backend.wizard.console_state import console_state
 
-router = APIRouter(prefix="/api/wizard", tags=["wizard"])
+router = make_router(prefix="/api/wizard", tags=["wizard"])
 WRITE = [Depends(verify_csrf)]
 
 
@@ -81,8 +86,10 @@ def get_prompts(
         raise HTTPException(
             status.HTTP_404_NOT_FOUND, f"Session {session_id} has no such interaction."
         )
+    language = view.session.language
     try:
-        catalogue = catalogue_for(request.app.state, interaction.actor)
+        catalogue = catalogue_for(request.app.state, interaction.actor, language)
+        missing = missing_in_language(request.app.state, interaction.actor, language)
     except MissingCatalogueError as exc:
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
     facts = layout.InteractionFacts(
@@ -96,6 +103,9 @@ def get_prompts(
         "actor": interaction.actor,
         "actor_name": catalogue.profile.display_name,
         "sections": layout.sections(catalogue, facts),
+        # The session's language: only its prompts are offered; these have no recording.
+        "language": language,
+        "missing": missing,
     }
 
 
@@ -143,6 +153,16 @@ async def apply_to_robot(session_id: int, request: Request, _user: CurrentStaff)
     logged as ``robot.applied`` or, with the reasons, ``robot.not_applied``."""
     with http_errors():
         return await robot.apply(request.app.state, session_id)
+
+
+@router.post("/sessions/{session_id}/capture/reset-pairing", dependencies=WRITE)
+async def reset_capture_pairing(
+    session_id: int, request: Request, _user: CurrentStaff
+) -> dict[str, Any]:
+    """Let the booth's face capture pair with the next phone that sends (the worker accepts
+    one phone only); logged as ``capture.pairing_reset``."""
+    with http_errors():
+        return await capture.reset_pairing(request.app.state, session_id)
 
 
 @router.post("/sessions/{session_id}/robot/retry", dependencies=WRITE)

@@ -20,7 +20,8 @@ from typing import Any
 
 STALE_AFTER_SECONDS = 3.0  # heartbeats come at 1 Hz: three missed ones mean "gone"
 NOMINAL_TICK_HZ = 125.0
-ALARM_AT_ONCE = frozenset({"worker", "robot"})  # nothing reaches the robot: no grace
+# Nothing reaches the robot, or nothing is recorded: no grace.
+ALARM_AT_ONCE = frozenset({"worker", "robot", "recording"})
 OK, UNKNOWN, DEGRADED, ALARM = "ok", "unknown", "degraded", "alarm"
 
 
@@ -50,6 +51,7 @@ LABELS = {
     "tick": "Renderer",
     "jitter": "Jitter",
     "robot": "Robot",
+    "recording": "Recording",
     "speaking": "Speaking",
     "face": "Robot face",
 }
@@ -138,6 +140,7 @@ def evaluate(
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
         "robot": _robot_check(telemetry, robot is True, display),
+        **_recording_check(telemetry),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
     }
@@ -152,7 +155,36 @@ def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) 
         return str(ingest["problem"])
     if not fps_ok and ingest.get("no_face"):
         return "phone sees no face"
-    return _fmt(fps, "fps")
+    return _fmt(fps, "fps") + _sender(ingest.get("pairing"))
+
+
+def _sender(pairing: Any) -> str:
+    """Which phone the stream is from, and how many packets other senders sent (dropped)."""
+    if not isinstance(pairing, Mapping):
+        return ""
+    sender = pairing.get("sender")
+    text = f" from {sender}" if sender else " (no phone paired yet)"
+    others = pairing.get("other_packets")
+    if isinstance(others, int) and others > 0:
+        text += f"; {others} packets from other senders ignored (last {pairing.get('last_other')})"
+    return text
+
+
+def _recording_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:
+    """Red with the worker's sentence when recordings cannot be written (read-only folder,
+    full disk); otherwise whether an interaction is being recorded. No chip for a worker
+    that reports no recorder."""
+    recording = telemetry.get("recording")
+    if not isinstance(recording, Mapping) or not recording:
+        return {}
+    if recording.get("problem"):
+        return {"recording": Check("recording", False, str(recording["problem"]))}
+    if not recording.get("active"):
+        return {"recording": Check("recording", True, "idle")}
+    frames = recording.get("frames")
+    count = frames.get("participant") if isinstance(frames, Mapping) else None
+    value = "recording" if count is None else f"recording, {count} frames"
+    return {"recording": Check("recording", True, value)}
 
 
 def _robot_face(telemetry: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -230,7 +262,9 @@ class HealthTracker:
             "alarm": any(check.level == ALARM for check in checks.values()),
             "alarm_after_s": self.limits.alarm_after_s,
             "checks": [
-                checks[name].as_dict() for name in (*CHECKS, "speaking", "face") if name in checks
+                checks[name].as_dict()
+                for name in (*CHECKS, "recording", "speaking", "face")
+                if name in checks
             ],
             "telemetry": dict(telemetry) if telemetry is not None else None,
         }

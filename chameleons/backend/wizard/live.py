@@ -14,19 +14,20 @@ import json
 from typing import Any
 
 import anyio
-from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from fastapi import WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.repository import GONE
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import health, worker_link
 from chameleons.backend.wizard.console_state import console_state
 from chameleons.backend.wizard.playback import read
 
-router = APIRouter(tags=["wizard"])
+router = make_router(tags=["wizard"])
 HEALTH_INTERVAL_SECONDS = 1.0
 UNAUTHORIZED = 4401
 NOT_FOUND = 4404

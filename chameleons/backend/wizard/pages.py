@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Form, HTTPException, Request, status
+from fastapi import Depends, Form, HTTPException, Request, status
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from sqlalchemy.orm import Session
 
@@ -13,13 +13,16 @@ from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.events.unit_of_work import WriteDb
+from chameleons.backend.input_guard import MAX_ROW_ID
 from chameleons.backend.models import StaffUser
+from chameleons.backend.routing import make_router
 from chameleons.backend.sessions import service as sessions
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import FlowError
+from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import repository
 
-router = APIRouter(tags=["wizard"])
+router = make_router(tags=["wizard"])
 BOOTH_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 
 
@@ -31,6 +34,8 @@ def _picker(
     error: str | None = None,
 ) -> Response:
     active = [study for study in studies.list_studies(db) if study.is_active]
+    # The participant's language: any the active studies declare (a study refuses others).
+    languages = sorted({lang for study in active for lang in spec_of(study).languages})
     return templates.TemplateResponse(
         request,
         "wizard/index.html",
@@ -38,6 +43,7 @@ def _picker(
             "user": user,
             "sessions": repository.recent_sessions(db),
             "studies": active,
+            "languages": languages,
             "error": error,
         },
         status_code=status.HTTP_200_OK if error is None else status.HTTP_409_CONFLICT,
@@ -57,10 +63,11 @@ def open_session(
     user: CurrentStaff,
     db: WriteDb,
     templates: Templates,
-    study_id: Annotated[int, Form()],
+    study_id: Annotated[int, Form(ge=1, le=MAX_ROW_ID)],
     booth: Annotated[str, Form(pattern=BOOTH_PATTERN)] = "booth-1",
     participant_code: Annotated[str, Form(max_length=32)] = "",
     rehearsal: Annotated[bool, Form()] = False,
+    language: Annotated[str, Form(max_length=16)] = "",
 ) -> Response:
     """Register the next participant (or take a registered one by code) and open their
     session, then go to its console."""
@@ -72,7 +79,7 @@ def open_session(
             if code
             else studies.register_participant(db, study, rehearsal)
         )
-        flow = sessions.create_session(db, study, participant, booth)
+        flow = sessions.create_session(db, study, participant, booth, language or None)
     except FlowError as exc:
         db.rollback()  # nothing of a refused request is kept (not even the registration)
         return _picker(request, templates, db, user, exc.message)

@@ -74,16 +74,17 @@ def start_play(
 ) -> Cue:
     """Pick a variant of ``group_name`` (never the one played last) and log the click."""
     clicked_at = utcnow()
-    view = _running(db, session_id)
+    view = speaking(db, session_id)
     interaction = view.current
     if interaction is None:
         raise ConflictError("This session has no current interaction to play prompts in.")
-    catalogue = _catalogue(state, interaction.actor)
+    catalogue = _catalogue(state, interaction.actor, view.session.language)
     try:
         group = catalogue.group(group_name)
     except KeyError:
         raise NotFoundError(
-            f"Actor {interaction.actor!r} has no prompt group {group_name!r}."
+            f"Actor {interaction.actor!r} has no prompt group {group_name!r}"
+            f" in {view.session.language}."
         ) from None
     last = repository.last_played_variant(db, session_id, group_name)
     prompt = pick_variant(group, last, rng)
@@ -205,9 +206,19 @@ def _running(db: Session, session_id: int) -> repository.SessionView:
     return view
 
 
-def _catalogue(state: Any, actor: str) -> Catalogue:
+def speaking(db: Session, session_id: int) -> repository.SessionView:
+    """The session for a prompt or typed sentence: refused while paused (prompts are off)."""
+    view = _running(db, session_id)
+    if view.session.paused_at is not None:
+        raise ConflictError(
+            f"Session {session_id} is paused: prompts are off until the wizard resumes it."
+        )
+    return view
+
+
+def _catalogue(state: Any, actor: str, language: str | None = None) -> Catalogue:
     try:
-        return catalogue_for(state, actor)
+        return catalogue_for(state, actor, language)
     except MissingCatalogueError as exc:
         raise ConflictError(str(exc)) from None
 

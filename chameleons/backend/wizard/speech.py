@@ -117,6 +117,11 @@ async def _next(subscription: Any, prompt_id: str) -> tuple[str, dict[str, Any]]
     raise TimeoutError("the event subscription closed")
 
 
+async def next_speech(subscription: Any, prompt_id: str) -> tuple[str, dict[str, Any]]:
+    """The next speech event of ``prompt_id`` (also for the booth check's test prompt)."""
+    return await _next(subscription, prompt_id)
+
+
 def _time(body: dict[str, Any]) -> float | None:
     moment = body.get("worker_time")
     return float(moment) if isinstance(moment, int | float) else None

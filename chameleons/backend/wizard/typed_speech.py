@@ -30,20 +30,21 @@ from types import SimpleNamespace
 from typing import Annotated, Any, cast
 
 import numpy as np
-from fastapi import APIRouter, FastAPI, HTTPException, Query, Request, status
+from fastapi import FastAPI, HTTPException, Query, Request, status
 from fastapi.responses import FileResponse
 from sqlalchemy.orm import Session
 
 from chameleons.backend.display.tokens import check_token, media_token, signing_key
 from chameleons.backend.events import repository as events
 from chameleons.backend.models.base import utcnow
+from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import ConflictError
 from chameleons.backend.wizard import repository, service
 from chameleons.backend.wizard.service import Cue
 from chameleons.prompts import Prompt, Stage
 from chameleons.settings import Settings
 
-router = APIRouter(tags=["wizard"])
+router = make_router(tags=["wizard"])
 FOLDER = "typed-speech"
 MEDIA_SCOPE = "typed-speech"  # media tokens are per actor; typed files share one scope
 LIPSYNC_RATE = 30
@@ -127,11 +128,12 @@ def media_url(state: Any, digest: str, suffix: str = ".wav") -> str:
 def start_typed(db: Session, state: Any, session_id: int, text: str) -> tuple[Cue, TypedAudio]:
     """Synthesise ``text`` in the current interaction's actor voice and log the click."""
     clicked_at = utcnow()
-    view = service._running(db, session_id)
+    view = service.speaking(db, session_id)
     interaction = view.current
     if interaction is None:
         raise ConflictError("This session has no current interaction to speak in.")
-    catalogue = service._catalogue(state, interaction.actor)
+    # The actor's voice in the session's language (prompts/<lang>/<actor>/actor.yaml).
+    catalogue = service._catalogue(state, interaction.actor, view.session.language)
     audio = synthesize(state.settings, catalogue.profile.voice, text)
     prompt = Prompt(id=f"typed-{audio.digest[:12]}", stage=Stage.CANNOT_ANSWER, group="typed",
                     text=text, audio=PurePosixPath(audio.wav.name),

@@ -19,6 +19,8 @@ NO_BRIDGE = "no_worker"
 TIMEOUT = "timeout"
 UNREACHABLE = "unreachable"
 REFUSED = "refused"
+# Refusals whose detail is already a sentence for the wizard (e.g. "The disk is full ...").
+SENTENCE_ERRORS = frozenset({"recording_failed"})
 
 
 def bridge_of(state: Any) -> Any | None:
@@ -57,6 +59,8 @@ def _from_ack(booth: str, answer: Any) -> Outcome:
         return Outcome(True, result=result if isinstance(result, dict) else {})
     error = str(_field(answer, "error") or REFUSED)
     detail = str(_field(answer, "detail") or "")
+    if error in SENTENCE_ERRORS and detail:
+        return Outcome(False, error, detail)
     return Outcome(False, error, f"The worker refused: {error}{': ' + detail if detail else ''}")
 
 

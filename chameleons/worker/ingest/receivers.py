@@ -8,6 +8,9 @@ under its reason and dropped; nothing a sender does stops the loop.
 By default the PUB socket *connects* to ``publish_endpoint`` (the consumer's SUB binds), so
 several receivers can feed one consumer; ``bind_publisher=True`` binds it instead.
 ``port=0`` binds a free port; read it from ``.port`` after :meth:`start`.
+
+With a :class:`SenderLock` (``pairing=``), input from any other address than the paired
+phone is dropped and counted there (see :mod:`.pairing`).
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from chameleons.worker.ingest.livelink import (
     NO_FACE,
     parse_livelink_packet,
 )
+from chameleons.worker.ingest.pairing import SenderLock
 from chameleons.worker.ingest.stats import CaptureStats, ClockAligner
 from chameleons.worker.ingest.transform import FrameTransform
 
@@ -90,8 +94,10 @@ class _Receiver:
         context: zmq.Context[zmq.Socket[bytes]] | None = None, bind_publisher: bool = False,
         transform: FrameTransform | None = None, topic: str = PARTICIPANT_TOPIC,
         align_clock: bool = True, clock: Callable[[], float] = time.monotonic,
+        pairing: SenderLock | None = None,
     ) -> None:  # fmt: skip
         self.host, self.requested_port = host, port
+        self.pairing = pairing
         self.port = 0
         self.transform = transform or FrameTransform()
         self.stats = CaptureStats(clock)
@@ -233,12 +239,14 @@ class LiveLinkReceiver(_Receiver):
         assert self._sock is not None
         for _ in range(_BURST):
             try:
-                data = self._sock.recv(_UDP_BUFFER)
+                data, sender = self._sock.recvfrom(_UDP_BUFFER)
             except BlockingIOError:
                 return
             except OSError as exc:  # e.g. an ICMP error reported on the socket
                 self._drop(IngestError("socket_error", str(exc)))
                 return
+            if self.pairing is not None and not self.pairing.admit(str(sender[0])):
+                continue  # not the paired phone: counted by the lock
             self._guarded(functools.partial(self._packet, data))
 
     def _packet(self, data: bytes) -> None:
@@ -279,8 +287,11 @@ class FaceCaptureXReceiver(_Receiver):
     def _accept(self) -> None:
         assert self._listener is not None
         try:
-            client, _ = self._listener.accept()
+            client, sender = self._listener.accept()
         except (BlockingIOError, ConnectionAbortedError):
+            return
+        if self.pairing is not None and not self.pairing.admit(str(sender[0])):
+            client.close()  # not the paired phone: counted by the lock
             return
         if self._client is not None:
             self.stats.count_drop("replaced_connection")

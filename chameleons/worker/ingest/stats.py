@@ -8,7 +8,7 @@ from collections import Counter, deque
 from collections.abc import Callable
 from typing import Any
 
-HEAD_WINDOW_SECONDS = 8.0
+HEAD_WINDOW_SECONDS = 15.0  # covers the booth check's 12 s wait
 
 
 class CaptureStats:

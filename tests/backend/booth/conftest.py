@@ -8,6 +8,7 @@ import random
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -63,7 +64,9 @@ def start_flow(app: FastAPI, client: TestClient, bridge: Bridge | None) -> Itera
     flow = BoothFlow(app.state)
     client.portal.call(flow.start, bridge)
     yield flow
-    client.portal.call(flow.stop)
+    # As the server does: let queued jobs finish (a cancelled job's database write would go
+    # on in its thread and collide with the next test's table reset).
+    client.portal.call(partial(flow.stop, drain_seconds=5.0))
 
 
 @pytest.fixture

@@ -3,13 +3,17 @@ check through a real bridge and worker fed a head turn and nod over real Live Li
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
 import pytest
+from fastapi import FastAPI
+from sqlalchemy import select
 
 from chameleons.backend.booth import check
 from chameleons.backend.bridge import Bridge
+from chameleons.backend.models import BoothCheck
 from tests.backend.booth.conftest import (
     BOOTH,
     new_session,
@@ -59,9 +63,34 @@ def test_without_a_worker_every_worker_step_fails_and_disk_is_judged(tmp_path: P
     assert check.disk(tmp_path, minimum=2**62)["status"] == "warn"  # a free-space warning
 
 
+def test_the_disk_step_needs_a_session_of_recordings_and_a_writable_folder(
+    tmp_path: Path,
+) -> None:
+    from chameleons.settings import Settings
+
+    settings = Settings(recording_rate_bytes_per_s=1_000, session_length_minutes=30)
+    assert settings.session_disk_bytes == 1_800_000  # rate x session length
+    enough = check.disk(tmp_path, settings.session_disk_bytes)
+    assert enough["status"] == "pass"
+    assert enough["figures"]["needed_bytes"] == 1_800_000
+    assert "a session needs about 2 MB" in enough["value"]
+    short = check.disk(tmp_path, minimum=2**62)
+    assert short["status"] == "warn"
+    assert "below the" in short["value"]
+    if os.geteuid() != 0:  # root writes through permissions (the reliability suite mounts)
+        (tmp_path / "recordings").mkdir()
+        (tmp_path / "recordings").chmod(0o555)
+        try:
+            refused = check.disk(tmp_path)
+        finally:
+            (tmp_path / "recordings").chmod(0o755)
+        assert refused["status"] == "fail"
+        assert "is read-only" in refused["value"]
+
+
 @pytest.mark.usefixtures("flow")
 def test_the_check_through_a_real_worker_sees_the_head_turn_and_is_stored(
-    pi: StaffApi, study_id: int, bridge: Bridge, tmp_path: Path
+    app: FastAPI, pi: StaffApi, study_id: int, bridge: Bridge, tmp_path: Path
 ) -> None:
     wizard, _ = new_session(pi, study_id)
     config = worker_config(bridge, tmp_path, behaviour="copy", livelink_port=0)
@@ -74,6 +103,9 @@ def test_the_check_through_a_real_worker_sees_the_head_turn_and_is_stored(
             return float(heads.get("yaw_max", 0.0)) > 35.0
 
         until(heartbeat_has_the_turn, what="the head turn in the heartbeat")
+        # The robot's copy of the turn comes 4 s later: the worker measures it then.
+        until(lambda: (bridge.latest_telemetry(BOOTH)[0] or {}).get("movement_delay"),
+              timeout=30, what="the measured copy delay")  # fmt: skip
         result = pi.post(f"/api/booths/{BOOTH}/check?session_id={wizard.session_id}")
     steps = {s["id"]: s for s in result["steps"]}
     assert steps["head"]["status"] == "pass", steps["head"]
@@ -81,5 +113,14 @@ def test_the_check_through_a_real_worker_sees_the_head_turn_and_is_stored(
     assert 12.0 < steps["head"]["figures"]["pitch_max"] <= 15.5
     assert steps["robot"]["status"] == "pass"
     assert steps["copy"]["figures"]["delay_s"] == 4.0
+    assert steps["copy"]["status"] == "pass", steps["copy"]
+    assert abs(steps["copy"]["figures"]["measured_s"] - 4.0) <= 0.25
+    assert [s["id"] for s in result["steps"]] == ["face", "head", "robot", "copy", "speech",
+                                                   "disk"]  # fmt: skip
     stored = next(e for e in timeline(wizard) if e["kind"] == "booth.checked")
     assert stored["payload"]["steps"] == result["steps"]
+    with app.state.sessionmaker() as db:
+        row = db.scalars(select(BoothCheck).where(BoothCheck.session_id == wizard.session_id)).one()
+    assert row.measured_delay_s == steps["copy"]["figures"]["measured_s"]
+    assert (row.copy_delay_s, row.booth, row.passed) == (4.0, BOOTH, result["passed"])
+    assert row.head_yaw_deg == steps["head"]["figures"]["yaw_max"]

@@ -32,6 +32,7 @@ KEYS = {
     "questionnaire": ("participant", "session", "position", "questionnaire", "item"),
     "scores": ("participant", "condition"),
     "events": ("event",),
+    "booth_checks": ("session", "checked_at"),
 }
 TIME_COLUMNS = {
     "participants": ("consent_at", "started_at", "completed_at"),
@@ -39,6 +40,7 @@ TIME_COLUMNS = {
     "suggestions": ("proposed_at", "decided_at"),
     "questionnaire": ("answered_at",),
     "events": ("server_time",),
+    "booth_checks": ("checked_at",),
 }
 
 
@@ -262,3 +264,21 @@ def test_what_natural_replayed_and_which_way_suggestions_moved_are_exported(
     assert "natural_source" in codebook
     assert "clip, yoked, synthetic" in codebook
     assert data.study_id
+
+
+def test_booth_checks_are_exported_with_their_figures_and_in_the_codebook(
+    db_session: DbSession, populated: PopulatedStudy, tmp_path: Path
+) -> None:
+    export_to_directory(db_session, ExportRequest(formats=("csv",)), tmp_path)
+    header, rows = read_csv(tmp_path / "booth_checks.csv")
+    assert len(rows) == 12  # one check before each participant (rehearsals not exported)
+    first = rows[0]
+    assert (first["passed"], first["copy_status"], first["speech_status"]) == (
+        "true", "pass", "pass",
+    )  # fmt: skip
+    assert (float(first["copy_delay_s"]), float(first["measured_delay_s"])) == (4.0, 4.02)
+    assert float(first["speech_start_ms"]) == 180.0
+    _, book = read_csv(tmp_path / "codebook.csv")
+    described = {r["column"] for r in book if r["table"] == "booth_checks"}
+    assert set(header) == described
+    assert "measured_delay_s" in described

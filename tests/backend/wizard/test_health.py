@@ -160,3 +160,16 @@ def test_the_face_stream_chip_says_why_no_faces_arrive() -> None:
     assert evaluate(refused, age=0.5)["input"].value == "switch the app to ARKit"
     # Faces arriving: the rate, whatever else happened a moment ago.
     assert evaluate({**GOOD, "ingest": {"no_face": True}}, age=0.5)["input"].value == "59.8 fps"
+
+
+def test_a_recording_problem_is_a_red_chip_at_once_with_the_workers_sentence() -> None:
+    sentence = "The disk is full where recordings are written (/data/rec): recording stopped."
+    recording = {"active": True, "frames": {"participant": 40}, "problem": sentence}
+    snapshot = HealthTracker().snapshot("b1", {**GOOD, "recording": recording}, 0.2, now=5.0)
+    chip = _check(snapshot, "recording")
+    assert (chip["ok"], chip["level"], chip["label"]) == (False, "alarm", "Recording")
+    assert chip["value"] == sentence
+    fine = evaluate({**GOOD, "recording": {"active": True, "frames": {"participant": 40}}}, 0.2)
+    assert (fine["recording"].ok, fine["recording"].value) == (True, "recording, 40 frames")
+    assert evaluate({**GOOD, "recording": {"active": False}}, 0.2)["recording"].value == "idle"
+    assert "recording" not in evaluate(GOOD, 0.2)  # a worker without a recorder: no chip

@@ -4,9 +4,6 @@ session (``booth.checked`` on its timeline)."""
 
 from __future__ import annotations
 
-import shutil
-from pathlib import Path
-
 import httpx
 import pytest
 from playwright.sync_api import Page, expect
@@ -17,13 +14,6 @@ from tests.support.bots import WizardBot, staff_api, study_with_plan
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    path = tmp_path / "browser.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 def test_the_booth_check_page_runs_the_check_and_stores_it(
@@ -45,7 +35,7 @@ def test_the_booth_check_page_runs_the_check_and_stores_it(
         page.get_by_role("button", name="Run the check").click()
         expect(page.locator("#check-summary")).to_contain_text("NOT READY")
         rows = page.locator("#check-steps tbody tr")
-        expect(rows).to_have_count(5)
+        expect(rows).to_have_count(6)
         face = page.locator("tr[data-step='face']")
         expect(face).to_have_attribute("data-status", "fail")
         expect(face).to_contain_text("no worker for this booth")
@@ -58,7 +48,7 @@ def test_the_booth_check_page_runs_the_check_and_stores_it(
         assert len(stored) == 1
         assert stored[0]["payload"]["passed"] is False
         assert [s["id"] for s in stored[0]["payload"]["steps"]] == [
-            "face", "head", "robot", "copy", "disk",
+            "face", "head", "robot", "copy", "speech", "disk",
         ]  # fmt: skip
 
 

@@ -4,7 +4,6 @@ the booth's display link, and a recorder of what pages report back."""
 from __future__ import annotations
 
 import queue
-import shutil
 import wave
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,6 +17,7 @@ from chameleons.backend.display.channel import DisplayChannel, get_display_chann
 from chameleons.backend.display.protocol import Message
 from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.settings import Settings
+from tests.support.browser import wait_for_js
 from tests.support.live_server import LiveServer
 
 BOOTH = "booth-1"
@@ -34,14 +34,6 @@ def write_tone(path: Path, seconds: float, rate: int = 16000) -> None:
         out.setsampwidth(2)
         out.setframerate(rate)
         out.writeframes(samples.tobytes())
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    """Browser tests exercise the page; one backend (SQLite) is enough here."""
-    path = tmp_path / "browser.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 @pytest.fixture
@@ -84,7 +76,7 @@ def display_url(live_server: LiveServer, app: FastAPI) -> str:
 def display_page(page: Page, display_url: str) -> Page:
     page.set_viewport_size({"width": 640, "height": 480})
     page.goto(display_url)
-    page.wait_for_function("window.robotDisplay && window.robotDisplay.connected()")
+    wait_for_js(page, "window.robotDisplay && window.robotDisplay.connected()")
     return page
 
 

@@ -27,6 +27,7 @@ from chameleons.backend.display.protocol import (
 from chameleons.backend.display.tokens import signing_key
 from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES
 from tests.e2e.display.conftest import ACTOR, BOOTH, next_report
+from tests.support.browser import wait_for_js
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
@@ -42,8 +43,9 @@ def shapes(**values: float) -> list[float]:
 
 def geometry_when(page: Page, condition: str) -> dict[str, Any]:
     """Wait until ``condition`` (JS over ``g``, the last painted geometry) holds."""
-    page.wait_for_function(
-        f"(() => {{ const g = window.robotDisplay.geometry(); return g && ({condition}); }})()"
+    wait_for_js(
+        page,
+        f"(() => {{ const g = window.robotDisplay.geometry(); return g && ({condition}); }})()",
     )
     result: dict[str, Any] = page.evaluate("window.robotDisplay.geometry()")
     return result
@@ -122,7 +124,7 @@ def test_the_four_faces_differ(display_page: Page, channel: DisplayChannel) -> N
     pictures = {}
     for face in FACE_IDS:
         channel.publish(BOOTH, set_face_message(face))
-        display_page.wait_for_function(f"window.robotDisplay.state().face === '{face}'")
+        wait_for_js(display_page, f"window.robotDisplay.state().face === '{face}'")
         display_page.evaluate(
             "new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
         )
@@ -138,18 +140,18 @@ def test_a_reconnecting_page_gets_the_current_face(
 ) -> None:
     channel.publish(BOOTH, set_face_message("face-3"))
     page.goto(display_url)
-    page.wait_for_function("window.robotDisplay.state().face === 'face-3'")
+    wait_for_js(page, "window.robotDisplay.state().face === 'face-3'")
 
 
 def test_page_reconnects_after_a_server_restart(
     app: FastAPI, live_server: LiveServer, display_page: Page, channel: DisplayChannel
 ) -> None:
     live_server.stop()
-    display_page.wait_for_function("!window.robotDisplay.connected()")
+    wait_for_js(display_page, "!window.robotDisplay.connected()")
     with LiveServer(app, live_server.port, lifespan="off"):
-        display_page.wait_for_function("window.robotDisplay.connected()")
+        wait_for_js(display_page, "window.robotDisplay.connected()")
         channel.publish(BOOTH, set_face_message("face-2"))
-        display_page.wait_for_function("window.robotDisplay.state().face === 'face-2'")
+        wait_for_js(display_page, "window.robotDisplay.state().face === 'face-2'")
 
 
 def play(app: FastAPI, channel: DisplayChannel, name: str, *, lipsync: bool) -> str:
@@ -236,4 +238,4 @@ def test_page_shows_no_text_but_a_debug_overlay_on_request(
 ) -> None:
     assert display_page.evaluate("document.body.innerText.trim()") == ""
     display_page.goto(display_url + "?debug=1")
-    display_page.wait_for_function("document.getElementById('debug').innerText.includes('fps')")
+    wait_for_js(display_page, "document.getElementById('debug').innerText.includes('fps')")

@@ -18,7 +18,7 @@ from chameleons.backend.display.channel import DisplayChannel
 from chameleons.backend.display.protocol import Message
 from tests.e2e.display.conftest import next_report
 from tests.e2e.display.test_display_browser import play
-from tests.support.browser import CHROMIUM_ARGS, chromium_path
+from tests.support.browser import CHROMIUM_ARGS, chromium_path, wait_for_js
 
 pytestmark = pytest.mark.browser
 AUTOPLAY_FLAG = "--autoplay-policy=no-user-gesture-required"
@@ -65,7 +65,7 @@ def test_blocked_sound_shows_a_hint_reports_the_play_and_a_click_unlocks_it(
 
     strict_page.mouse.click(320, 240)
     expect(hint).to_be_hidden()
-    strict_page.wait_for_function("window.robotDisplay.audioUnlocked()")
+    wait_for_js(strict_page, "window.robotDisplay.audioUnlocked()")
     play_id = play(app, channel, "short", lipsync=False)
     start = next_speech(reports)
     assert (start["event"], start["play_id"]) == ("start", play_id)
@@ -74,5 +74,5 @@ def test_blocked_sound_shows_a_hint_reports_the_play_and_a_click_unlocks_it(
 
 
 def test_with_autoplay_allowed_the_hint_never_shows(display_page: Page) -> None:
-    display_page.wait_for_function("window.robotDisplay.audioUnlocked()")
+    wait_for_js(display_page, "window.robotDisplay.audioUnlocked()")
     expect(display_page.locator("#sound-hint")).to_be_hidden()

@@ -29,6 +29,7 @@ from chameleons.worker.envelope import Message as Envelope
 from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.e2e.display.conftest import ACTOR, BOOTH
+from tests.support.browser import wait_for_js
 from tests.support.live_server import LiveServer
 
 bridge_module = pytest.importorskip("chameleons.backend.bridge")
@@ -126,12 +127,13 @@ def test_the_worker_drives_face_choice_and_head_pose(
 ) -> None:
     bridge, _events = chain
     command(bridge, "set_face", {"face_id": "face-4"})
-    display_page.wait_for_function("window.robotDisplay.state().face === 'face-4'")
+    wait_for_js(display_page, "window.robotDisplay.state().face === 'face-4'")
     clip = natural_clip(tmp_path / "turned.npz", 30.0)
     command(bridge, "set_behaviour", {"name": "natural", "params": {"path": str(clip)}})
-    display_page.wait_for_function(
+    wait_for_js(
+        display_page,
         "(() => { const g = window.robotDisplay.geometry(); "
-        "return g && g.noseX - g.centerX > 0.4 * g.scale; })()"
+        "return g && g.noseX - g.centerX > 0.4 * g.scale; })()",
     )
 
 
@@ -152,7 +154,7 @@ def test_a_prompt_speaks_with_lips_moved_by_the_worker(
     start = worker_event(events, "speech_start")
     assert start.body["prompt_id"] == "short"
     jaw = BLENDSHAPE_INDEX["jawOpen"]
-    display_page.wait_for_function(f"window.robotDisplay.state().bs[{jaw}] > 0.5")
+    wait_for_js(display_page, f"window.robotDisplay.state().bs[{jaw}] > 0.5")
     end = worker_event(events, "speech_end")
     assert end.body["prompt_id"] == "short"
     assert 0.3 < end.body["worker_time"] - start.body["worker_time"] < 5.0

@@ -6,9 +6,7 @@ ends up stored exactly once."""
 from __future__ import annotations
 
 import re
-import shutil
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import httpx
@@ -25,14 +23,6 @@ from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
 SAVE = re.compile(r"^Save")
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    """The browser walk exercises the UI; SQLite is enough here (the API tests cover both)."""
-    path = tmp_path / "phone.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 @pytest.fixture

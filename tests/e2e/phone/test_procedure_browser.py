@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import random
 import re
-import shutil
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import httpx
@@ -28,13 +26,6 @@ from tests.support.live_server import LiveServer
 pytestmark = pytest.mark.browser
 SAVE = re.compile(r"^Save")
 SIZES = [(390, 844), (320, 568)]
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    path = tmp_path / "procedure.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 @pytest.fixture

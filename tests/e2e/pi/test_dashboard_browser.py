@@ -4,7 +4,6 @@ withdraws a participant by typing the code."""
 from __future__ import annotations
 
 import io
-import shutil
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -22,14 +21,6 @@ pytestmark = pytest.mark.browser
 
 
 @pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    """The browser exercises the UI; one backend (SQLite) is enough here."""
-    path = tmp_path / "browser.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
-
-
-@pytest.fixture
 def study(engine: Engine, settings: Any) -> PopulatedStudy:
     with session_scope(build_sessionmaker(engine)) as db:
         data = populate(db, 6, rehearsals=1, recordings_dir=settings.data_dir / "recordings")
@@ -44,23 +35,30 @@ def log_in(page: Page, server: LiveServer, path: str) -> None:
     page.get_by_role("button", name="Log in").click()
 
 
+# Each page of the walk is computed by the server (statistics, plots, a zip): at load 10+
+# on two cores one can take well over Playwright's 5 s default, so every wait here is on
+# the page's own event (a heading, a row count, a download) with a deadline this long.
+SLOW = 60_000
+
+
 def test_pi_walks_the_dashboard(live_server: LiveServer, page: Page, study: PopulatedStudy) -> None:
+    page.set_default_timeout(SLOW)  # navigations, clicks and the download
     log_in(page, live_server, "/pi")
-    expect(page.get_by_role("heading", name="Study progress")).to_be_visible()
-    expect(page.locator('[data-stat="used"]')).to_have_text("6")
+    expect(page.get_by_role("heading", name="Study progress")).to_be_visible(timeout=SLOW)
+    expect(page.locator('[data-stat="used"]')).to_have_text("6", timeout=SLOW)
     rows = page.locator("#sessions tbody tr")
-    expect(rows).to_have_count(7)
+    expect(rows).to_have_count(7, timeout=SLOW)
     expect(page.locator('tr[data-participant="R001"] .badge')).to_have_text("rehearsal")
 
     page.get_by_role("link", name="P003", exact=True).click()
-    expect(page.get_by_role("heading", name="Session of P003")).to_be_visible()
-    expect(page.locator("section.interaction")).to_have_count(3)
-    expect(page.locator("#timeline li").first).to_contain_text("session_started")
-    expect(page.locator(".recordings a")).to_have_count(6)
+    expect(page.get_by_role("heading", name="Session of P003")).to_be_visible(timeout=SLOW)
+    expect(page.locator("section.interaction")).to_have_count(3, timeout=SLOW)
+    expect(page.locator("#timeline li").first).to_contain_text("session_started", timeout=SLOW)
+    expect(page.locator(".recordings a")).to_have_count(6, timeout=SLOW)
 
     page.get_by_role("link", name="Export").click()
     page.get_by_label("Parquet").check()
-    with page.expect_download() as download_info:
+    with page.expect_download(timeout=2 * SLOW) as download_info:
         page.get_by_role("button", name="Download zip").click()
     bundle = zipfile.ZipFile(io.BytesIO(Path(download_info.value.path()).read_bytes()))
     names = set(bundle.namelist())
@@ -70,16 +68,16 @@ def test_pi_walks_the_dashboard(live_server: LiveServer, page: Page, study: Popu
     assert bundle.read("scores.csv").decode().count("\n") == 1 + 6 * 3  # no rehearsal
 
     page.get_by_role("link", name="Analysis").click()
-    expect(page.locator("#table1 tbody tr")).to_have_count(4)
-    expect(page.locator("#friedman tbody tr")).to_have_count(4)
-    expect(page.locator("#latex")).to_contain_text("\\begin{tabular}")
+    expect(page.locator("#table1 tbody tr")).to_have_count(4, timeout=SLOW)
+    expect(page.locator("#friedman tbody tr")).to_have_count(4, timeout=SLOW)
+    expect(page.locator("#latex")).to_contain_text("\\begin{tabular}", timeout=SLOW)
     images = page.locator("#plots img")
-    expect(images).to_have_count(4)
+    expect(images).to_have_count(4, timeout=SLOW)
     for index in range(4):
         image = images.nth(index)
         image.scroll_into_view_if_needed()
         # Four plots drawn at once on a busy machine: wait for them, not for 5 s.
-        expect(image).to_have_js_property("complete", True, timeout=60_000)
+        expect(image).to_have_js_property("complete", True, timeout=SLOW)
         assert image.evaluate("img => img.naturalWidth") > 100, "a plot did not load"
 
 

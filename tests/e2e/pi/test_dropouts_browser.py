@@ -16,7 +16,7 @@ from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.models import Recording
 from tests.backend.test_auth import add_user
 from tests.backend.withdrawal.test_derived import yoke
-from tests.e2e.pi.test_dashboard_browser import database_url, log_in  # noqa: F401
+from tests.e2e.pi.test_dashboard_browser import log_in
 from tests.support.factories import populate
 from tests.support.live_server import LiveServer
 

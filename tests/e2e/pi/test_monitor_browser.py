@@ -4,9 +4,6 @@ the wizard's steps within its one-second refresh, and is for PIs only."""
 
 from __future__ import annotations
 
-import shutil
-from pathlib import Path
-
 import httpx
 import pytest
 from playwright.sync_api import Page, expect
@@ -17,13 +14,6 @@ from tests.support.bots import WizardBot, staff_api, study_with_plan
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    path = tmp_path / "browser.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 def test_the_monitor_shows_booths_live_with_alarms(

@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import random
-import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 
 import httpx
 import pytest
@@ -18,14 +16,6 @@ from tests.support.bots import ParticipantBot, StaffApi, WizardBot, staff_api, s
 from tests.support.live_server import LiveServer
 
 PASSWORD = "the wizard's password"
-
-
-@pytest.fixture
-def database_url(sqlite_template: Path, tmp_path: Path) -> str:
-    """Browser tests exercise the UI; one backend (SQLite) is enough here."""
-    path = tmp_path / "browser.sqlite3"
-    shutil.copyfile(sqlite_template, path)
-    return f"sqlite:///{path}"
 
 
 @dataclass

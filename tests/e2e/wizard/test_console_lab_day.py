@@ -10,6 +10,7 @@ import pytest
 from playwright.sync_api import Locator, Page, expect
 
 from tests.e2e.wizard.conftest import Console
+from tests.support.browser import wait_for_js
 
 pytestmark = pytest.mark.browser
 
@@ -53,7 +54,7 @@ def test_a_late_undo_says_it_is_too_late_and_nothing_else(console: Console, page
     expect(page.locator("#primary-action")).to_contain_text("Decide suggestion 2")
     undo = next(a for a in console.wizard.refresh()["allowed"] if a["action"] == "undo")
     # The undo window is wall-clock time: wait until the page's clock has passed it.
-    page.wait_for_function(f"Date.now() > Date.parse({undo['until']!r})", timeout=30_000)
+    wait_for_js(page, f"Date.now() > Date.parse({undo['until']!r})", timeout=30_000)
     page.keyboard.press("u")
     flash = page.locator("#flash")
     expect(flash).to_have_text("Too late to undo suggestion 1: its undo window has passed.")

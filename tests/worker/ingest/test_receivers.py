@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from chameleons.settings import Settings
 from chameleons.worker.frames import BLENDSHAPE_INDEX, FaceFrame
 from chameleons.worker.ingest.inputs import start_capture
+from chameleons.worker.ingest.pairing import SenderLock
 from chameleons.worker.ingest.receivers import FaceCaptureXReceiver, LiveLinkReceiver
 from chameleons.worker.ingest.transform import FrameTransform
 from chameleons.worker.ingest.wire import (
@@ -286,3 +287,29 @@ def test_no_face_packets_are_counted_apart_and_a_metahuman_stream_names_the_fix(
     assert "truncated" not in stats["drops"]
     assert stats["drops"] == {"metahuman_stream": 1}
     assert "Live Link (ARKit)" in stats["problem"]
+
+
+def test_facecapturex_accepts_only_the_paired_phone(zmq_context, face_sub) -> None:
+    """A connection from another address than the paired phone is closed at once and
+    counted; the paired phone's stream goes through (two real TCP clients, two addresses)."""
+    lock = SenderLock()
+    with (
+        tcp_receiver(zmq_context, face_sub, pairing=lock) as receiver,
+        socket.socket(socket.AF_INET, socket.SOCK_STREAM) as paired,
+    ):
+        paired.bind(("127.0.0.2", 0))
+        paired.connect((HOST, receiver.port))
+        assert paired.recv(1) == b"s"
+        face_sub.receive(1, send=lambda: paired.sendall(SYNC_FRAME))
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other:
+            other.bind(("127.0.0.3", 0))
+            other.settimeout(5)
+            other.connect((HOST, receiver.port))
+            assert other.recv(1) == b""  # closed without the greeting
+        paired.sendall(build_facecapturex_frame(smile(0.25), (12.0, 0.0, 0.0)))
+        [frame] = face_sub.receive(1, accept=not_sync)
+    assert abs(abs(float(frame.head[0])) - 12.0) < 1e-3
+    state = lock.snapshot()
+    assert (state["sender"], state["other_packets"], state["last_other"]) == (
+        "127.0.0.2", 1, "127.0.0.3",
+    )  # fmt: skip

@@ -4,7 +4,7 @@ const root = document.getElementById("booth-check");
 const body = document.querySelector("#check-steps tbody");
 const summary = document.getElementById("check-summary");
 const button = document.getElementById("run-check");
-const HEAD_SECONDS = 8;
+const HEAD_SECONDS = 12; // the turn, then the robot's copy of it after the copy delay
 
 function row(step) {
   const tr = document.createElement("tr");

@@ -14,6 +14,15 @@
   var state = JSON.parse(document.getElementById("initial-state").textContent);
   var renderedKey = null;
   var shownRanking = null;
+  // The participant's language: the server sends this script's strings translated
+  // (message id -> text); a string without a translation shows in English.
+  var messages = JSON.parse(document.getElementById("messages").textContent || "{}");
+  function t(message, params) {
+    var text = Object.prototype.hasOwnProperty.call(messages, message) ? messages[message] : message;
+    return text.replace(/\{(\w+)\}/g, function (whole, name) {
+      return params && Object.prototype.hasOwnProperty.call(params, name) ? String(params[name]) : whole;
+    });
+  }
 
   /* ---------- local storage: drafts and the outbox (tolerates private mode) ---------- */
   function key(name) { return "mc:" + token + ":" + name; }
@@ -63,16 +72,17 @@
   function showError(text) { errorBox.textContent = text; errorBox.hidden = !text; }
   function setSave(kind) {
     var texts = {
-      saving: "Saving…",
-      saved: "Saved ✓",
-      offline: "Not sent yet – your answers are kept on this phone and sent as soon as the connection is back.",
+      saving: t("Saving…"),
+      saved: t("Saved ✓"),
+      offline: t("Not sent yet – your answers are kept on this phone and sent as soon as the connection is back."),
+      held: t("Kept on this phone – sent as soon as the session continues."),
       "": ""
     };
     saveStatus.textContent = texts[kind];
     saveStatus.dataset.state = kind;
   }
   function setConnection(kind) {
-    var texts = { connecting: "Connecting…", online: "Connected", offline: "Reconnecting…", ended: "" };
+    var texts = { connecting: t("Connecting…"), online: t("Connected"), offline: t("Reconnecting…"), ended: "" };
     connection.textContent = texts[kind];
     connection.dataset.state = kind;
   }
@@ -83,7 +93,9 @@
   }
 
   function render(next) {
+    var wasPaused = state && state.view === "paused";
     state = next;
+    if (wasPaused && next.view !== "paused") { setTimeout(flush, 0); } // answers held meanwhile
     var nextKey = viewKey(next);
     if (nextKey === renderedKey) {
       if (next.view === "ranked") { updateRanked(next.ranking); }
@@ -93,9 +105,11 @@
     showError("");
     var builders = {
       welcome: welcomeView, waiting: waitingView, listen: listenView, ranking: rankingView,
-      ranked: rankedView, questionnaire: questionnaireView, ended: endedView, consent: consentView
+      ranked: rankedView, questionnaire: questionnaireView, ended: endedView, consent: consentView,
+      paused: pausedView
     };
     app.replaceChildren((builders[next.view] || waitingView)(next));
+    if (next.languages) { app.prepend(languageChooser(next)); }
     app.dataset.view = next.view;
     var heading = app.querySelector("h1");
     if (heading) { heading.setAttribute("tabindex", "-1"); heading.focus({ preventScroll: true }); }
@@ -107,6 +121,31 @@
     var section = h("section", { class: "panel" });
     for (var i = 0; i < arguments.length; i++) { if (arguments[i]) { section.appendChild(arguments[i]); } }
     return section;
+  }
+
+  /* The study's languages, offered before consent; the page reloads in the one chosen
+   * (its texts and this script's strings come from the server in that language). */
+  function languageChooser(s) {
+    var nav = h("nav", { class: "languages", "aria-label": t("Choose your language") });
+    s.languages.forEach(function (language) {
+      var current = language.code === s.language;
+      nav.appendChild(h("button", {
+        type: "button", class: "language", lang: language.code, "aria-pressed": current ? "true" : "false",
+        "data-language": language.code, text: language.name,
+        onclick: current ? null : function () { chooseLanguage(language.code); }
+      }));
+    });
+    return nav;
+  }
+
+  function chooseLanguage(code) {
+    fetch(api + "/language", {
+      method: "POST", headers: { "Content-Type": "application/json" },
+      body: JSON.stringify({ client_id: newClientId(), language: code })
+    }).then(function (response) {
+      if (response.ok) { location.reload(); return null; }
+      return response.json().then(function (data) { showError(messageOf(data)); });
+    }).catch(function () { setSave("offline"); });
   }
 
   function consentView(s) {
@@ -122,21 +161,28 @@
   }
 
   function welcomeView() {
-    return panel(h("h1", { text: "Welcome!" }),
-      h("p", { class: "lead", text: "Thank you for taking part. The session begins shortly." }),
-      h("p", { text: "Please keep this page open; it shows you what to do next." }));
+    return panel(h("h1", { text: t("Welcome!") }),
+      h("p", { class: "lead", text: t("Thank you for taking part. The session begins shortly.") }),
+      h("p", { text: t("Please keep this page open; it shows you what to do next.") }));
   }
 
   function waitingView(s) {
-    return panel(h("h1", { text: s.after ? "Thank you!" : "Please wait" }),
-      h("p", { class: "lead", text: "The next conversation begins shortly." }),
-      h("p", { text: "Please keep this page open." }));
+    return panel(h("h1", { text: s.after ? t("Thank you!") : t("Please wait") }),
+      h("p", { class: "lead", text: t("The next conversation begins shortly.") }),
+      h("p", { text: t("Please keep this page open.") }));
+  }
+
+  /* The wizard paused the session: a calm page; nothing to do, nothing is lost. */
+  function pausedView() {
+    return panel(h("h1", { text: t("A short pause") }),
+      h("p", { class: "lead", text: t("We will continue in a moment. Please stay here and keep this page open.") }),
+      h("p", { text: t("Everything you have answered so far is saved.") }));
   }
 
   function listenView(s) {
     return panel(h("div", { class: "listen-icon", "aria-hidden": "true" }),
-      h("h1", { text: "Listen to " + s.robot_name }),
-      h("p", { class: "lead", text: "When it is time to rank the items, they will appear here." }));
+      h("h1", { text: t("Listen to {robot}", { robot: s.robot_name }) }),
+      h("p", { class: "lead", text: t("When it is time to rank the items, they will appear here.") }));
   }
 
   function nameOf(s, id) {
@@ -149,7 +195,7 @@
     var presented = s.items.map(function (item) { return item.id; });
     var draft = load(draftName, null);
     var order = isPermutation(draft, presented) ? draft : presented;
-    var list = h("ol", { class: "rank-list", id: "ranking-list", "aria-label": "Your ranking" });
+    var list = h("ol", { class: "rank-list", id: "ranking-list", "aria-label": t("Your ranking") });
     order.forEach(function (id) { list.appendChild(rankItem(s, id, list, draftName)); });
     renumber(list);
     if (window.Sortable) {
@@ -159,14 +205,14 @@
       });
     }
     var button = h("button", {
-      type: "button", class: "big primary", id: "submit-ranking", text: "Submit my ranking",
+      type: "button", class: "big primary", id: "submit-ranking", text: t("Submit my ranking"),
       onclick: function () {
         submit("ranking", { position: s.position, ranking: currentOrder(list) }, draftName);
       }
     });
-    return panel(h("h1", { text: "Rank the items" }),
-      h("p", { class: "muted", text: s.task_name + ": " + s.introduction }),
-      h("p", { text: "Number 1 is the most important. Drag an item by its handle, or use the arrow buttons." }),
+    return panel(h("h1", { text: t("Rank the items") }),
+      h("p", { class: "muted", text: t("{task}: {introduction}", { task: s.task_name, introduction: s.introduction }) }),
+      h("p", { text: t("Number 1 is the most important. Drag an item by its handle, or use the arrow buttons.") }),
       list, button);
   }
 
@@ -186,7 +232,7 @@
         renumber(list);
         store(draftName, currentOrder(list));
         var rank = currentOrder(list).indexOf(id) + 1;
-        announce(name + " is now number " + rank + ".");
+        announce(t("{item} is now number {rank}.", { item: name, rank: rank }));
         item.querySelector(step < 0 ? ".up" : ".down").focus();
       };
     }
@@ -194,8 +240,8 @@
       h("span", { class: "handle", "aria-hidden": "true", text: "⠿" }),
       h("span", { class: "rank" }),
       h("span", { class: "name", text: name }),
-      h("button", { type: "button", class: "move up", "aria-label": "Move " + name + " up", text: "▲", onclick: moveBy(-1) }),
-      h("button", { type: "button", class: "move down", "aria-label": "Move " + name + " down", text: "▼", onclick: moveBy(1) }));
+      h("button", { type: "button", class: "move up", "aria-label": t("Move {item} up", { item: name }), text: "▲", onclick: moveBy(-1) }),
+      h("button", { type: "button", class: "move down", "aria-label": t("Move {item} down", { item: name }), text: "▼", onclick: moveBy(1) }));
   }
 
   function renumber(list) {
@@ -214,10 +260,10 @@
 
   function rankedView(s) {
     shownRanking = null;
-    var list = h("ol", { class: "rank-list readonly", id: "current-ranking", "aria-label": "Your current ranking" });
-    var section = panel(h("h1", { text: "Your ranking" }),
-      h("p", { class: "lead", text: "Listen to " + s.robot_name + "." }),
-      h("p", { class: "muted", text: "If you change your ranking together, this list changes too." }),
+    var list = h("ol", { class: "rank-list readonly", id: "current-ranking", "aria-label": t("Your current ranking") });
+    var section = panel(h("h1", { text: t("Your ranking") }),
+      h("p", { class: "lead", text: t("Listen to {robot}.", { robot: s.robot_name }) }),
+      h("p", { class: "muted", text: t("If you change your ranking together, this list changes too.") }),
       list);
     fillRanked(list, s.ranking, []);
     shownRanking = s.ranking.slice();
@@ -240,7 +286,7 @@
     fillRanked(list, ranking, moved);
     shownRanking = ranking.slice();
     var leader = moved.filter(function (id) { return ranking.indexOf(id) < before.indexOf(id); })[0];
-    if (leader) { announce("Updated: " + nameOf(state, leader) + " is now number " + (ranking.indexOf(leader) + 1) + "."); }
+    if (leader) { announce(t("Updated: {item} is now number {rank}.", { item: nameOf(state, leader), rank: ranking.indexOf(leader) + 1 })); }
   }
 
   function questionnaireView(s) {
@@ -257,7 +303,7 @@
         countAnswered(form, q, counter);
       }));
     });
-    form.appendChild(h("button", { type: "submit", class: "big primary", text: s.page < s.pages ? "Save and continue" : "Save" }));
+    form.appendChild(h("button", { type: "submit", class: "big primary", text: s.page < s.pages ? t("Save and continue") : t("Save") }));
     form.addEventListener("submit", function (event) {
       event.preventDefault();
       var answers = collect(form, q);
@@ -265,7 +311,7 @@
         return item.required !== false && answers[item.id] === undefined ? i + 1 : 0;
       }).filter(Boolean);
       if (missing.length) {
-        showError("Please answer question " + missing[0] + ".");
+        showError(t("Please answer question {number}.", { number: missing[0] }));
         var field = form.querySelector('[data-number="' + missing[0] + '"]');
         field.classList.add("invalid");
         field.scrollIntoView({ block: "center" });
@@ -274,16 +320,16 @@
       submit("questionnaire", { position: s.position, questionnaire: q.id, answers: answers }, draftName);
     });
     countAnswered(form, q, counter);
-    var title = s.before ? q.title : s.final ? "Final questions" : "Questions about " + s.robot_name;
+    var title = s.before ? q.title : s.final ? t("Final questions") : t("Questions about {robot}", { robot: s.robot_name });
     return panel(
-      h("p", { class: "progress-label", text: "Part " + s.page + " of " + s.pages }),
-      h("progress", { value: s.page - 1, max: s.pages, "aria-label": "Progress" }),
+      h("p", { class: "progress-label", text: t("Part {page} of {pages}", { page: s.page, pages: s.pages }) }),
+      h("progress", { value: s.page - 1, max: s.pages, "aria-label": t("Progress") }),
       h("h1", { text: title }), counter, form);
   }
 
   function questionField(q, item, number, saved, onChange) {
     var field = h("fieldset", { class: "question " + item.type, "data-number": number, "data-item": item.id });
-    var optional = item.required === false ? h("span", { class: "optional", text: " (optional)" }) : null;
+    var optional = item.required === false ? h("span", { class: "optional", text: " " + t("(optional)") }) : null;
     if (item.type === "text") {
       var area = h("textarea", { name: item.id, rows: "4", id: "answer-" + item.id });
       area.value = typeof saved === "string" ? saved : "";
@@ -346,22 +392,22 @@
 
   function countAnswered(form, q, counter) {
     var done = Object.keys(collect(form, q)).length;
-    counter.textContent = done + " of " + q.items.length + " answered";
+    counter.textContent = t("{done} of {total} answered", { done: done, total: q.items.length });
   }
 
   function endedView(s) {
     if (s.declined) {
-      return panel(h("h1", { text: "Thank you!" }),
-        h("p", { class: "lead", text: "You have chosen not to take part, and nothing about you has been kept." }),
-        h("p", { text: "Thank you for your time; please give the phone back to the experimenter." }));
+      return panel(h("h1", { text: t("Thank you!") }),
+        h("p", { class: "lead", text: t("You have chosen not to take part, and nothing about you has been kept.") }),
+        h("p", { text: t("Thank you for your time; please give the phone back to the experimenter.") }));
     }
-    var section = panel(h("h1", { text: "Thank you!" }),
-      h("p", { class: "lead", text: "This session has ended. Thank you for taking part!" }));
+    var section = panel(h("h1", { text: t("Thank you!") }),
+      h("p", { class: "lead", text: t("This session has ended. Thank you for taking part!") }));
     if (s.debriefing) {
       section.appendChild(h("h2", { text: s.debriefing.title }));
       s.debriefing.paragraphs.forEach(function (text) { section.appendChild(h("p", { text: text })); });
     }
-    section.appendChild(h("p", { text: "You can give the phone back now." }));
+    section.appendChild(h("p", { text: t("You can give the phone back now.") }));
     return section;
   }
 
@@ -398,13 +444,14 @@
   }
 
   function messageOf(data) {
-    return typeof data.detail === "string" ? data.detail : "Your answer could not be read. Please check it and try again.";
+    return typeof data.detail === "string" ? data.detail : t("Your answer could not be read. Please check it and try again.");
   }
 
   function flush() {
-    if (flushing) { return; }
+    if (flushing || state.view === "sent_away") { return; }
     var box = load("outbox", []);
     if (!box.length) { return; }
+    if (state.view === "paused") { setSave("held"); return; } // sent when the session continues
     flushing = true;
     var entry = box[0];
     fetch(api + "/" + entry.kind, {
@@ -412,6 +459,7 @@
     }).then(function (response) {
       if (response.status >= 500) { throw new Error("server " + response.status); }
       return response.json().catch(function () { return {}; }).then(function (data) {
+        if (response.status === 409) { return refused(entry, data); }
         dropFromOutbox(entry.body.client_id);
         if (response.ok) {
           if (entry.draft) { forget(entry.draft); }
@@ -423,7 +471,6 @@
         } else {
           setSave("");
           showError(messageOf(data));
-          if (response.status === 409) { refresh(); }
         }
       });
     }).then(function () {
@@ -432,6 +479,20 @@
     }, function () {
       flushing = false;
       scheduleRetry();
+    });
+  }
+
+  /* A 409: paused meanwhile (the answer stays in the outbox until the session continues),
+   * or really refused (dropped, with the server's sentence). */
+  function refused(entry, data) {
+    return fetch(api + "/state").then(function (response) {
+      return response.ok ? response.json() : null;
+    }).catch(function () { return null; }).then(function (fresh) {
+      if (fresh && fresh.view === "paused") { render(fresh); setSave("held"); return; }
+      dropFromOutbox(entry.body.client_id);
+      setSave("");
+      if (fresh) { render(fresh); } else { refresh(); }
+      showError(messageOf(data));
     });
   }
 
@@ -446,23 +507,46 @@
   var socket = null;
   var attempts = 0;
   var lastHeard = Date.now();
+  // This phone's name for the server: the wizard sees two phones on one link as two.
+  var device = load("device", null) || newClientId();
+  store("device", device);
+
+  /* The wizard disconnected this phone: the link is open on another one. Nothing more is
+   * sent from here (answers wait in the outbox), and it does not reconnect by itself.
+   * The server's sentence is English; the page shows its own, in the phone's language. */
+  function sentAway() {
+    state = { view: "sent_away" };
+    renderedKey = "sent_away";
+    app.replaceChildren(panel(h("h1", { text: t("This link is open on another phone") }),
+      h("p", { class: "lead", text: t("Please continue on that phone, or ask the experimenter if this is the phone you should use.") }),
+      h("p", { text: t("Your answers so far are saved.") })));
+    app.dataset.view = "sent_away";
+    setConnection("ended");
+    setSave("");
+  }
 
   function connect() {
-    if (state.view === "ended") { return; }
+    if (state.view === "ended" || state.view === "sent_away") { return; }
     setConnection(attempts ? "offline" : "connecting");
     var scheme = location.protocol === "https:" ? "wss://" : "ws://";
-    var ws = new WebSocket(scheme + location.host + "/ws/p/" + encodeURIComponent(token));
+    var ws = new WebSocket(scheme + location.host + "/ws/p/" + encodeURIComponent(token) +
+      "?device=" + encodeURIComponent(device));
     socket = ws;
     ws.onopen = function () { attempts = 0; lastHeard = Date.now(); setConnection("online"); flush(); };
     ws.onmessage = function (event) {
       lastHeard = Date.now();
       var message = JSON.parse(event.data);
       if (message.type === "state") { render(message.state); }
+      if (message.type === "sent_away") { sentAway(); }
     };
     ws.onclose = function (event) {
       if (socket !== ws) { return; }
       socket = null;
       if (event.code === 4410) { render({ view: "ended" }); return; }
+      if (event.code === 4409) {
+        if (state.view !== "sent_away") { sentAway(); }
+        return;
+      }
       setConnection("offline");
       var delay = Math.min(8000, 400 * Math.pow(2, attempts)) * (0.75 + Math.random() / 2);
       attempts += 1;

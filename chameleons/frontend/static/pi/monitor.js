@@ -20,12 +20,13 @@ function card(booth) {
     ? el("p", { class: "who" },
         el("a", { href: `/pi/sessions/${s.id}`, text: s.participant }),
         s.rehearsal ? el("span", { class: "badge", text: " rehearsal" }) : null,
-        ` · ${s.state}`, s.position ? ` · interaction ${s.position} · ${s.step}` : "",
+        ` · ${s.state}`, s.paused ? el("strong", { class: "paused", text: " · PAUSED" }) : null, s.position ? ` · interaction ${s.position} · ${s.step}` : "",
         s.condition ? ` · ${s.condition}` : "")
     : el("p", { class: "who muted", text: "No open session." });
   const phone = s
     ? el("span", { class: `chip ${s.phone_connected ? "ok" : s.state === "running" ? "alarm" : "unknown"}` },
-        el("strong", { text: "Phone" }), s.phone_connected ? " connected" : " not connected")
+        el("strong", { text: "Phone" }),
+        s.phones > 1 ? ` ${s.phones} on one link` : s.phone_connected ? " connected" : " not connected")
     : null;
   const chips = el("div", { class: "chips" }, phone, booth.health.checks.map(chip));
   const problems = el("ul", { class: "problems" }, booth.problems.map((p) => el("li", { text: p })));

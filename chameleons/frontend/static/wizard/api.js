@@ -46,6 +46,7 @@ export function createApi(sessionId, csrf, onReachable) {
     stop: () => call("POST", `${wizard}/prompts/stop`, {}),
     robotApply: () => call("POST", `${wizard}/robot/apply`, {}),
     robotRetry: () => call("POST", `${wizard}/robot/retry`, {}),
+    pairCapture: () => call("POST", `${wizard}/capture/reset-pairing`, {}),
     start: () => call("POST", `${session}/start`, {}),
     advance: (position, to) => call("POST", `${session}/advance`, { position, to }),
     decide: (position, index, accepted) =>
@@ -54,6 +55,10 @@ export function createApi(sessionId, csrf, onReachable) {
     condition: (position, condition, confirmDeviation = false) =>
       call("POST", `${session}/condition`, { position, condition, confirm_deviation: confirmDeviation }),
     end: (reason, note) => call("POST", `${session}/end`, { reason, note }),
+    pause: (reason, note) => call("POST", `${session}/pause`, { reason, note }),
+    resume: () => call("POST", `${session}/resume`, {}),
+    disconnectPhone: (device) =>
+      call("POST", `${session}/phones/${encodeURIComponent(device)}/disconnect`, {}),
     note: (text) => call("POST", `${session}/notes`, { text }),
     say: (text) => call("POST", `${wizard}/prompts/say`, { text }),
   };

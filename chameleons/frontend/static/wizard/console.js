@@ -14,6 +14,8 @@ import {
   renderCondition,
   renderNegotiation,
   renderParticipant,
+  renderPause,
+  renderPhones,
   renderPrimary,
   tickUndo,
 } from "./panels.js";
@@ -40,7 +42,11 @@ const timeline = new Timeline($("timeline"), $("timeline-count"));
 const now = new NowPlaying($("now-playing"), $("now-label"), $("now-bar"), (s) =>
   board.markPlaying(["playing", "sending"].includes(s.phase) ? s.group : null),
 );
-const health = new HealthStrip($("health"), () => perform("try the robot again", api.robotRetry));
+const health = new HealthStrip(
+  $("health"),
+  () => perform("try the robot again", api.robotRetry),
+  () => perform("pair with the next phone", api.pairCapture),
+);
 
 function showLink() {
   if (gone) return;
@@ -145,14 +151,19 @@ async function apply(next) {
     }
   }
   renderBar(state);
+  renderPhones(state, (phone) => perform(`disconnect phone ${phone.number}`, () => api.disconnectPhone(phone.id)));
   renderPrimary(state, api, perform);
+  renderPause(state);
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
   renderNegotiation(state, board, act);
   renderParticipant(state);
   markStep(state);
   const over = ["complete", "ended"].includes(state.session.state);
+  const paused = Boolean(state.session.paused);
   $("end-open").disabled = over;
-  board.setDisabled(over);
+  $("pause-open").disabled = over || paused || !["running", "final_questionnaire"].includes(state.session.state);
+  board.setDisabled(over || paused);
+  $("say-button").disabled = over || paused;
   board.highlight(state.suggestion_prompts);
   board.markPlayed(playedCounts(state));
   timeline.sync(state.events, itemNames(state));
@@ -184,7 +195,7 @@ function playedCounts(current) {
 async function play(group) {
   if (gone) return;
   if (board.disabled) {
-    flash("The session is over: prompts are off.", "warn");
+    flash(promptsOff(), "warn");
     return;
   }
   const button = board.find(group);
@@ -263,6 +274,27 @@ function requestSwitch(interaction, condition) {
   );
 }
 
+function promptsOff() {
+  return state && state.session.paused
+    ? "The session is paused: prompts are off until you resume it."
+    : "The session is over: prompts are off.";
+}
+
+function openPauseDialog() {
+  if (!state || state.session.paused) return;
+  const dialog = $("pause-dialog");
+  $("pause-note").value = "";
+  dialog.returnValue = "";
+  dialog.onclose = () => {
+    if (dialog.returnValue !== "pause") return;
+    const reason = $("pause-reason").value;
+    const note = $("pause-note").value.trim();
+    perform("pause the session", () => api.pause(reason, note));
+  };
+  dialog.showModal();
+  $("pause-reason").focus();
+}
+
 function openEndDialog() {
   if (!state || ["complete", "ended"].includes(state.session.state)) return;
   const dialog = $("end-dialog");
@@ -305,7 +337,7 @@ async function sayTyped(event) {
     return;
   }
   if (board.disabled) {
-    flash("The session is over: prompts are off.", "warn");
+    flash(promptsOff(), "warn");
     return;
   }
   sendingGroup = "typed";
@@ -353,6 +385,7 @@ bindKeys({
 
 $("stop-button").addEventListener("click", () => perform("stop", () => api.stop()));
 $("end-open").addEventListener("click", openEndDialog);
+$("pause-open").addEventListener("click", openPauseDialog);
 $("note-form").addEventListener("submit", addNote);
 $("say-form").addEventListener("submit", sayTyped);
 bindFilter($("timeline-filter"), $("timeline"), (filter) => (timeline.filter = filter));

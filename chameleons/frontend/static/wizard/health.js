@@ -15,9 +15,11 @@ function stateOf(check) {
 }
 
 export class HealthStrip {
-  constructor(container, onRetry = null) {
+  constructor(container, onRetry = null, onPair = null) {
     this.container = container;
     this.onRetry = onRetry;
+    // The capture accepts one phone: offer to pair afresh when another phone is sending.
+    this.onPair = onPair;
     this.lastAt = 0;
     this.mismatchSince = null;
     setInterval(() => this.checkSilence(), 1000);
@@ -75,6 +77,10 @@ export class HealthStrip {
     const robot = checks.find((check) => check.id === "robot");
     if (this.onRetry && robot && LOGIN_FAILED.test(robot.value || "")) {
       parts.push(el("button", { type: "button", class: "link", id: "robot-retry", onclick: this.onRetry }, "Try the robot again"));
+    }
+    const pairing = message.telemetry?.ingest?.pairing;
+    if (this.onPair && pairing && pairing.mode === "first_sender" && pairing.other_packets > 0) {
+      parts.push(el("button", { type: "button", class: "link", id: "capture-pair", onclick: this.onPair }, "Pair with the next phone"));
     }
     if (alarm) parts.push(alarm);
     this.container.replaceChildren(...parts);

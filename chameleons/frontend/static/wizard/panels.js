@@ -1,6 +1,6 @@
 // The session bar, primary action, condition switch, negotiation panel and participant view.
 
-import { el, kbd } from "./dom.js";
+import { clock, el, kbd } from "./dom.js";
 
 const $ = (id) => document.getElementById(id);
 export const SUGGESTION_KEYS = [
@@ -39,6 +39,7 @@ export function renderBar(state) {
   const interaction = interactionAt(state);
   $("bar-participant").textContent = session.participant.code;
   $("bar-rehearsal").hidden = !session.is_rehearsal;
+  $("bar-language").textContent = session.language; // the phone may change it before consent
   $("bar-position").textContent = `${interaction.position} of ${session.interaction_count}`;
   $("bar-step").textContent = session.state === "running" ? interaction.state : session.state.replace("_", " ");
   $("bar-planned").textContent = interaction.planned_condition;
@@ -56,16 +57,52 @@ export function renderBar(state) {
     // The phone link stops working when the session is over (the page says thank you).
     phone.textContent = session.phone.connected ? "phone still on the last page" : "phone left";
     phone.className = "pill";
+  } else if (session.phone.connections > 1) {
+    phone.textContent = `${session.phone.connections} phones on this link`;
+    phone.className = "pill warn";
   } else {
     phone.textContent = session.phone.connected ? "phone connected" : "phone not connected";
     phone.className = `pill ${session.phone.connected ? "ok" : "bad"}`;
   }
 }
 
+/** Two or more phones on the link: each with when it came and a Disconnect button (the
+ * later ones are probably the extra; the wizard chooses). */
+export function renderPhones(state, disconnect) {
+  const session = state.session;
+  const list = $("phone-devices");
+  const phones = session.phone.devices || [];
+  const over = ["complete", "ended"].includes(session.state);
+  list.hidden = phones.length < 2 || over;
+  if (list.hidden) {
+    list.replaceChildren();
+    return;
+  }
+  list.replaceChildren(
+    ...phones.map((phone) =>
+      el(
+        "li",
+        { dataset: { device: phone.id } },
+        `Phone ${phone.number} · ${phone.label}`,
+        phone.connected_at ? ` · since ${clock(phone.connected_at).slice(0, 8)}` : "",
+        phone.extra ? el("span", { class: "muted", text: " (later)" }) : null,
+        phone.id && el("button", {
+          type: "button",
+          class: phone.extra ? "danger" : "",
+          text: "Disconnect",
+          title: `Disconnect phone ${phone.number}: it says the link is open on another phone`,
+          onclick: () => disconnect(phone),
+        }),
+      ),
+    ),
+  );
+}
+
 /** The primary (next-step) action: returns a function to run it, or null when none. */
 export function primaryAction(state, api) {
   const action = state.session.allowed[0] || { action: "none" };
   if (action.action === "start") return { label: "Start the session", run: () => api.start() };
+  if (action.action === "resume") return { label: "Resume the session", run: () => api.resume() };
   if (action.action === "advance") {
     const label = STEP_ACTIONS[action.to](action.position);
     const startsInteraction = action.to === "discussion";
@@ -75,6 +112,17 @@ export function primaryAction(state, api) {
   if (action.action === "wait") return { label: WAITING[action.for] || "Waiting…", run: null };
   if (action.why === "ended") return { label: "Session ended early", run: null };
   return { label: "Session complete", run: null };
+}
+
+/** While paused: since when and why, under the primary action (which resumes). */
+export function renderPause(state) {
+  const paused = state.session.paused;
+  const banner = $("pause-banner");
+  banner.hidden = !paused;
+  if (!paused) return;
+  const note = paused.note ? ` (${paused.note})` : "";
+  banner.textContent = `Paused since ${clock(paused.since).slice(0, 8)}: ${paused.reason_text}${note}. ` +
+    "The phone shows a short pause; prompts are off.";
 }
 
 export function renderPrimary(state, api, perform) {

@@ -27,9 +27,20 @@ export class PromptBoard {
     this.buttons.clear();
     this.byShortcut.clear();
     const sections = data.sections.map((section) => this.section(section));
-    this.container.replaceChildren(...sections);
+    const warning = this.languageWarning(data);
+    this.container.replaceChildren(...(warning ? [warning] : []), ...sections);
     if (this.disabled) this.setDisabled(true);
     this.filter();
+  }
+
+  // The session's language: only its prompts are on the board; say which have no recording.
+  languageWarning(data) {
+    if (!data.missing || !data.missing.length) return null;
+    const names = data.missing.slice(0, 12).join(", ") + (data.missing.length > 12 ? ", …" : "");
+    return el("p", { class: "wz-language-warning", id: "prompt-language-warning", role: "note" },
+      `${data.missing.length} prompt${data.missing.length === 1 ? "" : "s"} of this actor ` +
+      `ha${data.missing.length === 1 ? "s" : "ve"} no recording in ${data.language}: ${names}. ` +
+      "Use the Say field for them.");
   }
 
   section(section) {

@@ -1,6 +1,6 @@
 // The session timeline: every event, newest first, with per-prompt latencies.
 
-import { clock, el } from "./dom.js";
+import { clock, el, seconds } from "./dom.js";
 
 function rankingText(ranking, names) {
   return (ranking || []).map((id, i) => `${i + 1}. ${names.get(id) || id}`).join("  ");
@@ -48,6 +48,8 @@ export function describe(event, names) {
     case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
     case "recording.stopped": return `Recording of interaction ${p.position} saved (${count(p.recordings, "file")})`;
     case "recording.indexed": return `Recording of interaction ${p.position}: ${count(p.recordings, "more file")} saved`;
+    case "capture.pairing_reset": return p.sent ? `Face capture pairs with the next phone${p.previous_sender ? ` (was ${p.previous_sender})` : ""}` : `Pairing not reset: ${p.detail || p.reason}`;
+    case "recording.failed": return `RECORDING FAILED (interaction ${p.position}): ${p.reason}`;
     case "recording.not_started": return `RECORDING NOT STARTED (interaction ${p.position}): ${p.detail || p.reason}`;
     case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
     case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
@@ -63,11 +65,15 @@ export function describe(event, names) {
     case "behaviour.natural_source": return `Natural movement replays ${p.source === "clip" ? `clip ${p.clip}` : p.source === "yoked" ? `participant ${p.from_participant}, interaction ${p.from_position} (${p.from_condition})` : `a synthetic face (seed ${p.seed})`}`;
     case "session.rehearsal_marked": return "Marked as a rehearsal";
     case "session.rehearsal_unmarked": return "No longer marked as a rehearsal";
-    case "phone.connected": return "Phone connected";
-    case "phone.disconnected": return "Phone disconnected";
+    case "phone.connected": return p.phones > 1 ? `PHONE CONNECTED: ${p.phones} phones on this link now (${p.label})` : "Phone connected";
+    case "phone.language": return `Participant chose language ${p.to} (was ${p.from})`;
+    case "phone.disconnected": return p.phones > 0 ? `Phone disconnected (${p.label}); ${p.phones} still on the link` : "Phone disconnected";
+    case "phone.sent_away": return `Wizard disconnected phone ${p.number} (${p.label}): the link was open on another phone`;
     case "session.final_questionnaire": return "Final questionnaire started";
     case "session.completed": return "Session complete";
     case "session.ended_early": return `SESSION ENDED EARLY: ${p.reason_text || p.reason}${p.note ? ` (${p.note})` : ""}${p.position ? `, during interaction ${p.position} (${p.step})` : ""}`;
+    case "session.paused": return `SESSION PAUSED: ${p.reason_text || p.reason}${p.note ? ` (${p.note})` : ""}${p.position ? `, during interaction ${p.position} (${p.step})` : ""}`;
+    case "session.resumed": return `Session resumed after ${seconds(p.paused_s || 0)} (paused: ${p.reason_text || p.reason})`;
     case "participant.excluded": return `PI excluded the participant from the analysis: ${p.reason}`;
     case "participant.included": return "PI included the participant in the analysis again";
     case "plan_row.handed_on": return `PI gave plan row ${p.row_number} to a replacement participant`;

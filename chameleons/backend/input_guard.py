@@ -1,0 +1,182 @@
+"""Refuse, at the edge and with a sentence, input that no route can store or look up.
+
+Each of these used to reach the database and come back as a 500 (or, on the phone, as an
+endless "connection is down" retry, since the phone retries only 5xx):
+
+- a NUL character in any text: PostgreSQL's text types cannot hold it (SQLite can, so the
+  two databases would disagree); refused in the address (400), in JSON bodies and in form
+  fields (422);
+- a whole number too large for the database: SQLite raises ``OverflowError`` from 2**63
+  and PostgreSQL "integer out of range" from 2**31, the size of every row id (INTEGER).
+  In the address (path segments and query values, where numbers are ids, counts and
+  positions) the limit is 2**31 - 1: a path segment beyond it names nothing (404), a
+  query value is a 422. In JSON bodies it is 2**63 - 1 (free JSON payloads may carry
+  nanosecond times); id fields of bodies carry their own bound (``MAX_ROW_ID``);
+- a lone surrogate (``"\\ud800"``) in a JSON string: valid JSON, but not Unicode text that
+  UTF-8 (the databases', files') can encode (422);
+- ``NaN``/``Infinity`` in JSON bodies: Python's JSON parser accepts them, JSON does not,
+  PostgreSQL's JSON columns refuse them, and no measure of this study is one (422).
+
+A pure ASGI middleware: it buffers only JSON and form bodies (which FastAPI reads whole
+anyway) and hands the same bytes on. Multipart bodies pass through (files may hold NULs).
+The messages are plain sentences in ``detail``, which the phone shows as they are.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+from urllib.parse import parse_qsl
+
+from starlette.responses import JSONResponse
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+DB_INT_LIMIT = 2**63  # SQLite INTEGER and PostgreSQL BIGINT hold -2**63 .. 2**63 - 1
+MAX_ROW_ID = 2**31 - 1  # PostgreSQL INTEGER: every row id but the events'
+_WHOLE_NUMBER = re.compile(r"-?\d+")
+
+NUL_IN_ADDRESS = "The address contains a NUL character (0x00), which is not allowed."
+NUL_IN_TEXT = "Text may not contain a NUL character (0x00). Please remove it and try again."
+NOT_UNICODE = "Text must be valid Unicode (it contains a lone surrogate escape such as \\ud800)."
+NOT_FINITE = "Numbers must be finite: NaN and Infinity are not allowed."
+TOO_LARGE = "A whole number in the request is too large (the limit is 2^63 - 1)."
+TOO_LARGE_IN_ADDRESS = "A number in the address is too large (the limit is 2147483647)."
+NO_SUCH_THING = "Not Found"
+
+
+class _Refused(Exception):  # noqa: N818 (a refusal carrying its message, not a fault)
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+
+def _too_large(text: str, limit: int = DB_INT_LIMIT) -> bool:
+    return bool(_WHOLE_NUMBER.fullmatch(text)) and abs(int(text)) >= limit
+
+
+def _parse_int(text: str) -> int:
+    if _too_large(text):
+        raise _Refused(TOO_LARGE)
+    return int(text)
+
+
+def _reject_constant(name: str) -> float:
+    raise _Refused(NOT_FINITE)
+
+
+def _check_strings(value: Any) -> None:
+    """Walk a decoded JSON value (keys too) for NUL characters and lone surrogates."""
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            if "\x00" in item:
+                raise _Refused(NUL_IN_TEXT)
+            if not item.isascii():
+                try:
+                    item.encode("utf-8")
+                except UnicodeEncodeError:
+                    raise _Refused(NOT_UNICODE) from None
+        elif isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+
+
+def check_json(body: bytes) -> None:
+    try:
+        decoded = json.loads(body, parse_constant=_reject_constant, parse_int=_parse_int)
+    except ValueError:
+        return  # malformed JSON: FastAPI answers it with its own 422
+    _check_strings(decoded)
+
+
+def check_form(body: bytes) -> None:
+    try:
+        fields = parse_qsl(body.decode("latin-1"), keep_blank_values=True)
+    except ValueError:
+        return
+    for name, value in fields:
+        if "\x00" in name or "\x00" in value:
+            raise _Refused(NUL_IN_TEXT)
+
+
+def check_address(scope: Scope) -> tuple[int, str] | None:
+    if "\x00" in scope["path"]:
+        return 400, NUL_IN_ADDRESS
+    if any(_too_large(segment, MAX_ROW_ID + 1) for segment in scope["path"].split("/")):
+        return 404, NO_SUCH_THING
+    query = scope.get("query_string", b"").decode("latin-1")
+    for name, value in parse_qsl(query, keep_blank_values=True):
+        if "\x00" in name or "\x00" in value:
+            return 400, NUL_IN_ADDRESS
+        if _too_large(value.strip(), MAX_ROW_ID + 1):
+            return 422, TOO_LARGE_IN_ADDRESS
+    return None
+
+
+def _body_checker(scope: Scope) -> Any:
+    content_type = ""
+    for name, value in scope.get("headers", ()):
+        if name == b"content-type":
+            content_type = value.decode("latin-1").split(";", 1)[0].strip().lower()
+    if content_type == "application/json" or content_type.endswith("+json"):
+        return check_json
+    if content_type == "application/x-www-form-urlencoded":
+        return check_form
+    return None
+
+
+class InputGuardMiddleware:
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        refused = check_address(scope)
+        if refused is not None:
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 1008})  # before accept: a 403
+            else:
+                await JSONResponse({"detail": refused[1]}, refused[0])(scope, receive, send)
+            return
+        checker = _body_checker(scope) if scope["type"] == "http" else None
+        if checker is None:
+            await self.app(scope, receive, send)
+            return
+        messages, body = await _read_body(receive)
+        try:
+            checker(body)
+        except _Refused as refusal:
+            await JSONResponse({"detail": refusal.message}, 422)(scope, receive, send)
+            return
+        await self.app(scope, _replay(messages, receive), send)
+
+
+async def _read_body(receive: Receive) -> tuple[list[Message], bytes]:
+    messages: list[Message] = []
+    chunks: list[bytes] = []
+    while True:
+        message = await receive()
+        messages.append(message)
+        if message["type"] != "http.request":
+            break
+        chunks.append(message.get("body", b""))
+        if not message.get("more_body", False):
+            break
+    return messages, b"".join(chunks)
+
+
+def _replay(messages: list[Message], receive: Receive) -> Receive:
+    pending = list(messages)
+
+    async def replayed() -> Message:
+        if pending:
+            return pending.pop(0)
+        return await receive()
+
+    return replayed

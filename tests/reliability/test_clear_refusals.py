@@ -1,0 +1,177 @@
+"""Input no route can store or look up gets a 4xx with a sentence, on SQLite and PostgreSQL,
+never a 500: a NUL character in free text, in an address or a media path; whole numbers
+>= 2**63 in paths, queries and bodies; NaN and Infinity in JSON bodies; and the withdraw
+form's paths. Nothing is stored by a refused request."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from chameleons.backend.input_guard import (
+    MAX_ROW_ID,
+    NOT_FINITE,
+    NOT_UNICODE,
+    NUL_IN_ADDRESS,
+    NUL_IN_TEXT,
+    TOO_LARGE,
+    TOO_LARGE_IN_ADDRESS,
+)
+from tests.backend.sessions.conftest import phone, pi, study_id, wizard
+from tests.support.bots import ParticipantBot, StaffApi, WizardBot
+
+__all__ = ["phone", "pi", "study_id", "wizard"]
+
+HUGE = 2**63
+HEADERS = {"Content-Type": "application/json"}
+
+
+def _post_raw(client: TestClient, path: str, raw: str, csrf: str = "") -> tuple[int, object]:
+    headers = {**HEADERS, **({"X-CSRF-Token": csrf} if csrf else {})}
+    response = client.post(path, content=raw.encode(), headers=headers)
+    return response.status_code, response.json().get("detail")
+
+
+def _answered(phone: ParticipantBot, wizard: WizardBot) -> int:
+    events = wizard.staff.get(f"/api/sessions/{wizard.session_id}/events?limit=5000")
+    return sum(1 for e in events if str(e["kind"]).startswith(("questionnaire", "consent")))
+
+
+def test_a_nul_in_the_phones_free_text_is_a_422_with_a_sentence_and_nothing_is_stored(
+    client: TestClient, wizard: WizardBot, phone: ParticipantBot
+) -> None:
+    before = _answered(phone, wizard)
+    raw = (
+        '{"client_id": "abcdefgh12345678", "position": -1, "questionnaire": "about_you",'
+        ' "answers": {"comment": "hello\\u0000world"}}'
+    )
+    status, detail = _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", raw)
+    assert status == 422
+    assert detail == NUL_IN_TEXT
+    # A NUL in a key is refused the same way; so is one in the consent's client id.
+    raw_key = raw.replace('"comment"', '"com\\u0000ment"').replace("hello\\u0000world", "hi")
+    assert _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", raw_key)[0] == 422
+    assert _answered(phone, wizard) == before
+
+
+def test_a_nul_in_staff_free_text_is_a_422(
+    client: TestClient, pi: StaffApi, wizard: WizardBot
+) -> None:
+    status, detail = _post_raw(
+        client, f"/api/sessions/{wizard.session_id}/notes", '{"text": "a\\u0000b"}', pi.csrf
+    )
+    assert (status, detail) == (422, NUL_IN_TEXT)
+    notes = pi.get(f"/api/sessions/{wizard.session_id}/events")
+    assert not [e for e in notes if e["kind"] == "wizard.note"]
+    form = client.post(
+        "/pi/participants/P001/exclude",
+        data={"reason": "bad\x00reason", "csrf_token": pi.csrf},
+        headers={"X-CSRF-Token": pi.csrf},
+    )
+    assert form.status_code == 422
+    assert form.json()["detail"] == NUL_IN_TEXT
+
+
+@pytest.mark.parametrize("constant", ["NaN", "Infinity", "-Infinity"])
+def test_nan_and_infinity_in_a_json_body_are_a_422(
+    client: TestClient, pi: StaffApi, wizard: WizardBot, constant: str
+) -> None:
+    raw = f'{{"kind": "worker.note", "payload": {{"x": {constant}}}, "worker_time": {constant}}}'
+    status, detail = _post_raw(client, f"/api/sessions/{wizard.session_id}/events", raw, pi.csrf)
+    assert (status, detail) == (422, NOT_FINITE)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        f"/api/sessions/{HUGE}",
+        f"/api/sessions/{MAX_ROW_ID + 1}",
+        f"/api/sessions/{HUGE * 10}/events",
+        f"/api/sessions/-{HUGE + 1}",
+        f"/api/studies/{HUGE}",
+        f"/pi/sessions/{HUGE}",
+        f"/pi/recordings/{HUGE}",
+        f"/wizard/sessions/{HUGE}",
+    ],
+)
+def test_ids_beyond_64_bits_in_a_path_are_a_404(
+    client: TestClient, pi: StaffApi, path: str
+) -> None:
+    response = client.get(path)
+    assert response.status_code == 404, response.text
+
+
+def test_ids_beyond_64_bits_in_a_query_or_body_are_a_422(
+    client: TestClient, pi: StaffApi, study_id: int
+) -> None:
+    for query in (f"/pi?study={HUGE}", f"/pi?study={MAX_ROW_ID + 1}"):
+        response = client.get(query)
+        assert (response.status_code, response.json()["detail"]) == (422, TOO_LARGE_IN_ADDRESS)
+    raw = f'{{"study_id": {HUGE}, "booth": "booth-1"}}'
+    assert _post_raw(client, "/api/sessions", raw, pi.csrf) == (422, TOO_LARGE)
+    # An id beyond PostgreSQL's INTEGER in a body is refused by its field's bound.
+    raw = f'{{"study_id": {MAX_ROW_ID + 1}, "booth": "booth-1"}}'
+    assert _post_raw(client, "/api/sessions", raw, pi.csrf)[0] == 422
+    # The largest id that fits is an ordinary "not found".
+    assert client.get(f"/api/sessions/{MAX_ROW_ID}").status_code == 404
+    assert client.get(f"/pi/sessions/{MAX_ROW_ID}").status_code == 404
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/media/prompts/m1/audio/x%00.mp3",
+        "/media/prompts/m1%00/x.mp3",
+        "/media/typed/0123abcd%00.wav",
+        "/static/css/app.css%00.js",
+        "/p/abc%00def",
+    ],
+    ids=["prompt-file", "prompt-dir", "typed", "static", "phone"],
+)
+def test_a_nul_in_a_media_or_page_path_is_a_400(
+    client: TestClient, pi: StaffApi, path: str
+) -> None:
+    # As a logged-in PI, so no login redirect could answer first.
+    response = client.get(path)
+    assert (response.status_code, response.json()["detail"]) == (400, NUL_IN_ADDRESS)
+
+
+def test_the_withdraw_form_paths_answer_4xx(
+    client: TestClient, pi: StaffApi, study_id: int
+) -> None:
+    form = {"confirm": "P999", "csrf_token": pi.csrf}
+    headers = {"X-CSRF-Token": pi.csrf}
+    for code in ("P999", "x" * 500, "%2e%2e", "P001%00"):
+        assert client.get(f"/pi/participants/{code}/withdraw").status_code in (400, 404)
+        answer = client.post(f"/pi/participants/{code}/withdraw", data=form, headers=headers)
+        assert answer.status_code in (400, 404), (code, answer.status_code)
+    assert client.get(f"/pi/participants/P001/withdraw?study={HUGE}").status_code == 422
+
+
+def test_a_lone_surrogate_in_json_text_is_a_422(
+    client: TestClient, pi: StaffApi, wizard: WizardBot
+) -> None:
+    raw = '{"text": "half a pair: \\ud800"}'
+    status, detail = _post_raw(client, f"/api/sessions/{wizard.session_id}/notes", raw, pi.csrf)
+    assert (status, detail) == (422, NOT_UNICODE)
+    # A proper pair is text like any other.
+    raw = '{"text": "a pair: \\ud83d\\ude00"}'
+    assert _post_raw(client, f"/api/sessions/{wizard.session_id}/notes", raw, pi.csrf)[0] == 201
+
+
+def test_a_study_file_with_control_characters_is_a_422(client: TestClient, pi: StaffApi) -> None:
+    status, detail = _post_raw(client, "/api/studies", '{"yaml": "name: x\\u0089"}', pi.csrf)
+    assert status == 422
+    assert "not valid YAML" in str(detail)
+
+
+@pytest.mark.parametrize(
+    "path", [f"/ws/sessions/{HUGE}", f"/ws/wizard/sessions/{MAX_ROW_ID + 1}", "/ws/p/a%00b"]
+)
+def test_a_websocket_address_no_database_can_look_up_is_refused(
+    client: TestClient, pi: StaffApi, path: str
+) -> None:
+    with pytest.raises(WebSocketDisconnect) as refused, client.websocket_connect(path):
+        pass
+    assert refused.value.code == 1008

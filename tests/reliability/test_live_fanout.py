@@ -1,0 +1,165 @@
+"""Two server processes on one PostgreSQL database: a phone answering on one updates a
+console watching on the other (events.pg_fanout, LISTEN/NOTIFY).
+
+The two servers are two apps, each with its own uvicorn server, event loop, thread pool and
+live hub, in threads of this process: nothing connects their hubs but PostgreSQL, as with
+two processes (the real processes are in bench/server_bench.py's topology notes)."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import httpx
+import pytest
+from fastapi import FastAPI
+from sqlalchemy import Engine, text
+from websockets.sync.client import ClientConnection, connect
+from websockets.sync.connection import Connection
+
+from chameleons.backend.app import create_app
+from chameleons.backend.events.hub import RESYNC
+from chameleons.backend.events.pg_fanout import MAX_PAYLOAD, encode
+from chameleons.backend.phone import devices
+from chameleons.backend.sessions.snapshot import phone_presence_key
+from chameleons.settings import Settings
+from tests.support.bots import ParticipantBot, WizardBot, staff_api, study_with_plan
+from tests.support.live_server import LiveServer
+
+WAIT_S = 120.0
+DEVICE = "0123456789abcdef"  # the phone page's own id for itself
+
+
+def wait_until(condition: Callable[[], bool], what: str) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting until {what}")
+        time.sleep(0.01)
+
+
+Served = tuple[LiveServer, FastAPI]
+
+
+@pytest.fixture
+def two_servers(settings: Settings, engine: Engine) -> Iterator[tuple[Served, Served]]:
+    if engine.dialect.name != "postgresql":
+        pytest.skip("one SQLite server is one process: the fan-out is PostgreSQL's")
+    apps = [create_app(settings), create_app(settings)]
+    with LiveServer(apps[0]) as first, LiveServer(apps[1]) as second:
+        for app in apps:
+            wait_until(lambda app=app: _listening(app), "both servers listen")  # type: ignore[misc]
+        yield (first, apps[0]), (second, apps[1])
+    for app in apps:
+        app.state.engine.dispose()
+
+
+def _listening(app: FastAPI) -> bool:
+    fanout = app.state.live_fanout
+    return fanout is not None and fanout.listening.is_set()
+
+
+def _console(server: LiveServer, session_id: int, http: httpx.Client) -> ClientConnection:
+    cookies = "; ".join(f"{k}={v}" for k, v in http.cookies.items())
+    return connect(
+        f"ws://127.0.0.1:{server.port}/ws/sessions/{session_id}",
+        additional_headers={"Origin": server.url, "Cookie": cookies},
+        open_timeout=WAIT_S,
+    )
+
+
+def _next_matching(socket: Connection, match: Callable[[Any], bool]) -> Any:
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        message = json.loads(socket.recv(timeout=max(0.1, deadline - time.monotonic())))
+        if match(message):
+            return message
+    raise AssertionError("no matching message")
+
+
+def test_a_phone_on_one_server_updates_a_console_on_the_other(
+    two_servers: tuple[Served, Served], engine: Engine
+) -> None:
+    (phone_server, phone_app), (console_server, console_app) = two_servers
+    with (
+        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
+        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+    ):
+        pi = staff_api(staff_http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi))
+        with _console(console_server, wizard.session_id, staff_http) as console:
+            _next_matching(console, lambda m: m.get("type") == "snapshot")
+            ParticipantBot(phone_http, wizard.token).consent(True, client_id="fanout-consent")
+            event = _next_matching(
+                console,
+                lambda m: (
+                    m.get("type") == "event" and m["event"].get("client_id") == "fanout-consent"
+                ),
+            )
+            assert event["event"]["session_id"] == wizard.session_id
+            snapshot = _next_matching(console, lambda m: m.get("type") == "snapshot")
+            assert snapshot["session"]["id"] == wizard.session_id
+
+        key = phone_presence_key(wizard.session_id)
+        assert console_app.state.live_hub.present(key) == 0
+        with connect(
+            f"ws://127.0.0.1:{phone_server.port}/ws/p/{wizard.token}?device={DEVICE}",
+            open_timeout=WAIT_S,
+        ):
+            wait_until(lambda: phone_app.state.live_hub.present(key) == 1, "the phone is in")
+            wait_until(
+                lambda: console_app.state.live_hub.present(key) == 1,
+                "the other server counts the phone",
+            )
+            # ... and knows which phone it is (the console lists two phones on one link).
+            listed = devices.phones(console_app.state.live_hub, wizard.session_id)
+            assert [phone["id"] for phone in listed] == [DEVICE]
+        wait_until(
+            lambda: console_app.state.live_hub.present(key) == 0,
+            "the other server sees the phone leave",
+        )
+
+
+def test_a_message_too_large_for_notify_becomes_a_resync() -> None:
+    small = json.loads(encode("me", "session:1", {"type": "event", "n": 1}))
+    assert small == {"o": "me", "c": "session:1", "m": {"type": "event", "n": 1}}
+    large = json.loads(encode("me", "session:1", {"type": "event", "text": "x" * MAX_PAYLOAD}))
+    assert large == {"o": "me", "c": "session:1", "m": RESYNC}
+
+
+def test_a_server_whose_database_connections_drop_reconnects_and_carries_on(
+    two_servers: tuple[Served, Served], engine: Engine
+) -> None:
+    """PostgreSQL ends the connection the phone server sends its notifications on (an
+    idle-connection timeout, a network cut) while its listening connection stays up: the
+    failed send ends both, the server reconnects, and the next answer on it still reaches
+    the other console (a silently dead sender would drop every later message)."""
+    (phone_server, phone_app), (console_server, _console_app) = two_servers
+    fanout = phone_app.state.live_fanout
+    before = fanout.backend_pids
+    with engine.connect() as connection:
+        connection.execute(text("SELECT pg_terminate_backend(:pid)"), {"pid": before[1]})
+    # The next message (a heartbeat within HEARTBEAT_S, or any event) finds the dead
+    # connection; until then nothing was lost.
+    wait_until(
+        lambda: fanout.listening.is_set() and fanout.backend_pids[0] not in before,
+        "the phone server listens again on new connections",
+    )
+    assert fanout.backend_pids[1] not in before
+    with (
+        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
+        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+    ):
+        pi = staff_api(staff_http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi))
+        with _console(console_server, wizard.session_id, staff_http) as console:
+            _next_matching(console, lambda m: m.get("type") == "snapshot")
+            ParticipantBot(phone_http, wizard.token).consent(True, client_id="after-reconnect")
+            _next_matching(
+                console,
+                lambda m: (
+                    m.get("type") == "event" and m["event"].get("client_id") == "after-reconnect"
+                ),
+            )

@@ -1,0 +1,47 @@
+"""The booth check's copy-delay probe: a head turn and its copy sent ``delay`` seconds
+later (at the robot's 25 Hz against the phone's 60 Hz) give that delay back; a still head
+or a copy of something else gives no figure."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from chameleons.worker.delay_probe import DelayProbe
+
+
+def turn(t: np.ndarray) -> np.ndarray:
+    """A turn to the left and back, then a smaller one to the right (degrees)."""
+    yaw: np.ndarray = 30 * np.exp(-(((t - 3) / 0.6) ** 2)) - 10 * np.exp(-(((t - 6) / 0.5) ** 2))
+    return yaw
+
+
+def fed(delay: float, copy: np.ndarray | None = None) -> DelayProbe:
+    probe = DelayProbe()
+    captured = np.arange(0.0, 18.0, 1 / 60)
+    for t, yaw in zip(captured, turn(captured), strict=True):
+        probe.captured(float(t), float(yaw))
+    sent = np.arange(0.0, 18.0, 1 / 25)
+    yaws = turn(sent - delay) if copy is None else copy[: len(sent)]
+    for t, yaw in zip(sent, yaws, strict=True):
+        probe.sent(float(t), float(yaw))
+    return probe
+
+
+@pytest.mark.parametrize("delay", [4.0, 2.5, 0.37])
+def test_a_copied_turn_gives_back_its_delay(delay: float) -> None:
+    measured = fed(delay).measure(18.0)
+    assert measured is not None
+    assert measured["delay_s"] == pytest.approx(delay, abs=0.02)
+    assert measured["correlation"] > 0.99
+    assert measured["motion_deg"] == pytest.approx(40.0, abs=0.5)
+
+
+def test_no_movement_or_no_copy_gives_no_figure() -> None:
+    still = DelayProbe()
+    for k in range(600):
+        still.captured(k / 60, 0.3)
+        still.sent(k / 60, 0.3)
+    assert still.measure(10.0) is None
+    noise = np.random.default_rng(3).normal(0.0, 5.0, 500)
+    assert fed(4.0, copy=noise).measure(18.0) is None
