@@ -56,7 +56,8 @@ async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]
 
     def relay(message: Message) -> None:
         # With the prompt's lip-sync URL the page moves the lips on the audio's own clock.
-        relay_envelope(channel, message, lipsync_for=partial(lipsync_url_for, settings))
+        relay_envelope(channel, message, lipsync_for=partial(lipsync_url_for, settings),
+                       served_from=settings.effective_public_url)  # fmt: skip
 
     bridge.add_listener("display.", relay)
     forward_speech_events(channel, bridge.send_command)

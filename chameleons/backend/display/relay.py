@@ -47,10 +47,16 @@ def booth_of(envelope: Envelope) -> str:
     return envelope.topic[len(DISPLAY_TOPIC_PREFIX) :]
 
 
-def display_message(envelope: Envelope, lipsync_for: LipsyncResolver | None = None) -> Message:
+def display_message(
+    envelope: Envelope, lipsync_for: LipsyncResolver | None = None, served_from: str | None = None
+) -> Message:
     """The page message for one virtual-driver envelope; raises :class:`RelayError`.
     ``lipsync_for(audio_url)`` may name the curves the page should play with the audio
-    (e.g. ``functools.partial(media.lipsync_url_for, settings)``)."""
+    (e.g. ``functools.partial(media.lipsync_url_for, settings)``). URLs under
+    ``served_from`` (this server's public URL) reach the page as paths: the page loads them
+    from the address it was opened at. A booth screen on another computer opens the server
+    by its LAN name, where ``http://127.0.0.1:8000`` (the public URL when none is set)
+    would be the screen itself and every prompt would fail to play."""
     convert = _CONVERTERS.get(envelope.type)
     if convert is None:
         raise RelayError("unknown_type")
@@ -62,7 +68,15 @@ def display_message(envelope: Envelope, lipsync_for: LipsyncResolver | None = No
         raise RelayError(f"bad_{envelope.type}") from exc
     if message["type"] == "play_audio" and message["lipsync_url"] is None and lipsync_for:
         message["lipsync_url"] = lipsync_for(message["url"])
+    if message["type"] == "play_audio" and served_from:
+        for key in ("url", "lipsync_url"):
+            message[key] = _as_path(message[key], served_from)
     return message
+
+
+def _as_path(url: str | None, served_from: str) -> str | None:
+    prefix = served_from.rstrip("/") + "/"
+    return url[len(prefix) - 1 :] if url and url.startswith(prefix) else url
 
 
 def _face(envelope: Envelope) -> Message:
@@ -113,11 +127,15 @@ _CONVERTERS: dict[str, Callable[[Envelope], Message]] = {
 
 
 def relay_envelope(
-    channel: DisplayChannel, envelope: Envelope, lipsync_for: LipsyncResolver | None = None
+    channel: DisplayChannel,
+    envelope: Envelope,
+    lipsync_for: LipsyncResolver | None = None,
+    served_from: str | None = None,
 ) -> bool:
     """Publish one worker envelope to its booth's pages; False (counted) when unusable."""
     try:
-        channel.publish(booth_of(envelope), display_message(envelope, lipsync_for))
+        message = display_message(envelope, lipsync_for, served_from)
+        channel.publish(booth_of(envelope), message)
     except RelayError as error:
         channel.counters[f"relay.{error.reason}"] += 1
         return False

@@ -153,6 +153,21 @@ def test_relay_names_the_curves_for_the_audio() -> None:
     assert display_message(envelope)["lipsync_url"] is None
 
 
+def test_this_servers_media_reaches_the_page_as_paths() -> None:
+    """A booth screen on another computer opens the server by its LAN name: the server's
+    own URLs (public URL default http://127.0.0.1:8000) must not send it to itself."""
+    own = "http://127.0.0.1:8000/media/prompts/m1/audio/hi.wav?key=k"
+    envelope = Envelope("display.b", "play_audio", body={"prompt_id": "hi", "url": own})
+    message = display_message(envelope, lambda url: url.replace(".wav", ".csv"),
+                              served_from="http://127.0.0.1:8000/")  # fmt: skip
+    assert message["url"] == "/media/prompts/m1/audio/hi.wav?key=k"
+    assert message["lipsync_url"] == "/media/prompts/m1/audio/hi.csv?key=k"
+    elsewhere = Envelope("display.b", "play_audio",
+                         body={"url": "http://127.0.0.1:80001/x.wav"})  # fmt: skip
+    kept = display_message(elsewhere, served_from="http://127.0.0.1:8000")
+    assert kept["url"] == "http://127.0.0.1:80001/x.wav"  # another origin stays whole
+
+
 def test_relay_publishes_to_the_envelopes_booth() -> None:
     async def scenario() -> Message:
         channel = DisplayChannel()
