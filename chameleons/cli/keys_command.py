@@ -17,8 +17,12 @@ def keys() -> None:
 @keys.command("create")
 @click.option("--keys-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Where to write them. [<data dir>/keys; CHAMELEONS_ZMQ_KEYS_DIR]")  # fmt: skip
-@click.option("--worker", "worker_name", default=None,
-              help="Name of the worker key pair (one per booth PC, if you like). [worker]")
+@click.option(
+    "--worker",
+    "worker_name",
+    default=None,
+    help="Name of the worker key pair (one per booth PC, if you like). [worker]",
+)
 @click.option("--force", is_flag=True, help="Replace an existing key pair of that name.")
 def create(keys_dir: Path | None, worker_name: str | None, force: bool) -> None:
     """Create the server's key pair (once) and a worker's, and authorize the worker.
@@ -33,5 +37,7 @@ def create(keys_dir: Path | None, worker_name: str | None, force: bool) -> None:
         raise click.ClickException(str(exc)) from exc
     for path in made:
         click.echo(f"wrote {path}")
-    click.echo(f"The server accepts the workers whose public keys are in {folder / 'authorized'}. "
-               "Restart the server and workers to use the keys.")
+    click.echo(
+        f"The server accepts the workers whose public keys are in {folder / 'authorized'}. "
+        "Restart the server and workers to use the keys."
+    )

@@ -158,7 +158,9 @@ class _Columns:
 
 
 def read_take(
-    path: str | Path, *, rotation_factor: float = DEFAULT_ROTATION_FACTOR,
+    path: str | Path,
+    *,
+    rotation_factor: float = DEFAULT_ROTATION_FACTOR,
     fps: float | None = None,
 ) -> Take:
     """Read a Live Link Face take CSV; raises :class:`TakeError` naming file and line.

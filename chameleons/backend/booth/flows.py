@@ -339,8 +339,12 @@ class BoothFlow:
         slot = await self._read(slot_of, interaction_id)
         if slot is not None:
             reason = str(body.get("reason") or "The recording could not be written.")
-            job = partial(self._log, slot, RECORDING_FAILED,
-                          {"reason": reason, "stream": body.get("stream"), "source": "worker"})
+            job = partial(
+                self._log,
+                slot,
+                RECORDING_FAILED,
+                {"reason": reason, "stream": body.get("stream"), "source": "worker"},
+            )
             self._enqueue(f"session:{slot.session_id}", job)
 
     async def _index_reported(self, slot: Slot, body: dict[str, Any]) -> None:

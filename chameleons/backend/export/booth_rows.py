@@ -21,10 +21,7 @@ FIGURES = ("face_fps", "capture_to_send_ms", "head_yaw_deg", "head_pitch_deg", "
 def booth_check_rows(
     db: DbSession, study: Study, include_rehearsal: bool
 ) -> Iterator[dict[str, Any]]:
-    query = (
-        select(BoothCheck, Participant.code)
-        .join(Session, Session.id == BoothCheck.session_id)
-    )
+    query = select(BoothCheck, Participant.code).join(Session, Session.id == BoothCheck.session_id)
     query = joined(query, study.id, include_rehearsal).order_by(BoothCheck.checked_at,
                                                                 BoothCheck.id)  # fmt: skip
     for check, code in db.execute(query.execution_options(yield_per=BATCH)):

@@ -218,8 +218,9 @@ def questionnaire_rows(
             "value": answer.value,
             "scored_value": scored,
             "text": answer.text,
-            "named_condition": robots.get((answer.session_id, answer.questionnaire, answer.item,
-                                           answer.value)),
+            "named_condition": robots.get(
+                (answer.session_id, answer.questionnaire, answer.item, answer.value)
+            ),
             "skipped": answer.skipped,
             "answered_at": iso(answer.created_at),
         }

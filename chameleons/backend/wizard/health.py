@@ -113,7 +113,9 @@ def _flag(data: Mapping[str, Any], *names: str) -> bool | None:
 
 
 def evaluate(
-    telemetry: Mapping[str, Any] | None, age: float | None, limits: Thresholds | None = None,
+    telemetry: Mapping[str, Any] | None,
+    age: float | None,
+    limits: Thresholds | None = None,
     display: tuple[bool, str] | None = None,
 ) -> dict[str, Check]:
     """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds.

@@ -40,7 +40,9 @@ def test_notes_carry_the_step_and_reach_the_export_and_the_pi(
     assert during["interaction_id"] is not None
     assert during["source"] == "wizard"
     assert [n["payload"]["text"] for n in notes(wizard)] == [  # type: ignore[index]
-        "participant arrived late", "asked about the distance to the road"]
+        "participant arrived late",
+        "asked about the distance to the road",
+    ]
 
     bundle = zipfile.ZipFile(io.BytesIO(
         client.get("/api/pi/export.zip", params={"study": study_id}).content))  # fmt: skip

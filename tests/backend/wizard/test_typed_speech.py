@@ -51,7 +51,8 @@ def test_a_typed_sentence_becomes_audio_and_a_logged_deviation(
     assert audio.headers["content-type"] == "audio/wav"
     with wave.open(io.BytesIO(audio.content)) as wav:
         assert wav.getnframes() / wav.getframerate() == pytest.approx(
-            played["payload"]["duration"], abs=0.01)
+            played["payload"]["duration"], abs=0.01
+        )
     curve = client.get(media.replace(".wav", ".csv"))
     rows = list(csv.DictReader(io.StringIO(curve.text)))
     assert rows[0].keys() == {"time", "jawOpen"}

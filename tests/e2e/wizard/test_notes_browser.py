@@ -31,7 +31,8 @@ def test_a_note_from_the_keyboard_lands_on_the_timeline(console: Console) -> Non
     expect(note).to_have_value("")
     stored = [e for e in console.events() if e["kind"] == "wizard.note"]
     assert [e["payload"]["text"] for e in stored] == [  # type: ignore[index]
-        "participant laughed at the intro"]
+        "participant laughed at the intro"
+    ]
     page.keyboard.press("Escape")  # leaves the field; the keys work again
     expect(note).not_to_be_focused()
 
@@ -68,7 +69,8 @@ def test_timelines_filter_and_the_pi_reads_the_same_sentences(
     expect(first_name).to_contain_text("Phone: ranking submitted — 1. ")
     assert f"1. {ranking[0]}  2." not in first_name.inner_text()  # the id would read so
     expect(timeline.locator("li[data-kind='wizard.note'] .tl-text")).to_have_text(
-        "Note: hesitated long")
+        "Note: hesitated long"
+    )
     pi.locator("#timeline-filter").get_by_role("button", name="Notes").click()
     expect(timeline.locator("li:visible")).to_have_count(1)
     pi.context.close()
