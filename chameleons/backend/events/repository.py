@@ -14,6 +14,7 @@ from chameleons.backend.models.base import utcnow
 
 OUTBOX_KEY = "live_outbox"
 GONE_KEY = "live_gone_sessions"
+RESYNC_KEY = "live_resync_sessions"
 GONE: dict[str, Any] = {"type": "gone"}
 
 
@@ -21,6 +22,13 @@ def announce_gone(db: Session, session_ids: list[int]) -> None:
     """After the commit, tell whoever watches these sessions live that they no longer exist
     (a withdrawal deleted them): an open console tab says so instead of going stale."""
     db.info.setdefault(GONE_KEY, []).extend(session_ids)
+
+
+def announce_rewritten(db: Session, session_ids: set[int]) -> None:
+    """After the commit, tell live watchers of these sessions that events they were sent
+    have changed (a withdrawal emptied the ones quoting the withdrawn participant): they
+    read the whole timeline again instead of keeping the old texts."""
+    db.info.setdefault(RESYNC_KEY, []).extend(sorted(session_ids))
 
 
 def record(

@@ -18,8 +18,14 @@ from fastapi import Depends, Request
 from sqlalchemy import event as sa_event
 from sqlalchemy.orm import Session, sessionmaker
 
-from chameleons.backend.events.hub import LiveHub, session_channel
-from chameleons.backend.events.repository import GONE, GONE_KEY, OUTBOX_KEY, to_dict
+from chameleons.backend.events.hub import RESYNC, LiveHub, session_channel
+from chameleons.backend.events.repository import (
+    GONE,
+    GONE_KEY,
+    OUTBOX_KEY,
+    RESYNC_KEY,
+    to_dict,
+)
 from chameleons.backend.models import Event
 
 
@@ -38,12 +44,15 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
                 hub.publish(
                     session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
                 )
+        for session_id in session.info.pop(RESYNC_KEY, []):
+            hub.publish(session_channel(session_id), RESYNC)
         for session_id in session.info.pop(GONE_KEY, []):
             hub.publish(session_channel(session_id), GONE)
 
     def after_rollback(session: Session) -> None:
         session.info.pop(OUTBOX_KEY, None)
         session.info.pop(GONE_KEY, None)
+        session.info.pop(RESYNC_KEY, None)
 
     sa_event.listen(db, "after_commit", after_commit)
     sa_event.listen(db, "after_rollback", after_rollback)

@@ -22,6 +22,7 @@ from typing import Any
 from sqlalchemy import delete, or_, select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.events.repository import announce_rewritten
 from chameleons.backend.models import Event, Interaction, Participant, Recording, Session
 from chameleons.backend.withdrawal.files import JOURNAL_SUFFIX, RECORDINGS_DIR, recording_file
 
@@ -130,13 +131,14 @@ def redact_events(db: DbSession, study_id: int, withdrawn: Withdrawn) -> int:
     """Empty the payload of every remaining event of the study that quotes the withdrawn
     participant (code, interactions, recordings, deleted files). Returns how many."""
     query = select(Event).where(or_(Event.study_id == study_id, Event.study_id.is_(None)))
-    count = 0
+    rewritten: list[Event] = []
     for event in db.scalars(query):
         if event.payload != REDACTED and _quotes(event.payload, withdrawn):
             event.payload = dict(REDACTED)
-            count += 1
+            rewritten.append(event)
     db.flush()
-    return count
+    announce_rewritten(db, {e.session_id for e in rewritten if e.session_id is not None})
+    return len(rewritten)
 
 
 ID_KEYS = {

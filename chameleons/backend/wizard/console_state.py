@@ -21,27 +21,42 @@ from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.backend.wizard import layout
 from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
-from chameleons.backend.wizard.repository import PLAYED
 
 TIMELINE_LIMIT = 5000
 
 
-def console_state(db: Session, app_state: Any, session_id: int, base_url: str) -> dict[str, Any]:
-    """Raises the session flow's ``NotFoundError`` for an unknown session."""
+def console_state(
+    db: Session,
+    app_state: Any,
+    session_id: int,
+    base_url: str,
+    new_events: list[dict[str, Any]] | None = None,
+) -> dict[str, Any]:
+    """Raises the session flow's ``NotFoundError`` for an unknown session.
+
+    With ``new_events`` (the events a live console was just sent, as published after their
+    commit) the state carries only those (``events_delta``): the console adds them to the
+    timeline it holds instead of the server reading and sending the whole timeline after
+    every change (the largest cost of a busy server, docs/performance.md). Without, the
+    whole timeline (first message, a reload, or a subscriber that fell behind)."""
     flow = load_flow(db, session_id, lock=False)
     hub: LiveHub = app_state.live_hub
     snapshot = session_snapshot(flow, base_url, devices.phones(hub, session_id))
     position = prompt_position(flow)
-    timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
-    return {
+    state: dict[str, Any] = {
         "session": snapshot,
         "prompt_position": position,
         "suggestion_prompts": _suggestion_prompts(app_state, snapshot, position),
-        "events": [events.to_dict(event) for event in timeline],
-        "last_event_id": timeline[-1].id if timeline else 0,
-        "last_play_id": next((e.id for e in reversed(timeline) if e.kind == PLAYED), None),
         "worker": {"bridge": getattr(app_state, "bridge", None) is not None},
     }
+    if new_events is None:
+        timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
+        state["events"] = [events.to_dict(event) for event in timeline]
+        state["last_event_id"] = timeline[-1].id if timeline else 0
+    else:
+        state["events"] = sorted(new_events, key=lambda event: int(event["id"]))
+        state["events_delta"] = True
+    return state
 
 
 def prompt_position(flow: Flow) -> int:

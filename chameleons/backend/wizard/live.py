@@ -2,8 +2,10 @@
 
 On connect ``{"type": "console", ...}`` (the whole console state); then, per batch of
 committed changes, each new event as ``{"type": "event", ...}`` followed by a fresh console
-state; and once a second the robot's health as ``{"type": "health", ...}``. When the session
-is deleted (its participant withdrawn), ``{"type": "gone"}`` and the socket closes.
+state whose timeline holds only that batch's events (``events_delta``; the whole timeline
+again after a ``resync``); and once a second the robot's health as
+``{"type": "health", ...}``. When the session is deleted (its participant withdrawn),
+``{"type": "gone"}`` and the socket closes.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import sessions as staff_sessions
 from chameleons.backend.events import guard, live
-from chameleons.backend.events.hub import LiveHub, Message, session_channel
+from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_channel
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
@@ -49,8 +51,18 @@ def _is_staff(db: Any, cookie: dict[str, Any]) -> bool:
     return staff_sessions.staff_of(db, cookie) is not None
 
 
-def _state_message(db: Any, state: Any, session_id: int, base_url: str) -> Message:
-    return {"type": "console", **console_state(db, state, session_id, base_url)}
+def _state_message(
+    db: Any, state: Any, session_id: int, base_url: str, new_events: list[Message] | None = None
+) -> Message:
+    return {"type": "console", **console_state(db, state, session_id, base_url, new_events)}
+
+
+def _new_events(messages: list[Message]) -> list[Message] | None:
+    """The events of a batch, or None when the subscription fell behind (a ``resync``: the
+    batch is not the whole story, so the console gets its whole timeline again)."""
+    if any(message.get("type") == RESYNC["type"] for message in messages):
+        return None
+    return [message["event"] for message in messages if message.get("type") == "event"]
 
 
 @router.websocket("/ws/wizard/sessions/{session_id}")
@@ -63,20 +75,24 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
         await websocket.close(code=UNAUTHORIZED)
         return
     base_url = live.base_url(websocket)
-    try:
-        first = await run_in_threadpool(read, state, _state_message, state, session_id, base_url)
-    except NotFoundError:
-        # Accepted first so the console learns why (a refused handshake looks like a
-        # network failure and it would retry for ever); staff only, checked above.
-        await websocket.accept()
-        await live.send_json(websocket, GONE)
-        await websocket.close(code=NOT_FOUND)
-        return
-    await websocket.accept()
-    sender = Sender(websocket)
     hub: LiveHub = state.live_hub
-    booth = str(first["session"]["booth"])
+    # Subscribed before the first read: a change committed meanwhile reaches this console
+    # as a message (its event is then in both; the console keeps one of each id).
     async with hub.subscribe(session_channel(session_id)) as subscription:
+        try:
+            first = await run_in_threadpool(
+                read, state, _state_message, state, session_id, base_url
+            )
+        except NotFoundError:
+            # Accepted first so the console learns why (a refused handshake looks like a
+            # network failure and it would retry for ever); staff only, checked above.
+            await websocket.accept()
+            await live.send_json(websocket, GONE)
+            await websocket.close(code=NOT_FOUND)
+            return
+        await websocket.accept()
+        sender = Sender(websocket)
+        booth = str(first["session"]["booth"])
         await sender.send(first)
 
         reads: set[asyncio.Future[Message]] = set()
@@ -91,8 +107,11 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
                     return GONE  # withdrawn: the tab says so and stops reconnecting
                 # Shielded: a read cut off by a disconnect still finishes (and gives its
                 # database connection back) before the handler returns.
+                new_events = _new_events(messages)
                 reading = asyncio.ensure_future(
-                    run_in_threadpool(read, state, _state_message, state, session_id, base_url)
+                    run_in_threadpool(
+                        read, state, _state_message, state, session_id, base_url, new_events
+                    )
                 )
                 reads.add(reading)
                 reading.add_done_callback(reads.discard)

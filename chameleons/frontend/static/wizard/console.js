@@ -139,9 +139,21 @@ async function refresh() {
   }
 }
 
+/** A live update carries only the events new since the last one (events_delta): they join
+ * the events this page holds. Anything else is the whole timeline: it replaces them. */
+function withHeldEvents(next) {
+  if (!next.events_delta) return next;
+  const held = state ? state.events : [];
+  const known = new Set(held.map((e) => e.id));
+  const events = held.concat(next.events.filter((e) => !known.has(e.id)));
+  events.sort((a, b) => a.id - b.id); // already in order but for a rare late commit
+  return { ...next, events };
+}
+
 async function apply(next) {
   if (gone) return;
-  state = next;
+  if (!next.events_delta) timeline.reset(); // texts may have changed (a withdrawal)
+  state = withHeldEvents(next);
   if (state.prompt_position !== promptsPosition) {
     promptsPosition = state.prompt_position;
     try {

@@ -128,7 +128,7 @@ export class Timeline {
   sync(events, names) {
     if (events.length && events[0].id < this.lastId && !this.rows.has(events[0].id)) this.reset();
     for (const event of events) {
-      if (event.id <= this.lastId) continue;
+      if (this.rows.has(event.id)) continue; // (a late commit can come below lastId)
       this.add(event, names);
     }
   }
