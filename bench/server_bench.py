@@ -43,6 +43,7 @@ from bench.server_load import (
     Console,
     Figures,
     Server,
+    cpu_seconds,
     run_threads,
     scratch_postgres,
 )
@@ -161,18 +162,30 @@ def run_real(database_url: str, phones: int, think_max: float, seed: int) -> dic
         real = RealServer(server, setup["cookies"], setup["csrf"], setup["study_id"])
         think_figures, burst_figures = Figures(), Figures()
         walkers = [real.new_phone() for _ in range(phones)]
-        run_threads([partial(walk_session, phone, think_figures, random.Random(seed + i),
-                             think_max) for i, phone in enumerate(walkers)])  # fmt: skip
+        with server_cpu(server, think_figures):
+            run_threads([partial(walk_session, phone, think_figures, random.Random(seed + i),
+                                 think_max) for i, phone in enumerate(walkers)])  # fmt: skip
         burst = [real.new_phone() for _ in range(phones)]
         for phone in burst:  # one after the other: the burst is the phones' alone
             phone.wizard.start()
             for to in ("discussion", "ranking"):
                 phone.wizard.advance(1, to)
-        run_threads([partial(submit_ranking, phone, burst_figures) for phone in burst],
-                    together=True)  # fmt: skip
+        with server_cpu(server, burst_figures):
+            run_threads([partial(submit_ranking, phone, burst_figures) for phone in burst],
+                        together=True)  # fmt: skip
         for phone in real.phones:
             phone.console.close()
         return {"think": think_figures.summary(), "burst": burst_figures.summary()}
+
+
+@contextmanager
+def server_cpu(server: Server, figures: Figures) -> Iterator[None]:
+    """The server process's CPU time over the block, noted in ``figures`` (the wizard's
+    actions of the think scenario are in it too: per submission, it is the server's cost of
+    a whole session divided by the phone's submissions)."""
+    before = cpu_seconds(server.process.pid)
+    yield
+    figures.server_cpu_s = cpu_seconds(server.process.pid) - before
 
 
 def submit_ranking(phone: Phone, figures: Figures) -> None:
@@ -208,11 +221,13 @@ def run_baseline(phones: int, submissions: int, think_max: float, seed: int) -> 
     with Server.baseline() as server:
         think_figures, burst_figures = Figures(), Figures()
         walkers = [BaselinePhone(server, f"think-{i}") for i in range(phones)]
-        run_threads([partial(phone.submit, think_figures, submissions, think_max, seed + i)
-                     for i, phone in enumerate(walkers)])  # fmt: skip
+        with server_cpu(server, think_figures):
+            run_threads([partial(phone.submit, think_figures, submissions, think_max, seed + i)
+                         for i, phone in enumerate(walkers)])  # fmt: skip
         burst = [BaselinePhone(server, f"burst-{i}") for i in range(phones)]
-        run_threads([partial(phone.submit, burst_figures, 1, 0.0, 0) for phone in burst],
-                    together=True)  # fmt: skip
+        with server_cpu(server, burst_figures):
+            run_threads([partial(phone.submit, burst_figures, 1, 0.0, 0) for phone in burst],
+                        together=True)  # fmt: skip
         for phone in walkers + burst:
             phone.close()
         return {"think": think_figures.summary(), "burst": burst_figures.summary()}
@@ -228,8 +243,11 @@ def _post_json(http: Any, path: str, body: dict[str, Any]) -> Any:
 @contextmanager
 def databases(args: argparse.Namespace) -> Iterator[list[tuple[str, str]]]:
     with tempfile.TemporaryDirectory(prefix="chameleons-bench-") as tmp:
-        found = [] if args.only == "postgresql" else [
-            ("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
+        found = (
+            []
+            if args.only == "postgresql"
+            else [("SQLite", f"sqlite:///{Path(tmp) / 'bench.sqlite3'}")]
+        )
         server_url = args.database_url or os.environ.get("TEST_DATABASE_URL")
         if args.only == "sqlite" or not server_url:
             yield found
@@ -249,6 +267,9 @@ def print_table(name: str, result: dict[str, Any], baseline: dict[str, Any]) -> 
             label = "HTTP round trip" if figure == "http" else "submit -> console update"
             errors = ours["errors"] if figure == "update" else ""
             print(f"{scenario:<8} {label:<26} {p50:>8.1f} {p99:>8.1f} {ratio:>10.1f}x {errors}")
+        cpu, base_cpu = ours["server_cpu_ms_per_submission"], base["server_cpu_ms_per_submission"]
+        ratio = cpu / base_cpu if base_cpu else float("nan")
+        print(f"{scenario:<8} {'server CPU / submission':<26} {cpu:>8.1f} {'':>8} {ratio:>10.1f}x")
 
 
 def main() -> None:
@@ -257,8 +278,9 @@ def main() -> None:
     parser.add_argument("--think-max", type=float, default=3.0, help="Seconds (uniform 0..T).")
     parser.add_argument("--quick", action="store_true", help="10 phones, 0.5 s think time.")
     parser.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
-    parser.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
-                        help="Run one database only.")
+    parser.add_argument(
+        "--only", choices=("sqlite", "postgresql"), default=None, help="Run one database only."
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="Also write the figures here.")
     args = parser.parse_args()

@@ -34,6 +34,14 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process so far (Linux ``/proc``): unlike latencies, a
+    figure that a busy machine does not inflate."""
+    with open(f"/proc/{pid}/stat") as handle:
+        fields = handle.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def percentile(values: list[float], q: float) -> float:
     """The q-quantile by nearest rank (enough for p50/p99 of hundreds of samples)."""
     if not values:
@@ -47,6 +55,7 @@ class Figures:
     http: list[float] = field(default_factory=list)
     update: list[float] = field(default_factory=list)
     errors: Counter[str] = field(default_factory=Counter)
+    server_cpu_s: float = 0.0  # the server process's CPU time over the scenario
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def add(self, *, http: float | None, update: float | None) -> None:
@@ -65,8 +74,10 @@ class Figures:
             ms = {f"{name}_{label}_ms": round(percentile(values, q) * 1000, 2)
                   for name, values in (("http", self.http), ("update", self.update))
                   for label, q in (("p50", 0.5), ("p99", 0.99))}  # fmt: skip
-            return {**ms, "submissions": len(self.http) + sum(self.errors.values()),
-                    "errors": dict(self.errors)}  # fmt: skip
+            submissions = len(self.http) + sum(self.errors.values())
+            cpu_ms = 1000 * self.server_cpu_s / submissions if submissions else 0.0
+            return {**ms, "submissions": submissions, "errors": dict(self.errors),
+                    "server_cpu_ms_per_submission": round(cpu_ms, 2)}  # fmt: skip
 
 
 class Console:

@@ -30,6 +30,7 @@ import numpy as np
 import zmq
 
 from bench.probes import AMPLITUDE, ProbeWorker, TrianglePhone, delay_errors
+from bench.server_load import cpu_seconds
 from chameleons.worker.envelope import Message, deserialize, serialize
 from chameleons.worker.renderer import RenderLoop
 from chameleons.worker.runtime import GIL_SWITCH_INTERVAL, Worker, WorkerConfig
@@ -153,12 +154,6 @@ def copy_latency(duration: float, delay: float) -> Row:
 
 
 # --- 5: booths per machine ------------------------------------------------------------------
-def _cpu_seconds(pid: int) -> float:
-    with open(f"/proc/{pid}/stat") as handle:
-        fields = handle.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def booths(count: int, duration: float) -> Row:
     """``count`` worker processes with a phone each; per-second p99 jitter from telemetry."""
     context: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -190,11 +185,11 @@ def booths(count: int, duration: float) -> Row:
                 beats[body["booth"]].append(body)
                 if all(len(v) > WARMUP_BEATS for v in beats.values()):
                     started = time.monotonic()
-                    cpu0 = [_cpu_seconds(p.pid) for p in processes[::2]]
+                    cpu0 = [cpu_seconds(p.pid) for p in processes[::2]]
                     beats = {booth: [] for booth in beats}
             elif started is not None and ready:
                 beats[body["booth"]].append(body)
-        cpu = [(_cpu_seconds(p.pid) - c) / duration for p, c in zip(processes[::2], cpu0,
+        cpu = [(cpu_seconds(p.pid) - c) / duration for p, c in zip(processes[::2], cpu0,
                                                                     strict=True)]  # fmt: skip
     finally:
         for process in processes:

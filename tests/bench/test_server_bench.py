@@ -29,4 +29,7 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     for scenario in (real["think"], real["burst"], baseline["think"], baseline["burst"]):
         assert scenario["errors"] == {}
         assert scenario["update_p99_ms"] > 0
+        assert scenario["server_cpu_ms_per_submission"] >= 0  # clock ticks: a burst of 2 may be 0
+    assert real["think"]["server_cpu_ms_per_submission"] > 0  # two whole sessions cost CPU
     assert "submit -> console update" in done.stdout
+    assert "server CPU / submission" in done.stdout
