@@ -10,7 +10,10 @@
 3. the copy delay's error (realised delay - 4.000 s) on the head pose and the face;
 4. CPU per booth (one worker process with its phone in another process);
 5. how many booths (worker processes, each with a phone process) this machine carries
-   while every booth's p99 tick jitter stays under 1 ms.
+   while every booth's p99 tick jitter stays under 1 ms;
+6. one booth with the renderer in a process of its own (``--renderer-process``), and with
+   real-time scheduling too (``--realtime``; refused without the privilege, then normal),
+   against the in-process booth of 5 (per-second p99 jitter from the heartbeat).
 Linux only (reads /proc for per-process CPU).
 """
 
@@ -19,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import socket
 import subprocess
 import sys
 import threading
@@ -54,6 +58,13 @@ def _wait_for(condition: Callable[[], bool], timeout: float, what: str) -> None:
         if time.monotonic() > deadline:
             raise RuntimeError(f"benchmark: {what} did not happen within {timeout} s")
         time.sleep(0.05)
+
+
+def free_udp_port() -> int:
+    """A UDP port free now, for a worker's Live Link input (no fixed ports: tests run too)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
 
 
 def _phone(port: int, duration: float, seed: int = 0) -> subprocess.Popen[bytes]:
@@ -154,22 +165,24 @@ def copy_latency(duration: float, delay: float) -> Row:
 
 
 # --- 5: booths per machine ------------------------------------------------------------------
-def booths(count: int, duration: float) -> Row:
-    """``count`` worker processes with a phone each; per-second p99 jitter from telemetry."""
+def booths(count: int, duration: float, options: tuple[str, ...] = ()) -> Row:
+    """``count`` worker processes with a phone each; per-second p99 jitter from telemetry.
+    ``options`` go to each worker (``--renderer-process``: then the CPU figure is the
+    worker's alone, without its renderer child)."""
     context: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = context.socket(zmq.SUB)
     sub.setsockopt(zmq.SUBSCRIBE, b"telemetry.")
     sub.bind("tcp://127.0.0.1:*")
     telemetry = sub.getsockopt_string(zmq.LAST_ENDPOINT)
     processes: list[subprocess.Popen[bytes]] = []
-    ports = [21100 + 7 * i for i in range(count)]
+    ports = [free_udp_port() for _ in range(count)]
     try:
         for i, port in enumerate(ports):
             processes.append(subprocess.Popen(
                 [sys.executable, "-m", "chameleons.cli.worker_command", "--booth", f"b{i}",
                  "--driver", "null", "--behaviour", "copy", "--livelink-port", str(port),
                  "--facecapturex-port", "0", "--control", "tcp://127.0.0.1:1",
-                 "--telemetry", telemetry], stdout=subprocess.DEVNULL))  # fmt: skip
+                 "--telemetry", telemetry, *options], stdout=subprocess.DEVNULL))  # fmt: skip
             processes.append(_phone(port, duration + 120, seed=i))
         beats: dict[str, list[dict[str, Any]]] = {f"b{i}": [] for i in range(count)}
         deadline, started = time.monotonic() + 90, None
@@ -224,6 +237,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         results["booths"].append(row)
         if row["worst_booth_median_p99_ms"] >= 1.0:
             break
+    # 6: the renderer (and driver) in a process of its own, then also real-time scheduled.
+    results["renderer_process"] = booths(1, args.booth_seconds, ("--renderer-process",))
+    results["renderer_realtime"] = booths(1, args.booth_seconds,
+                                          ("--renderer-process", "--realtime"))  # fmt: skip
     results["load_after"] = os.getloadavg()
     return results
 
@@ -260,6 +277,14 @@ def table(r: dict[str, Any]) -> str:
                      "< 1 ms", f"CPU {100 * row['cpu_per_booth']:.1f}%/booth"))  # fmt: skip
     ok = [row["booths"] for row in r["booths"] if row["worst_booth_median_p99_ms"] < 1.0]
     rows.append(("5 booths carried with p99 jitter < 1 ms", str(max(ok, default=0)), "", ""))
+    one = r["booths"][0]["worst_booth_median_p99_ms"]
+    for name, key in (("renderer process", "renderer_process"),
+                      ("renderer process, real-time", "renderer_realtime")):  # fmt: skip
+        row = r[key]
+        rows.append((f"6 1 booth, {name}: median p99 / max p99 (ms)",
+                     f"{row['worst_booth_median_p99_ms']:.3f} / {row['max_p99_ms']:.3f}",
+                     f"{one:.3f} (in-process)",
+                     ratio(row["worst_booth_median_p99_ms"], one)))  # fmt: skip
     widths = [max(len(row[i]) for row in rows) for i in range(4)]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
