@@ -17,7 +17,10 @@ class Study(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True)
     name: Mapped[str] = mapped_column(String(120))
-    config: Mapped[dict[str, Any]]
+    # Loaded when read: every session read loads its study, and the parsed study is cached
+    # by config_hash (studies.specs.spec_of), so decoding the whole document each time
+    # was most of the cost of loading a session.
+    config: Mapped[dict[str, Any]] = mapped_column(deferred=True)
     config_hash: Mapped[str] = mapped_column(String(64), index=True)
     plan_seed: Mapped[int] = mapped_column(default=0)
     is_active: Mapped[bool] = mapped_column(default=True)

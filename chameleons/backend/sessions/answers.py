@@ -63,11 +63,21 @@ def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
 
 def answered(flow: Flow, position: int) -> set[str]:
     """Ids of the questionnaires of this position already stored."""
-    query = select(QuestionnaireResponse.questionnaire).where(
+    query = select(QuestionnaireResponse.questionnaire).distinct().where(
         QuestionnaireResponse.session_id == flow.session.id,
         QuestionnaireResponse.position == position,
     )
     return set(flow.db.scalars(query))
+
+
+def answered_by_position(flow: Flow) -> dict[int, set[str]]:
+    """``answered`` for every position of the session, in one query (the snapshot's)."""
+    query = select(QuestionnaireResponse.position, QuestionnaireResponse.questionnaire).distinct()
+    query = query.where(QuestionnaireResponse.session_id == flow.session.id)
+    found: dict[int, set[str]] = {}
+    for position, questionnaire in flow.db.execute(query):
+        found.setdefault(position, set()).add(questionnaire)
+    return found
 
 
 def submit_questionnaire(

@@ -68,6 +68,19 @@ class Flow:
         )
         return list(self.db.scalars(query))
 
+    def suggestions_by_interaction(self) -> dict[int, list[Suggestion]]:
+        """``suggestions`` of every interaction, in one query (the snapshot's)."""
+        ids = [interaction.id for interaction in self.interactions]
+        query = (
+            select(Suggestion)
+            .where(Suggestion.interaction_id.in_(ids))
+            .order_by(Suggestion.interaction_id, Suggestion.index)
+        )
+        found: dict[int, list[Suggestion]] = {i: [] for i in ids}
+        for suggestion in self.db.scalars(query):
+            found[suggestion.interaction_id].append(suggestion)
+        return found
+
     def row_number(self) -> int:
         row = self.db.get(PlanRow, self.session.plan_row_id)
         return row.row_number if row else 0

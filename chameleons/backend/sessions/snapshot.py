@@ -6,7 +6,11 @@ from typing import Any
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Interaction, Suggestion
-from chameleons.backend.sessions.answers import FINAL_POSITION, answered, questionnaires_for
+from chameleons.backend.sessions.answers import (
+    FINAL_POSITION,
+    answered_by_position,
+    questionnaires_for,
+)
 from chameleons.backend.sessions.flow import Flow, allowed_actions, undo_deadline
 from chameleons.backend.sessions.pausing import paused_view
 from chameleons.backend.sessions.states import allowed_sentence
@@ -25,6 +29,9 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
     """``phones``: the phones on the link now, oldest first (``phone.devices.phones``)."""
     session = flow.session
     actions = allowed_actions(flow)
+    # One query each for every interaction's suggestions and answers (not one per part).
+    suggestions = flow.suggestions_by_interaction()
+    done = answered_by_position(flow)
     return {
         "id": session.id,
         "study_id": session.study_id,
@@ -55,8 +62,11 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
         "conditions": list(flow.spec.condition_ids),
         "suggestions_per_interaction": flow.spec.suggestions_per_interaction,
         "condition_details": [_condition(c) for c in flow.spec.conditions],
-        "interactions": [_interaction(flow, interaction) for interaction in flow.interactions],
-        "final_questionnaire": _progress(flow, FINAL_POSITION),
+        "interactions": [
+            _interaction(flow, i, suggestions[i.id], done.get(i.position, set()))
+            for i in flow.interactions
+        ],
+        "final_questionnaire": _progress(flow, FINAL_POSITION, done.get(FINAL_POSITION, set())),
         "allowed": actions,
         "allowed_sentence": allowed_sentence(actions),
         "version": events.last_id(flow.db, session.id),
@@ -84,10 +94,11 @@ def behaviour_summary(condition: Condition) -> str:
     return condition.behaviour + (f" ({shown})" if shown else "")
 
 
-def _interaction(flow: Flow, interaction: Interaction) -> dict[str, Any]:
+def _interaction(
+    flow: Flow, interaction: Interaction, suggestions: list[Suggestion], done: set[str]
+) -> dict[str, Any]:
     task = flow.spec.task(interaction.task)
     items = [task.item(item_key(str(item_id))) for item_id in interaction.presented_order]
-    suggestions = flow.suggestions(interaction)
     return {
         "position": interaction.position,
         "state": interaction.state,
@@ -126,7 +137,7 @@ def _interaction(flow: Flow, interaction: Interaction) -> dict[str, Any]:
         "ended_at": _time(interaction.ended_at),
         "suggestions": [_suggestion(flow, interaction, s) for s in suggestions],
         "accepted": sum(1 for s in suggestions if s.accepted),
-        "questionnaires": _progress(flow, interaction.position),
+        "questionnaires": _progress(flow, interaction.position, done),
     }
 
 
@@ -147,7 +158,6 @@ def _suggestion(flow: Flow, interaction: Interaction, suggestion: Suggestion) ->
     }
 
 
-def _progress(flow: Flow, position: int) -> dict[str, Any]:
+def _progress(flow: Flow, position: int, done: set[str]) -> dict[str, Any]:
     required = [q.id for q in questionnaires_for(flow, position)]
-    done = answered(flow, position)
     return {"required": required, "answered": [q for q in required if q in done]}
