@@ -138,6 +138,23 @@ def language_name(language: str) -> str:
     return name[:1].upper() + name[1:] if name else language
 
 
+def preferred_language(accept_language: str) -> str:
+    """The first language of an ``Accept-Language`` header that has a catalogue (by weight,
+    then order), else English."""
+    available = set(catalogue_languages())
+    ranked: list[tuple[float, int, str]] = []
+    for index, part in enumerate(accept_language.split(",")[:20]):
+        tag, _, quality = part.strip().partition(";q=")
+        code = tag.split("-")[0].strip().lower()
+        try:
+            weight = float(quality) if quality else 1.0
+        except ValueError:
+            continue
+        if code in available:
+            ranked.append((-weight, index, code))
+    return min(ranked)[2] if ranked else SOURCE_LANGUAGE
+
+
 def gettext(language: str, message: str, **params: object) -> str:
     """``message`` in ``language``, with ``{name}`` placeholders filled in."""
     text = translations(language).gettext(message)
