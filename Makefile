@@ -42,7 +42,8 @@ i18n-extract: $(STAMP)
 	done
 
 # Optional: the app reads the .po files directly; compiled .mo files (newer than their .po)
-# are used instead, and compiling checks the catalogues.
+# are used instead, and compiling checks the catalogues. `make test` compiles them too, in a
+# temporary folder (tests/i18n/test_compile.py), and fails on any error or warning.
 i18n-compile: $(STAMP)
 	$(BIN)/pybabel compile --statistics -D messages -d $(LOCALE)
 	$(BIN)/pybabel compile --statistics -D phone -d $(LOCALE)

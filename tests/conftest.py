@@ -27,7 +27,7 @@ from chameleons.backend.models import Base
 from chameleons.settings import Settings
 from tests.support.live_server import LiveServer
 
-pytest_plugins = ["tests.support.browser"]
+pytest_plugins = ["tests.support.browser", "tests.support.catalogues"]
 
 BACKENDS = ["sqlite", "postgres"]
 

@@ -19,7 +19,10 @@ endless "connection is down" retry, since the phone retries only 5xx):
 
 A pure ASGI middleware: it buffers only JSON and form bodies (which FastAPI reads whole
 anyway) and hands the same bytes on. Multipart bodies pass through (files may hold NULs).
-The messages are plain sentences in ``detail``, which the phone shows as they are.
+The messages are plain sentences in ``detail``, which the phone shows as they are. On the
+participant's routes they are in the participant's language: the phone's script sends its
+page's language (the session's) as ``Accept-Language``; ``/join``'s form has the browser's
+own, as its page does. This runs before any route, so it reads no session.
 """
 
 from __future__ import annotations
@@ -32,17 +35,22 @@ from urllib.parse import parse_qsl
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from chameleons.i18n import N_, preferred_language, translations
+
 DB_INT_LIMIT = 2**63  # SQLite INTEGER and PostgreSQL BIGINT hold -2**63 .. 2**63 - 1
 MAX_ROW_ID = 2**31 - 1  # PostgreSQL INTEGER: every row id but the events'
 _WHOLE_NUMBER = re.compile(r"-?\d+")
 
-NUL_IN_ADDRESS = "The address contains a NUL character (0x00), which is not allowed."
-NUL_IN_TEXT = "Text may not contain a NUL character (0x00). Please remove it and try again."
-NOT_UNICODE = "Text must be valid Unicode (it contains a lone surrogate escape such as \\ud800)."
-NOT_FINITE = "Numbers must be finite: NaN and Infinity are not allowed."
-TOO_LARGE = "A whole number in the request is too large (the limit is 2^63 - 1)."
-TOO_LARGE_IN_ADDRESS = "A number in the address is too large (the limit is 2147483647)."
+NUL_IN_ADDRESS = N_("The address contains a NUL character (0x00), which is not allowed.")
+NUL_IN_TEXT = N_("Text may not contain a NUL character (0x00). Please remove it and try again.")
+NOT_UNICODE = N_(
+    "Text must be valid Unicode (it contains a lone surrogate escape such as \\ud800)."
+)
+NOT_FINITE = N_("Numbers must be finite: NaN and Infinity are not allowed.")
+TOO_LARGE = N_("A whole number in the request is too large (the limit is 2^63 - 1).")
+TOO_LARGE_IN_ADDRESS = N_("A number in the address is too large (the limit is 2147483647).")
 NO_SUCH_THING = "Not Found"
+PARTICIPANT_PREFIXES = ("/api/phone/", "/p/")
 
 
 class _Refused(Exception):  # noqa: N818 (a refusal carrying its message, not a fault)
@@ -129,6 +137,17 @@ def _body_checker(scope: Scope) -> Any:
     return None
 
 
+def in_language(scope: Scope, message: str) -> str:
+    """``message`` in the participant's language on their routes; English elsewhere."""
+    path = scope["path"]
+    if not (path.startswith(PARTICIPANT_PREFIXES) or path == "/join"):
+        return message
+    header = next(
+        (v.decode("latin-1") for n, v in scope.get("headers", ()) if n == b"accept-language"), ""
+    )
+    return translations(preferred_language(header)).gettext(message)
+
+
 class InputGuardMiddleware:
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -142,7 +161,8 @@ class InputGuardMiddleware:
             if scope["type"] == "websocket":
                 await send({"type": "websocket.close", "code": 1008})  # before accept: a 403
             else:
-                await JSONResponse({"detail": refused[1]}, refused[0])(scope, receive, send)
+                detail = in_language(scope, refused[1])
+                await JSONResponse({"detail": detail}, refused[0])(scope, receive, send)
             return
         checker = _body_checker(scope) if scope["type"] == "http" else None
         if checker is None:
@@ -152,7 +172,8 @@ class InputGuardMiddleware:
         try:
             checker(body)
         except _Refused as refusal:
-            await JSONResponse({"detail": refusal.message}, 422)(scope, receive, send)
+            detail = in_language(scope, refusal.message)
+            await JSONResponse({"detail": detail}, 422)(scope, receive, send)
             return
         await self.app(scope, _replay(messages, receive), send)
 

@@ -6,6 +6,9 @@ introductions, item names, questionnaire titles, items, anchors and options, con
 debriefing) may then be a plain string (the same in every language) or a mapping per
 language, ``{en: ..., sv: ...}``. Every mapping must give every declared language and no
 other: a missing translation is a problem at its place (``file:line`` in a study file).
+Every declared language but English also needs the phone's own texts translated
+(``chameleons/locale/<lang>/``, see :mod:`chameleons.i18n`): a study file declaring one
+without them is refused; a stored study only warns, as does a catalogue lacking some texts.
 
 The loader builds the study once per language from :func:`resolve`\\ d copies of the
 document; :func:`merge` folds the per-language snapshots into one, with a mapping wherever
@@ -20,6 +23,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from chameleons.experiment.reader import Reader, join
+from chameleons.i18n import has_phone_catalogue, untranslated_phone_texts
 
 LANGUAGE = re.compile(r"^[a-z]{2,3}(-[A-Za-z0-9]{2,8})?$")
 # Keys whose value is a text the participant may see (a study's own name and description
@@ -55,6 +59,35 @@ def read_languages(reader: Reader, top: Mapping[str, Any]) -> tuple[tuple[str, .
         reader.problem("default_language", f"{default!r} is not one of languages {languages}")
         default = languages[0]
     return tuple(languages), str(default)
+
+
+def catalogue_notes(
+    top: Mapping[str, Any], declared: tuple[str, ...]
+) -> tuple[list[str], list[str]]:
+    """(missing, incomplete): ``place: sentence`` for each declared language whose phone
+    has no catalogue of its own texts (buttons, progress, errors, offline notices: they
+    would stay in English), and for each whose catalogue lacks some of them."""
+    listed = top.get("languages")
+    listed = listed if isinstance(listed, list) else []
+    missing: list[str] = []
+    incomplete: list[str] = []
+    for code in declared:
+        place = join("languages", listed.index(code)) if code in listed else "languages"
+        if not has_phone_catalogue(code):
+            missing.append(
+                f"{place}: {code!r} has no translation of the phone's own texts (buttons, "
+                f"progress, errors, offline notices), which would stay in English. Add one: "
+                f"`make i18n-extract`, then `pybabel init` a {code} catalogue for each domain "
+                f'(README, "Adding a language") and translate '
+                f"chameleons/locale/{code}/LC_MESSAGES/messages.po and phone.po"
+            )
+        elif count := untranslated_phone_texts(code):
+            incomplete.append(
+                f"{place}: {count} of the phone's own texts have no {code} translation in "
+                f"chameleons/locale/{code}/LC_MESSAGES/ (the phone shows them in English; "
+                f"`make test` fails until they are translated)"
+            )
+    return missing, incomplete
 
 
 def is_translated(value: object) -> bool:

@@ -174,6 +174,9 @@ def _build(
     reader.check_keys(top, "", TOP_LEVEL_REQUIRED, TOP_LEVEL_OPTIONAL)
     declared, default = languages.read_languages(reader, top)
     languages.check(reader, top, declared)
+    missing, incomplete = languages.catalogue_notes(top, declared)
+    # A new study is refused; a stored one (data collected under it) is only warned about.
+    reader.problems.extend([] if snapshot else missing)
     resolved = languages.resolve(top, default, default)
     parts, name_genders = _read_parts(reader, resolved, behaviours, snapshot)
     if reader.problems:
@@ -190,7 +193,8 @@ def _build(
     if "languages" in top:  # a study without them keeps the hash it had before
         config = {**config, "languages": list(declared), "default_language": default}
     digest = hashlib.sha256(canonical_json(config).encode("utf-8")).hexdigest()
-    warnings = tuple(duplicate_wording(parts["questionnaires"]))
+    notes = (missing if snapshot else []) + incomplete
+    warnings = (*notes, *duplicate_wording(parts["questionnaires"]))
     common = {
         "config": config,
         "content_hash": digest,

@@ -40,6 +40,50 @@ def catalogue_languages() -> tuple[str, ...]:
     return (SOURCE_LANGUAGE, *[lang for lang in found if lang != SOURCE_LANGUAGE])
 
 
+def has_phone_catalogue(language: str) -> bool:
+    """Whether the phone can show its own texts in ``language``: English (any region) is
+    the source language; every other needs both domains' ``.po``."""
+    if language.split("-")[0].lower() == SOURCE_LANGUAGE:
+        return True
+    folder = LOCALE_DIR / language / "LC_MESSAGES"
+    return all((folder / f"{domain}.po").is_file() for domain in DOMAINS)
+
+
+def untranslated_phone_texts(language: str) -> int:
+    """How many of the templates' entries (``<domain>.pot``) ``language``'s catalogues lack,
+    leave empty or mark fuzzy: the phone shows those in English."""
+    if language.split("-")[0].lower() == SOURCE_LANGUAGE:
+        return 0
+    files = [LOCALE_DIR / language / "LC_MESSAGES" / f"{d}.po" for d in DOMAINS]
+    files += [LOCALE_DIR / f"{d}.pot" for d in DOMAINS]
+    stamp = tuple(f.stat().st_mtime_ns if f.is_file() else 0 for f in files)
+    return _untranslated(LOCALE_DIR, language, stamp)
+
+
+@functools.lru_cache(maxsize=32)
+def _untranslated(locale_dir: Path, language: str, _stamp: tuple[int, ...]) -> int:
+    """Cached per language and the files' times, so an edited catalogue is read again."""
+    from babel.messages.pofile import read_po
+
+    missing = 0
+    for domain in DOMAINS:
+        template = locale_dir / f"{domain}.pot"
+        po = locale_dir / language / "LC_MESSAGES" / f"{domain}.po"
+        if not template.is_file():
+            continue
+        with template.open("rb") as handle:
+            wanted = [m.id for m in read_po(handle) if m.id]
+        if not po.is_file():
+            missing += len(wanted)
+            continue
+        with po.open("rb") as handle:
+            catalog = read_po(handle, locale=language)
+        for message_id in wanted:
+            message = catalog.get(message_id)
+            missing += message is None or not message.string or message.fuzzy
+    return missing
+
+
 @functools.cache
 def translations(language: str, domain: str = "messages") -> NullTranslations:
     """The catalogue of ``language``; English (or a language without one) translates
@@ -92,6 +136,23 @@ def language_name(language: str) -> str:
     except (ValueError, UnknownLocaleError):
         return language
     return name[:1].upper() + name[1:] if name else language
+
+
+def preferred_language(accept_language: str) -> str:
+    """The first language of an ``Accept-Language`` header that has a catalogue (by weight,
+    then order), else English."""
+    available = set(catalogue_languages())
+    ranked: list[tuple[float, int, str]] = []
+    for index, part in enumerate(accept_language.split(",")[:20]):
+        tag, _, quality = part.strip().partition(";q=")
+        code = tag.split("-")[0].strip().lower()
+        try:
+            weight = float(quality) if quality else 1.0
+        except ValueError:
+            continue
+        if code in available:
+            ranked.append((-weight, index, code))
+    return min(ranked)[2] if ranked else SOURCE_LANGUAGE
 
 
 def gettext(language: str, message: str, **params: object) -> str:

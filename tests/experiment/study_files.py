@@ -28,6 +28,21 @@ def with_natural(**params: Any) -> str:
     return study_yaml(document)
 
 
+def with_german(document: dict[str, Any]) -> dict[str, Any]:
+    """``document`` declaring German too, with a German text beside every Swedish one."""
+
+    def walk(node: Any) -> Any:
+        if isinstance(node, dict):
+            if set(node) == {"en", "sv"}:
+                return {**node, "de": f"{node['en']} (de)"}
+            return {key: walk(value) for key, value in node.items()}
+        if isinstance(node, list):
+            return [walk(value) for value in node]
+        return node
+
+    return {**walk(document), "languages": ["en", "sv", "de"]}
+
+
 def write_study(directory: Path, document: dict[str, Any], name: str = "study.yaml") -> Path:
     path = directory / name
     path.write_text(yaml.safe_dump(document, sort_keys=False, allow_unicode=True), "utf-8")

@@ -3,6 +3,7 @@ undeclared translations refused with file:line, and the hash covering every tran
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,8 @@ from chameleons.experiment.study import (
     load_study,
     study_from_config,
 )
-from tests.experiment.study_files import default_document, write_study
+from tests.experiment.study_files import default_document, with_german, write_study
+from tests.support.catalogues import MakeCatalogues, filler
 
 
 def participant_texts(study: Study) -> list[str]:
@@ -164,3 +166,70 @@ def test_a_study_without_languages_keeps_its_snapshot_and_hash() -> None:
     assert copy_study.languages == ("en",)
     assert "languages" not in copy_study.config
     assert copy_study.in_language("sv") is copy_study
+
+
+def catalogue_warnings(study: Study) -> list[str]:
+    return [w for w in study.warnings if "the phone's own texts" in w]
+
+
+def german_line(path: Path) -> int:
+    """The line of ``- de`` in the study's block list of languages."""
+    lines = path.read_text("utf-8").splitlines()
+    start = lines.index("languages:")
+    return start + 1 + lines[start:].index("- de")
+
+
+def test_a_language_without_the_phones_catalogue_is_refused_saying_how_to_add_one(
+    tmp_path: Path,
+) -> None:
+    path = write_study(tmp_path, with_german(default_document()))
+    with pytest.raises(StudyError) as caught:
+        load_study(path)
+    [problem] = caught.value.located
+    assert problem.startswith(f"{path}:{german_line(path)}: languages[2]: 'de' has no ")
+    assert "phone's own texts" in problem
+    assert "`make i18n-extract`" in problem
+    assert "chameleons/locale/de/LC_MESSAGES/messages.po and phone.po" in problem
+
+
+def test_english_of_any_region_needs_no_catalogue(tmp_path: Path) -> None:
+    document = default_document()
+    document["languages"] = ["en-GB", "sv"]
+    text = write_study(tmp_path, document).read_text("utf-8").replace("en: ", "en-GB: ")
+    (tmp_path / "study.yaml").write_text(text, "utf-8")
+    study = load_study(tmp_path / "study.yaml")
+    assert study.languages == ("en-GB", "sv")
+    assert catalogue_warnings(study) == []
+
+
+def test_with_its_catalogue_a_language_loads_and_untranslated_phone_texts_are_warned(
+    tmp_path: Path, extra_catalogues: MakeCatalogues
+) -> None:
+    german = filler("Deutsch")
+    extra_catalogues({"de": german})
+    path = write_study(tmp_path, with_german(default_document()))
+    study = load_study(path)
+    assert study.languages == ("en", "sv", "de")
+    assert catalogue_warnings(study) == []
+    assert study.in_language("de").task("lunar").name == "Lost on the Moon (de)"
+
+    # Two of the phone's texts left untranslated: loaded, with a warning at the language.
+    extra_catalogues({"de": lambda m: "" if m in ("Connected", "(optional)") else german(m)})
+    study = load_study(path)
+    assert catalogue_warnings(study) == [
+        f"{path}:{german_line(path)}: languages[2]: 2 of the phone's own texts have "
+        "no de translation in chameleons/locale/de/LC_MESSAGES/ (the phone shows them in "
+        "English; `make test` fails until they are translated)"
+    ]
+
+
+def test_a_stored_study_whose_language_lost_its_catalogue_still_loads_with_a_warning(
+    tmp_path: Path, extra_catalogues: MakeCatalogues
+) -> None:
+    folder = extra_catalogues({"de": filler("Deutsch")})
+    stored = load_study(write_study(tmp_path, with_german(default_document())))
+    shutil.rmtree(folder / "de")
+    rebuilt = study_from_config(stored.config)  # data collected under it stays readable
+    assert rebuilt.content_hash == stored.content_hash
+    [warning] = catalogue_warnings(rebuilt)
+    assert warning.startswith("languages[2]: 'de' has no translation of the phone's own texts")

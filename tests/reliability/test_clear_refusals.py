@@ -18,6 +18,7 @@ from chameleons.backend.input_guard import (
     TOO_LARGE,
     TOO_LARGE_IN_ADDRESS,
 )
+from chameleons.i18n import gettext
 from tests.backend.sessions.conftest import phone, pi, study_id, wizard
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot
 
@@ -175,3 +176,43 @@ def test_a_websocket_address_no_database_can_look_up_is_refused(
     with pytest.raises(WebSocketDisconnect) as refused, client.websocket_connect(path):
         pass
     assert refused.value.code == 1008
+
+
+SWEDISH_NUL = "Texten får inte innehålla ett NUL-tecken (0x00). Ta bort det och försök igen."
+
+
+@pytest.mark.parametrize(
+    ("accept", "expected"),
+    [("sv", SWEDISH_NUL), ("de, sv;q=0.5", SWEDISH_NUL), ("", NUL_IN_TEXT), ("de", NUL_IN_TEXT)],
+)
+def test_the_phones_refusals_are_in_the_language_it_asks_for(
+    client: TestClient, wizard: WizardBot, accept: str, expected: str
+) -> None:
+    """The phone sends its page's language; a language without a catalogue gets English."""
+    headers = {**HEADERS, **({"Accept-Language": accept} if accept else {})}
+    raw = (
+        '{"client_id": "abcdefgh12345678", "position": -1, "questionnaire": "about_you",'
+        ' "answers": {"comment": "hello\\u0000world"}}'
+    )
+    path = f"/api/phone/{wizard.token}/questionnaire"
+    answer = client.post(path, content=raw.encode(), headers=headers)
+    assert (answer.status_code, answer.json()["detail"]) == (422, expected)
+    surrogate = raw.replace("hello\\u0000world", "\\ud800")
+    answer = client.post(path, content=surrogate.encode(), headers=headers)
+    language = "sv" if expected == SWEDISH_NUL else "en"
+    assert answer.json()["detail"] == gettext(language, NOT_UNICODE)
+    assert ("surrogatkod" in answer.json()["detail"]) == (language == "sv")
+    address = client.get(f"/api/phone/{wizard.token}/state?x=%00", headers=headers)
+    assert (address.status_code, address.json()["detail"]) == (
+        400,
+        gettext(language, NUL_IN_ADDRESS),
+    )
+
+
+def test_staff_refusals_stay_in_english_whatever_the_browser_asks_for(
+    client: TestClient, pi: StaffApi, wizard: WizardBot
+) -> None:
+    headers = {**HEADERS, "X-CSRF-Token": pi.csrf, "Accept-Language": "sv"}
+    path = f"/api/sessions/{wizard.session_id}/notes"
+    answer = client.post(path, content=b'{"text": "a\\u0000b"}', headers=headers)
+    assert (answer.status_code, answer.json()["detail"]) == (422, NUL_IN_TEXT)

@@ -1,7 +1,8 @@
 """The phone, in Chromium, with an answer the database cannot store (a NUL character, as a
 paste from another app can carry) waiting in its outbox: it sends it once, shows the
 server's sentence, drops it from the outbox and does not retry; on PostgreSQL this used to
-be a 500 and an endless "Reconnecting…" loop. Both databases."""
+be a 500 and an endless "Reconnecting…" loop. The sentence is in the session's language
+(the script asks for it). Both databases."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from playwright.sync_api import BrowserContext, Request, expect
 from sqlalchemy import Engine
 
 from chameleons.backend.input_guard import NUL_IN_TEXT
+from chameleons.i18n import gettext
 from tests.support.bots import WizardBot, staff_api, study_with_plan
 from tests.support.live_server import LiveServer
 
@@ -22,12 +24,14 @@ OUTBOX_WITH_A_NUL = """token => localStorage.setItem(`mc:${token}:outbox`, JSON.
           answers: { comment: "pasted\\u0000text" } } }]))"""
 
 
+@pytest.mark.parametrize("language", ["en", "sv"])
 def test_the_phone_shows_the_refusal_once_and_does_not_retry(
-    live_server: LiveServer, phone_context: BrowserContext, engine: Engine
+    live_server: LiveServer, phone_context: BrowserContext, engine: Engine, language: str
 ) -> None:
     with httpx.Client(base_url=live_server.url, timeout=30) as http:
         pi = staff_api(http, engine, "pi")
-        wizard = WizardBot.create(pi, study_with_plan(pi, participants=2))
+        study = study_with_plan(pi, participants=2)
+        wizard = WizardBot.create(pi, study, language=language)
     posts: list[Request] = []
     page = phone_context.new_page()
     page.on("request", lambda r: posts.append(r) if r.method == "POST" else None)
@@ -41,7 +45,9 @@ def test_the_phone_shows_the_refusal_once_and_does_not_retry(
     with page.expect_response(lambda r: r.url.endswith("/questionnaire")) as answered:
         page.reload()
     assert answered.value.status == 422
-    expect(page.locator("#error")).to_have_text(NUL_IN_TEXT)
+    sentence = gettext(language, NUL_IN_TEXT)
+    assert (sentence == NUL_IN_TEXT) == (language == "en")
+    expect(page.locator("#error")).to_have_text(sentence)
     expect(page.locator("#error")).to_be_visible()
     outbox = page.evaluate("token => localStorage.getItem(`mc:${token}:outbox`)", wizard.token)
     assert outbox == "[]"  # nothing left to retry

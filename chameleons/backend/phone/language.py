@@ -13,7 +13,12 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.studies.errors import ConfirmationNeededError, FlowError
-from chameleons.i18n import SOURCE_LANGUAGE, catalogue_languages, script_catalogue, translations
+from chameleons.i18n import (
+    SOURCE_LANGUAGE,
+    preferred_language,
+    script_catalogue,
+    translations,
+)
 
 
 def page_context(language: str) -> dict[str, Any]:
@@ -40,19 +45,7 @@ def phone_errors(language: str) -> Iterator[None]:
 
 def browser_language(request: Request) -> str:
     """The first of the browser's ``Accept-Language`` that has a catalogue, else English."""
-    available = set(catalogue_languages())
-    ranked: list[tuple[float, int, str]] = []
-    header = request.headers.get("accept-language", "")
-    for index, part in enumerate(header.split(",")[:20]):
-        tag, _, quality = part.strip().partition(";q=")
-        code = tag.split("-")[0].strip().lower()
-        try:
-            weight = float(quality) if quality else 1.0
-        except ValueError:
-            continue
-        if code in available:
-            ranked.append((-weight, index, code))
-    return min(ranked)[2] if ranked else SOURCE_LANGUAGE
+    return preferred_language(request.headers.get("accept-language", ""))
 
 
 def language_of(db: Session, token: str) -> str:

@@ -11,7 +11,9 @@ from chameleons.backend.models import Event, Participant
 from chameleons.backend.studies import service
 from chameleons.experiment.study import default_study_path, load_default_study
 from tests.backend.sessions.conftest import refused
-from tests.support.bots import StaffApi, WizardBot, staff_api
+from tests.experiment.study_files import default_document, study_yaml, with_german
+from tests.support.bots import ApiError, StaffApi, WizardBot, staff_api
+from tests.support.catalogues import MakeCatalogues, filler
 
 
 @pytest.fixture
@@ -122,3 +124,26 @@ def test_the_pi_pages_create_a_study_and_its_plan(client: TestClient, pi: StaffA
     again = client.post("/studies", data={"csrf_token": pi.csrf})
     assert again.status_code == 409
     assert "already exists" in again.text
+
+
+def test_a_study_in_a_language_the_phone_cannot_speak_is_refused_at_upload(
+    pi: StaffApi, extra_catalogues: MakeCatalogues
+) -> None:
+    text = study_yaml(with_german(default_document()))
+    with pytest.raises(ApiError) as caught:
+        pi.post("/api/studies", {"yaml": text})
+    assert caught.value.status == 422
+    assert isinstance(caught.value.detail, dict)
+    [problem] = caught.value.detail["problems"]
+    assert problem.startswith("languages[2]: 'de' has no translation of the phone's own texts")
+    assert "make i18n-extract" in problem
+
+    # With a German catalogue lacking one text, the study is created with a warning.
+    german = filler("Deutsch")
+    extra_catalogues({"de": lambda m: "" if m == "Connected" else german(m)})
+    study = pi.post("/api/studies", {"yaml": text})
+    assert study["name"] == "Mechanical Chameleons"
+    assert any(
+        w.startswith("languages[2]: 1 of the phone's own texts have no de translation")
+        for w in study["warnings"]
+    ), study["warnings"]

@@ -24,6 +24,11 @@
     });
   }
 
+  // The page's language (the session's) asks the server for its refusals in it too.
+  function postHeaders() {
+    return { "Content-Type": "application/json", "Accept-Language": document.documentElement.lang || "en" };
+  }
+
   /* ---------- local storage: drafts and the outbox (tolerates private mode) ---------- */
   function key(name) { return "mc:" + token + ":" + name; }
   function load(name, fallback) {
@@ -140,7 +145,7 @@
 
   function chooseLanguage(code) {
     fetch(api + "/language", {
-      method: "POST", headers: { "Content-Type": "application/json" },
+      method: "POST", headers: postHeaders(),
       body: JSON.stringify({ client_id: newClientId(), language: code })
     }).then(function (response) {
       if (response.ok) { location.reload(); return null; }
@@ -455,7 +460,7 @@
     flushing = true;
     var entry = box[0];
     fetch(api + "/" + entry.kind, {
-      method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(entry.body)
+      method: "POST", headers: postHeaders(), body: JSON.stringify(entry.body)
     }).then(function (response) {
       if (response.status >= 500) { throw new Error("server " + response.status); }
       return response.json().catch(function () { return {}; }).then(function (data) {
