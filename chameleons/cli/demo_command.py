@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 from typing import IO
 from urllib.parse import urlsplit
 
 import click
 import segno
-import uvicorn
+from fastapi import FastAPI
 from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons.backend.app import create_app
@@ -25,6 +26,7 @@ from chameleons.cli.embedded import (
     stop_process,
 )
 from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
+from chameleons.cli.startup import QuietStartup, StartupError, serve
 from chameleons.settings import Settings
 
 
@@ -99,32 +101,46 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
     study and plan, a local worker driving the virtual robot, and a simulated face."""
     # Everything that can fail is done before the welcome is printed, so a failure is the
-    # first (and only) thing the user reads.
+    # first (and only) thing the user reads: the settings, the data directory, the ports,
+    # the database, and the server's start-up (worker link, local worker) inside uvicorn.
     settings = demo_settings(load_settings(host=host, port=port))
     lock = _lock(settings)
     ports = _ports(settings, web_port_given=port is not None)
     settings = ports.settings
     data = _prepare(settings)
-    app = create_app(settings)
+    app = _app(settings)
     base = settings.effective_public_url
     path = current_path(app, settings.embedded_worker_booth)
     display_url = base + path if path else "(retired: issue a new link on /display)"
-    _print_welcome(base, data, display_url, ports, simulate_face)
-    simulator = start_face_simulator(settings) if simulate_face else None
+    simulator: list[subprocess.Popen[bytes]] = []
+
+    def started() -> None:
+        _print_welcome(base, data, display_url, ports, simulate_face)
+        if simulate_face:
+            simulator.append(start_face_simulator(settings))
+
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning"))
+    server = QuietStartup(app, started, log_level="warning")
     try:
-        server.run(sockets=[ports.web])  # the socket bound above: no second bind to fail
+        serve(server, [ports.web])  # the socket bound above: no second bind to fail
     except KeyboardInterrupt:  # uvicorn re-raises Ctrl-C after its graceful shutdown
         pass
+    except StartupError as exc:
+        raise click.ClickException(str(exc)) from exc
     finally:
-        if simulator is not None:
-            stop_process(simulator)
+        for process in simulator:
+            stop_process(process)
         lock.close()
-    if not server.started:  # the app's start-up failed (uvicorn has logged why)
-        sys.exit(3)
+
+
+def _app(settings: Settings) -> FastAPI:
+    try:
+        return create_app(settings)
+    except Exception as exc:  # one sentence, not a traceback, before anything is printed
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise click.ClickException(f"The server could not start: {reason}.") from exc
 
 
 def _lock(settings: Settings) -> IO[str]:

@@ -3,7 +3,9 @@ otherwise free ones chosen here, so a second demo on the same machine just start
 
 The web port is bound here and the socket handed to uvicorn, so "port in use" is found
 before anything is printed. The other ports are only probed: the worker and the server bind
-them a moment later (a port taken in between fails there, loudly, as before).
+them a moment later (the server's worker link during its start-up, still before the
+welcome: :mod:`chameleons.cli.startup`). An address this computer cannot listen on at all
+is a :class:`PortError` naming the setting.
 """
 
 from __future__ import annotations
@@ -34,11 +36,22 @@ def choose_ports(settings: Settings, *, web_port_given: bool) -> ChosenPorts:
     """Bind the web port and pick free worker and capture ports where the configured ones
     are taken (or 0, "any free port")."""
     web, moved = _bind_web(settings, web_port_given)
-    update: dict[str, object] = {"port": web.getsockname()[1]}
+    try:
+        update, more = _other_ports(settings)
+    except BaseException:
+        web.close()
+        raise
+    update["port"] = web.getsockname()[1]
+    return ChosenPorts(settings.model_copy(update=update), web, moved + more)
+
+
+def _other_ports(settings: Settings) -> tuple[dict[str, object], list[str]]:
+    update: dict[str, object] = {}
+    moved: list[str] = []
     for name, label in (("worker_command_endpoint", "worker control (ZeroMQ)"),
                         ("worker_telemetry_endpoint", "worker telemetry (ZeroMQ)")):  # fmt: skip
         endpoint: str = getattr(settings, name)
-        chosen = _free_endpoint(endpoint)
+        chosen = _free_endpoint(endpoint, _variable(name))
         if chosen != endpoint:
             update[name] = chosen
             moved.append(f"{label}: {endpoint} in use, using {chosen}")
@@ -49,13 +62,41 @@ def choose_ports(settings: Settings, *, web_port_given: bool) -> ChosenPorts:
         ("facecapturex_port", "FaceCaptureX (TCP)", socket.SOCK_STREAM),
     ):
         port: int = getattr(settings, name)
-        free = udp_port_free if kind == socket.SOCK_DGRAM else tcp_port_free
-        if port == 0 or not free(host, port):
-            chosen_port = free_port(host, kind)
+        where = f"{_variable(name)} with CHAMELEONS_CAPTURE_BIND_HOST={host}"
+        if port == 0 or _taken(host, port, kind, where):
+            chosen_port = _any_port(host, kind, where)
             update[name] = chosen_port
             if port:
                 moved.append(f"{label}: port {port} in use, using {chosen_port}")
-    return ChosenPorts(settings.model_copy(update=update), web, moved)
+    return update, moved
+
+
+def _variable(name: str) -> str:
+    return f"CHAMELEONS_{name.upper()}"
+
+
+def _taken(host: str, port: int, kind: socket.SocketKind, where: str) -> bool:
+    """Whether ``port`` is in use; any other reason it cannot be bound is a PortError."""
+    try:
+        if kind == socket.SOCK_STREAM:
+            _listen(host, port).close()
+        else:
+            with socket.socket(_family(host), socket.SOCK_DGRAM) as probe:
+                probe.bind((host, port))
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            return True
+        raise PortError(
+            f"Cannot listen on {host}:{port} ({where}): {exc.strerror or exc}."
+        ) from exc
+    return False
+
+
+def _any_port(host: str, kind: socket.SocketKind, where: str) -> int:
+    try:
+        return free_port(host, kind)
+    except OSError as exc:
+        raise PortError(f"Cannot listen on {host} ({where}): {exc.strerror or exc}.") from exc
 
 
 def _bind_web(settings: Settings, given: bool) -> tuple[socket.socket, list[str]]:
@@ -98,34 +139,17 @@ def _listen(host: str, port: int) -> socket.socket:
     return sock
 
 
-def _free_endpoint(endpoint: str) -> str:
+def _free_endpoint(endpoint: str, variable: str) -> str:
     """A ``tcp://HOST:PORT`` endpoint, or the same host on a free port when it is taken."""
     scheme, _, address = endpoint.partition("://")
     host, _, port = address.rpartition(":")
     if scheme != "tcp" or not port.isdigit():
         return endpoint  # ipc://, inproc:// or tcp://host:* (ZeroMQ picks) need no choice
     host = host.strip("[]")
-    if tcp_port_free(host, int(port)):
+    if not _taken(host, int(port), socket.SOCK_STREAM, variable):
         return endpoint
-    chosen = free_port(host, socket.SOCK_STREAM)
+    chosen = _any_port(host, socket.SOCK_STREAM, variable)
     return f"tcp://[{host}]:{chosen}" if ":" in host else f"tcp://{host}:{chosen}"
-
-
-def tcp_port_free(host: str, port: int) -> bool:
-    try:
-        _listen(host, port).close()
-    except OSError:
-        return False
-    return True
-
-
-def udp_port_free(host: str, port: int) -> bool:
-    with socket.socket(_family(host), socket.SOCK_DGRAM) as probe:
-        try:
-            probe.bind((host, port))
-        except OSError:
-            return False
-    return True
 
 
 def free_port(host: str, kind: socket.SocketKind) -> int:

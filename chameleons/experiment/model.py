@@ -91,11 +91,18 @@ class Condition:
 
 @dataclass(frozen=True)
 class Voice:
-    """A hint for synthetic demo voices (espeak-ng voice name, pitch 0-99, words/min)."""
+    """A hint for synthetic demo voices (espeak-ng voice name, pitch 0-99, words/min), and
+    the Furhat's own TTS voice for typed speech on a Furhat: ``furhat`` maps a language to
+    a voice name (key ``""``: every language); empty keeps the robot's current voice."""
 
     espeak: str
     pitch: int
     speed: int
+    furhat: dict[str, str] = field(default_factory=dict, hash=False)
+
+    def furhat_voice(self, language: str | None) -> str | None:
+        """The Furhat voice for a session in ``language`` (None: the robot's own)."""
+        return self.furhat.get(language or "") or self.furhat.get("") or None
 
 
 @dataclass(frozen=True)

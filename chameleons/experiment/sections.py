@@ -6,6 +6,7 @@ from collections import Counter
 from collections.abc import Mapping
 from typing import Any, cast
 
+from chameleons.experiment.languages import LANGUAGE
 from chameleons.experiment.model import (
     Actor,
     Choice,
@@ -186,7 +187,7 @@ def read_actors(reader: Reader, node: object) -> tuple[Actor, ...]:
         voice_place = join(place, "voice")
         voice = reader.mapping(body.get("voice", {}), voice_place)
         if "voice" in body:  # a missing voice is one problem, not one per field
-            reader.check_keys(voice, voice_place, ["espeak"], ["pitch", "speed"])
+            reader.check_keys(voice, voice_place, ["espeak"], ["pitch", "speed", "furhat"])
         actors.append(
             Actor(
                 id=aid,
@@ -200,11 +201,27 @@ def read_actors(reader: Reader, node: object) -> tuple[Actor, ...]:
                     speed=reader.integer(
                         voice, "speed", voice_place, default=160, minimum=80, maximum=450
                     ),
+                    furhat=_furhat_voice(reader, voice.get("furhat"), join(voice_place, "furhat")),
                 ),
                 properties=_properties(reader, body, place),
             )
         )
     return tuple(actors)
+
+
+def _furhat_voice(reader: Reader, node: object, path: str) -> dict[str, str]:
+    """A Furhat voice name for every language (key ``""``), or one per language code."""
+    if node is None:
+        return {}
+    if isinstance(node, str):
+        if not node.strip():
+            reader.problem(path, "must name a Furhat voice, or one per language ({en: ...})")
+        return {"": node.strip()} if node.strip() else {}
+    voices = reader.mapping(node, path)
+    for language, name in voices.items():
+        if not LANGUAGE.match(language) or not (isinstance(name, str) and name.strip()):
+            reader.problem(join(path, language), "must be a language code with a voice name")
+    return {language: str(name).strip() for language, name in voices.items()}
 
 
 def read_faces(reader: Reader, node: object) -> tuple[Face, ...]:

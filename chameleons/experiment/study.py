@@ -300,13 +300,22 @@ def _config_of(parts: dict[str, Any], name_genders: dict[str, str]) -> dict[str,
         "suggestions_per_interaction": parts["suggestions_per_interaction"],
         "suggestion_rule": parts["suggestion_rule"],
         "design": {"alternate_tasks": parts["alternate_tasks"]},
-        "actors": [asdict(a) for a in parts["actors"]],
+        "actors": [_actor_config(a) for a in parts["actors"]],
         "faces": [asdict(f) for f in parts["faces"]],
         "robot_names": names,
         "personas": asdict(parts["personas"]),
         "questionnaires": [_questionnaire_config(q) for q in parts["questionnaires"]],
         **({"procedure": p} if (p := procedure_config(parts["procedure"])) else {}),
     }
+
+
+def _actor_config(actor: Any) -> dict[str, Any]:
+    """An actor as written; a Furhat voice only when set (older studies keep their hash)."""
+    data = asdict(actor)
+    furhat = data["voice"].pop("furhat")
+    if furhat:
+        data["voice"]["furhat"] = furhat[""] if list(furhat) == [""] else furhat
+    return data
 
 
 def _questionnaire_config(questionnaire: Any) -> dict[str, Any]:

@@ -51,6 +51,10 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
         "prompt_id": ((str,), True),
         "audio_url": ((str,), True),
         "lipsync_path": ((str, type(None)), False),
+        # Typed speech on a robot with its own TTS (a Furhat): the text, in ``voice`` (None:
+        # the robot's current voice); ``audio_url`` is then empty.
+        "text": ((str,), False),
+        "voice": ((str, type(None)), False),
     },
     STOP_PROMPT: {},
     SET_FACE: {"face_id": ((str,), True)},

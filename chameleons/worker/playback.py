@@ -8,6 +8,11 @@ from the moment the driver reports that the audio started (``speech_start``, wit
 worker's timestamp) to when it ended (``speech_end``). ``stop_prompt`` publishes
 ``playback.stop``; ``set_face`` ``playback.face``; ``speech_event`` (sent by the server for
 the virtual robot, whose page plays the audio) ``playback.speech``.
+
+A ``play_prompt`` with ``text`` (the wizard's typed sentence) is for a robot that speaks
+text with its own TTS (a Furhat, ``speaks_text``): ``playback.prompt`` then carries
+``text`` and ``voice`` and no curves. Another robot refuses it (``no_tts``): the server
+sends such a robot audio it synthesised.
 """
 
 from __future__ import annotations
@@ -62,8 +67,12 @@ def lipsync_from_message(message: Message) -> LipSync | None:
 class PlaybackStage:
     name = "playback"
 
-    def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints) -> None:
+    def __init__(
+        self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints,
+        *, speaks_text: bool = False,
+    ) -> None:  # fmt: skip
         self.context, self.endpoints = context, endpoints
+        self.speaks_text = speaks_text
         self.errors: Counter[str] = Counter()
         self.prompts = 0
         self._pub: zmq.Socket[bytes] | None = None
@@ -89,6 +98,8 @@ class PlaybackStage:
             self.errors["publish_dropped"] += 1
 
     def _play(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        if "text" in body:
+            return self._say(body)
         path = body.get("lipsync_path")
         try:
             lipsync = load_lipsync(path) if path else None
@@ -101,6 +112,20 @@ class PlaybackStage:
             return {"prompt_id": prompt_id, "lipsync_seconds": None, "lipsync_channels": []}
         return {"prompt_id": prompt_id, "lipsync_seconds": lipsync.duration,
                 "lipsync_channels": list(lipsync.channels)}  # fmt: skip
+
+    def _say(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        """Typed speech for the robot's own TTS (the renderer hands it to the driver)."""
+        if not self.speaks_text:
+            raise CommandError("no_tts", "this booth's robot has no text-to-speech of its own")
+        prompt_id, text = str(body["prompt_id"]), str(body["text"]).strip()
+        if not text:
+            raise CommandError("bad_field", "text is empty")
+        message = lipsync_message(prompt_id, "", None)
+        message.body.update(text=text, voice=body.get("voice"))
+        self._publish(message)
+        self.prompts += 1
+        return {"prompt_id": prompt_id, "lipsync_seconds": None, "lipsync_channels": [],
+                "robot_tts": True}  # fmt: skip
 
     def _stop(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
         self._publish(Message("playback.stop", "stop", 0, self.name))

@@ -126,9 +126,10 @@ class RendererStage:
                     raise ValueError("bad keyframe vector")
                 self.core.push_keyframe(t, vector, math.nan if used is None else float(used))
             elif message.topic == "playback.prompt":
-                self._requests.put(("prompt", str(message.body["prompt_id"]),
-                                    str(message.body["audio_url"]),
-                                    lipsync_from_message(message)))  # fmt: skip
+                body = message.body
+                self._requests.put(("prompt", str(body["prompt_id"]), str(body["audio_url"]),
+                                    lipsync_from_message(message), body.get("text"),
+                                    body.get("voice")))  # fmt: skip
             elif message.topic == "playback.stop":
                 self._requests.put(("stop",))
             elif message.topic == "playback.retry":
@@ -181,13 +182,16 @@ class RendererStage:
             request = self._requests.get_nowait()
             kind = request[0]
             if kind == "prompt":
-                _, prompt_id, url, curve = request
+                _, prompt_id, url, curve, text, voice = request
                 if self.speaking is not None:  # cut short by the new prompt: not "played"
                     self.driver.stop_audio()
                     self._speech_event(SPEECH_END, time.monotonic(), self.speaking,
                                        outcome="interrupted")  # fmt: skip
                 self.core.lipsync.load(prompt_id, curve)
-                self.driver.play_audio(prompt_id, url)
+                if text:  # typed speech in the robot's own TTS voice
+                    self.driver.speak_text(prompt_id, str(text), voice and str(voice))
+                else:
+                    self.driver.play_audio(prompt_id, url)
             elif kind == "stop":
                 self.driver.stop_audio()
                 if self.speaking is not None and not self.driver.reports_speech_end:

@@ -26,7 +26,7 @@ import zmq
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
 from chameleons.worker.control import RESET_PAIRING
 from chameleons.worker.curve import ClientKeys
-from chameleons.worker.drivers import DEFAULT_URL
+from chameleons.worker.drivers import DEFAULT_URL, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
 from chameleons.worker.ingest.pairing import SenderLock
 from chameleons.worker.playback import PlaybackStage
@@ -134,7 +134,9 @@ class Worker:
             head_lead=config.head_lead, initial=config.behaviour,
             initial_params=config.initial_params(), locations=config,
         ))  # fmt: skip
-        self.playback = PlaybackStage(self.context, self.endpoints)
+        self.playback = PlaybackStage(
+            self.context, self.endpoints, speaks_text=speaks_text(config.driver)
+        )
         # In-process (the default) the renderer is a stage thread like the others.
         self.renderer: RendererStage | None = None
         renderer: RendererStage | RendererProcess

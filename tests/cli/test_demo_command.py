@@ -297,3 +297,43 @@ def test_taken_worker_and_capture_ports_move_and_a_shared_data_dir_is_refused(
     assert second.stdout == ""
     assert "Another chameleons demo is using the data directory" in second.stderr
     _stop(demo, {"chameleons.cli.worker_command", "simulate-face"})
+
+
+def _printed_livelink_port(demo: Demo) -> int:
+    text = "\n".join(demo.output)
+    printed = re.search(r"iPhone face\s+Live Link Face UDP (\d+),", text)
+    assert printed is not None, text
+    return int(printed.group(1))
+
+
+def _udp_in_use(port: int) -> bool:
+    """Whether something listens on UDP ``port`` (on every address, as the worker does)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.bind(("0.0.0.0", port))
+        except OSError:
+            return True
+    return False
+
+
+def test_livelink_port_zero_means_a_free_port_the_worker_and_the_simulated_face_share(
+    data_dir: Path, demos: list[Demo]
+) -> None:
+    demo = _start(data_dir, True, CHAMELEONS_LIVELINK_PORT="0")
+    demos.append(demo)
+    demo.read_welcome()
+    port = _printed_livelink_port(demo)
+    assert port != 0
+    deadline = time.monotonic() + START_SECONDS
+    while True:
+        commands = [_command_line(pid) for pid in _children(demo.process.pid)]
+        worker = [c for c in commands if "chameleons.cli.worker_command" in c]
+        face = [c for c in commands if "simulate-face" in c]
+        if worker and face and _udp_in_use(port):
+            break
+        assert time.monotonic() < deadline, (port, commands)
+        threading.Event().wait(0.1)
+    assert f"--livelink-port {port} " in worker[0] + " "  # the worker listens there
+    assert f"--target 127.0.0.1:{port}" in face[0]  # and the simulated face sends there
+    assert "is not HOST:PORT" not in "\n".join(demo.output)
+    _stop(demo, {"chameleons.cli.worker_command", "simulate-face"})

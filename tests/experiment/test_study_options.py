@@ -222,3 +222,34 @@ def test_faces_tied_to_actors_need_a_face_per_actor(tmp_path: Path) -> None:
     problems = refusal(tmp_path, document).problems
     assert problems[0].startswith("faces: has 1 fitting male voices, but 2 are needed (one per "
                                   "actor")  # fmt: skip
+
+
+def test_an_actor_may_name_its_furhat_voice_per_language_without_changing_older_hashes(
+    tmp_path: Path,
+) -> None:
+    plain = load_study(write_study(tmp_path, default_document(), "plain.yaml"))
+    assert all(a.voice.furhat_voice("en") is None for a in plain.actors)
+    document = default_document()
+    document["actors"]["m1"]["voice"]["furhat"] = "Matthew-Neural"
+    document["actors"]["f1"]["voice"]["furhat"] = {"en": "Joanna-Neural", "sv": "Astrid"}
+    study = load_study(write_study(tmp_path, document))
+    assert study.actor("m1").voice.furhat_voice("sv") == "Matthew-Neural"  # every language
+    assert study.actor("f1").voice.furhat_voice("en") == "Joanna-Neural"
+    assert study.actor("f1").voice.furhat_voice("sv") == "Astrid"
+    assert study.actor("f2").voice.furhat_voice("en") is None  # the robot's own voice
+    assert study.content_hash != plain.content_hash
+    again = study_from_config(json.loads(json.dumps(study.config)))
+    assert again.content_hash == study.content_hash
+    assert again.actor("f1").voice.furhat == study.actor("f1").voice.furhat
+    assert "furhat" not in plain.config["actors"][0]["voice"]  # a study without keeps its hash
+
+
+def test_a_bad_furhat_voice_is_refused(tmp_path: Path) -> None:
+    document = default_document()
+    document["actors"]["m1"]["voice"]["furhat"] = " "
+    document["actors"]["m2"]["voice"]["furhat"] = {"english": "Matthew", "sv": ""}
+    assert refusal(tmp_path, document).problems == [
+        "actors.m1.voice.furhat: must name a Furhat voice, or one per language ({en: ...})",
+        "actors.m2.voice.furhat.english: must be a language code with a voice name",
+        "actors.m2.voice.furhat.sv: must be a language code with a voice name",
+    ]

@@ -8,11 +8,17 @@ this project's driver:
   counts only ``access: true`` as a login. ``access`` False refuses, None never answers.
 - Replies echo the request's ``request_id`` (the client's ``send_event_and_wait`` matches
   replies by it); ``echo_request_id=False`` models a robot that does not.
-- Speech is a queue, as on the robot: a ``request.speak.audio`` that arrives while one plays
-  waits for it, unless it has ``abort: true``; ``request.speak.stop`` stops the current one
-  and drops the queue. Each play answers ``response.speak.start`` after ``start_latency``
-  seconds and ``response.speak.end`` after ``speech_seconds`` more (or when stopped, with
-  ``aborted: true``).
+- Speech is a queue, as on the robot: a ``request.speak.audio`` or ``request.speak.text``
+  (the client's ``request_speak_text``: ``text``, ``abort``; the robot's own TTS) that
+  arrives while one plays waits for it, unless it has ``abort: true``;
+  ``request.speak.stop`` stops the current one and drops the queue. Each play answers
+  ``response.speak.start`` after ``start_latency`` seconds and ``response.speak.end`` after
+  ``speech_seconds`` more (or when stopped, with ``aborted: true``).
+- ``request.voice.config`` (the client's ``request_voice_config``) with a ``name`` from
+  ``voices`` sets the TTS voice and is answered ``response.voice.status`` (what the client
+  waits for) with ``voice_id``; the sentences said in it are kept in ``said``. The answer
+  to an unknown name is not documented; the peer answers ``response.error`` and keeps its
+  voice.
 - ``request.face.status`` answers ``face_id`` and ``face_list``.
 - ``refuse_fields``: face-config fields this robot does not know. The refusal's form is not
   documented; the peer answers ``{"type": "response.error", "request_id", "error"}``.
@@ -76,7 +82,10 @@ class _Voice:
             self.playing = message
             await asyncio.sleep(self.peer.start_latency)
             await self.peer.reply(self.ws, "response.speak.start", message)
-            self.peer.spoken.append(str(message.get("url")))
+            if message.get("type") == "request.speak.text":
+                self.peer.said.append((str(message.get("text")), self.peer.voice))
+            else:
+                self.peer.spoken.append(str(message.get("url")))
             await asyncio.sleep(self.peer.speech_seconds)
             self.playing = None
             await self.peer.reply(self.ws, "response.speak.end", message)
@@ -88,6 +97,7 @@ class FurhatPeer:
         access: bool | None = True, echo_request_id: bool = True,
         faces: tuple[str, ...] = ("adult - Alex", "Isabel", "Marty"),
         refuse_fields: frozenset[str] = frozenset(),
+        voices: tuple[str, ...] = ("Matthew-Neural", "Joanna-Neural", "Astrid"),
     ) -> None:  # fmt: skip
         self.speech_seconds, self.start_latency = speech_seconds, start_latency
         self.access, self.echo_request_id = access, echo_request_id
@@ -95,6 +105,8 @@ class FurhatPeer:
         self.received: list[Received] = []
         self.sent: list[dict[str, Any]] = []
         self.spoken: list[str] = []  # audio URLs whose speech started, in order
+        self.voices, self.voice = voices, voices[0]  # the robot's TTS voices and current one
+        self.said: list[tuple[str, str]] = []  # (text, voice) whose speech started, in order
         self.connections = 0
         self._cond = threading.Condition()
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -166,8 +178,10 @@ class FurhatPeer:
             if self.access is not None:
                 await self.reply(ws, "response.auth", message, access=self.access,
                                  scope="local_network" if self.access else None)  # fmt: skip
-        elif kind == "request.speak.audio":
+        elif kind in ("request.speak.audio", "request.speak.text"):
             await voice.speak(message)
+        elif kind == "request.voice.config":
+            await self._configure_voice(ws, message)
         elif kind == "request.speak.stop":
             await voice.stop()
         elif kind == "request.face.status":
@@ -178,6 +192,15 @@ class FurhatPeer:
             if unknown:
                 await self.reply(ws, "response.error", message,
                                  error=f"unknown field {unknown[0]}")  # fmt: skip
+
+    async def _configure_voice(self, ws: ServerConnection, message: dict[str, Any]) -> None:
+        name = message.get("name") or message.get("voice_id")
+        if name not in self.voices:
+            await self.reply(ws, "response.error", message, error=f"unknown voice {name}")
+            return
+        self.voice = str(name)
+        await self.reply(ws, "response.voice.status", message, voice_id=self.voice,
+                         voice_list=list(self.voices))  # fmt: skip
 
     def drop_connections(self) -> None:
         """Close every live connection from the robot's side (the driver must reconnect)."""

@@ -39,17 +39,24 @@ def embedded_worker_args(settings: Settings) -> list[str]:
     ]  # fmt: skip
 
 
+class WorkerLinkError(RuntimeError):
+    """The worker link's sockets cannot be bound (one sentence, for the log and the CLI)."""
+
+
 @asynccontextmanager
 async def worker_link(app: FastAPI, settings: Settings) -> AsyncIterator[Bridge]:
     bridge = Bridge.from_settings(settings)
     try:
         await bridge.start()
     except zmq.ZMQError as exc:
-        raise RuntimeError(
-            f"cannot bind the worker endpoints {settings.worker_command_endpoint} and "
-            f"{settings.worker_telemetry_endpoint}: {exc}. Is another chameleons server "
-            "running? Stop it, or set CHAMELEONS_WORKER_COMMAND_ENDPOINT and "
-            "CHAMELEONS_WORKER_TELEMETRY_ENDPOINT to free ports."
+        variables = "CHAMELEONS_WORKER_COMMAND_ENDPOINT and CHAMELEONS_WORKER_TELEMETRY_ENDPOINT"
+        advice = (f"another chameleons server may be using them: stop it, or set {variables} "
+                  "to free ones" if exc.errno == zmq.EADDRINUSE
+                  else f"set {variables} to endpoints this computer can bind")  # fmt: skip
+        why = zmq.strerror(exc.errno) if exc.errno else str(exc)
+        raise WorkerLinkError(
+            f"Cannot bind the worker endpoints {settings.worker_command_endpoint} and "
+            f"{settings.worker_telemetry_endpoint} ({why}): {advice}."
         ) from exc
     app.state.bridge = bridge
     channel = get_display_channel(app)

@@ -25,6 +25,7 @@ from chameleons.backend.models.base import utcnow
 from chameleons.backend.wizard import service, speech, typed_speech, worker_link
 from chameleons.backend.wizard.service import Cue, Outcome
 from chameleons.worker.control import PLAY_PROMPT, STOP_PROMPT
+from chameleons.worker.drivers import speaks_text
 
 T = TypeVar("T")
 
@@ -55,11 +56,18 @@ async def play(
 
 
 async def say(state: Any, session_id: int, text: str) -> dict[str, Any]:
-    """The wizard's typed sentence in the actor's synthetic voice (``typed_speech``)."""
-    cue, audio = await run_in_threadpool(
-        write, state, typed_speech.start_typed, state, session_id, text
+    """The wizard's typed sentence in the actor's voice (``typed_speech``): synthesised
+    here for the virtual robot, the text itself for a robot with its own TTS (a Furhat)."""
+    booth = await run_in_threadpool(read, state, service.booth_of, session_id)
+    robot_tts = speaks_text(_driver(state, booth) or "")
+    cue, spoken = await run_in_threadpool(
+        write, state, typed_speech.start_typed, state, session_id, text, robot_tts
     )
-    body = {"prompt_id": cue.prompt.id, "audio_url": typed_speech.media_url(state, audio.digest)}
+    body: dict[str, Any] = {"prompt_id": cue.prompt.id}
+    if isinstance(spoken, typed_speech.TypedAudio):
+        body["audio_url"] = typed_speech.media_url(state, spoken.digest)
+    else:
+        body.update(audio_url="", text=spoken.text, voice=spoken.voice)
     return await _deliver(state, cue, body)
 
 

@@ -7,8 +7,13 @@ The sentence is synthesised with espeak-ng using the actor's ``voice`` hints fro
 under ``<data_dir>/typed-speech`` with a jaw-opening curve from its loudness, and played
 like any prompt: ``prompt.played`` with ``typed: true`` (so acks, speech start/end and
 "not voiced" are tracked as for recorded prompts), plus ``wizard.typed_speech`` on the
-timeline and in the export, which the PI counts as deviations. A Furhat plays the same WAV
-(``request.speak.audio``): its own TTS voice would differ from the recorded actor anyway.
+timeline and in the export, which the PI counts as deviations.
+
+A booth whose robot has its own TTS (a Furhat: the worker's hello names the driver) gets the
+text instead of a WAV: the worker says it with ``request.speak.text`` in the actor's Furhat
+voice from the study (``actors.<id>.voice.furhat``; none: the robot's current voice), and
+its speech start and end are tracked like a prompt's. The play's payload then says
+``robot_tts: true`` and names the ``voice``; nothing is synthesised on the server.
 
     GET /media/typed/<digest>.wav|.csv?key=<token>   the audio and its lip-sync curve
 """
@@ -41,7 +46,7 @@ from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import ConflictError
 from chameleons.backend.wizard import repository, service
 from chameleons.backend.wizard.service import Cue
-from chameleons.prompts import Prompt, Stage
+from chameleons.prompts import Prompt, Stage, estimate_duration
 from chameleons.settings import Settings
 
 router = make_router(tags=["wizard"])
@@ -64,14 +69,22 @@ class TypedAudio:
     duration: float
 
 
+@dataclass(frozen=True)
+class RobotSpeech:
+    """Typed speech for the robot's own TTS: what it says and in which voice."""
+
+    text: str
+    voice: str | None
+    duration: float  # estimated: the robot says when it really ends
+
+
 def folder(settings: Settings) -> Path:
     return settings.data_dir / FOLDER
 
 
 def synthesize(settings: Settings, voice: Mapping[str, Any], text: str) -> TypedAudio:
     """The WAV (and lip-sync CSV) of ``text`` in ``voice``, made once and then reused."""
-    key = json.dumps({"voice": dict(voice), "text": text}, sort_keys=True)
-    digest = hashlib.sha256(key.encode()).hexdigest()[:24]
+    digest = _digest(voice, text)
     target = folder(settings) / f"{digest}.wav"
     if not target.is_file():
         _espeak_to(target, voice, text)
@@ -125,34 +138,60 @@ def media_url(state: Any, digest: str, suffix: str = ".wav") -> str:
     return f"{state.settings.effective_public_url}/media/typed/{digest}{suffix}?key={token}"
 
 
-def start_typed(db: Session, state: Any, session_id: int, text: str) -> tuple[Cue, TypedAudio]:
-    """Synthesise ``text`` in the current interaction's actor voice and log the click."""
+def start_typed(
+    db: Session, state: Any, session_id: int, text: str, robot_tts: bool = False
+) -> tuple[Cue, TypedAudio | RobotSpeech]:
+    """Log the click and prepare ``text`` in the current interaction's actor voice: a WAV
+    from espeak-ng, or (``robot_tts``) the text and the actor's voice for the robot's TTS."""
     clicked_at = utcnow()
     view = service.speaking(db, session_id)
     interaction = view.current
     if interaction is None:
         raise ConflictError("This session has no current interaction to speak in.")
-    # The actor's voice in the session's language (prompts/<lang>/<actor>/actor.yaml).
-    catalogue = service._catalogue(state, interaction.actor, view.session.language)
-    audio = synthesize(state.settings, catalogue.profile.voice, text)
-    prompt = Prompt(id=f"typed-{audio.digest[:12]}", stage=Stage.CANNOT_ANSWER, group="typed",
-                    text=text, audio=PurePosixPath(audio.wav.name),
-                    estimated_duration=audio.duration)  # fmt: skip
+    spoken = (_robot_speech(view, interaction.actor, text) if robot_tts
+              else _espeak_speech(state, view, interaction.actor, text))  # fmt: skip
+    digest = spoken.digest if isinstance(spoken, TypedAudio) else _digest({"robot": True}, text)
+    audio = PurePosixPath(spoken.wav.name) if isinstance(spoken, TypedAudio) else None
+    prompt = Prompt(id=f"typed-{digest[:12]}", stage=Stage.CANNOT_ANSWER, group="typed",
+                    text=text, audio=audio, estimated_duration=spoken.duration)  # fmt: skip
     log = partial(events.record, db, source="wizard", study_id=view.session.study_id,
                   session_id=session_id, interaction_id=interaction.id, at=clicked_at)  # fmt: skip
     payload = {"prompt_id": prompt.id, "group": "typed", "stage": "typed", "typed": True,
-               "text": text, "duration": audio.duration, "has_audio": True,
-               "audio_digest": audio.digest,
+               "text": text, "duration": spoken.duration, "has_audio": audio is not None,
                "actor": interaction.actor, "position": interaction.position}  # fmt: skip
+    if isinstance(spoken, TypedAudio):
+        payload["audio_digest"] = spoken.digest
+    else:
+        payload.update(robot_tts=True, voice=spoken.voice)
     event = log(repository.PLAYED, payload=payload)
     log(TYPED_KIND, payload={"text": text, "actor": interaction.actor,
                              "position": interaction.position, "step": interaction.state,
                              "play_event_id": event.id})  # fmt: skip
     cue = Cue(event_id=event.id, study_id=view.session.study_id, session_id=session_id,
               interaction_id=interaction.id, booth=view.session.booth, actor=interaction.actor,
-              prompt=prompt, duration=audio.duration, clicked_at=clicked_at, audio=None,
+              prompt=prompt, duration=spoken.duration, clicked_at=clicked_at, audio=None,
               lipsync=None)  # fmt: skip
-    return cue, audio
+    return cue, spoken
+
+
+def _espeak_speech(state: Any, view: Any, actor: str, text: str) -> TypedAudio:
+    # The actor's voice in the session's language (prompts/<lang>/<actor>/actor.yaml).
+    catalogue = service._catalogue(state, actor, view.session.language)
+    return synthesize(state.settings, catalogue.profile.voice, text)
+
+
+def _robot_speech(view: Any, actor: str, text: str) -> RobotSpeech:
+    """The actor's Furhat voice in the session's language, when the study names one."""
+    try:
+        voice = view.spec.actor(actor).voice.furhat_voice(view.session.language)
+    except KeyError:  # an actor the study no longer lists: the robot's own voice
+        voice = None
+    return RobotSpeech(text, voice, estimate_duration(text))
+
+
+def _digest(voice: Mapping[str, Any], text: str) -> str:
+    key = json.dumps({"voice": dict(voice), "text": text}, sort_keys=True)
+    return hashlib.sha256(key.encode()).hexdigest()[:24]
 
 
 @router.get("/media/typed/{name}")

@@ -19,6 +19,14 @@ from chameleons.worker.drivers.record import RecordDriver
 from chameleons.worker.drivers.virtual import Publish, VirtualDriver
 
 DRIVER_NAMES = ("virtual", "furhat", "record", "null")
+_CLASSES: dict[str, type[Driver]] = {"virtual": VirtualDriver, "furhat": FurhatDriver,
+                                     "record": RecordDriver, "null": NullDriver}  # fmt: skip
+
+
+def speaks_text(name: str) -> bool:
+    """Whether the robot of driver ``name`` speaks typed text with its own TTS."""
+    driver = _CLASSES.get(name)
+    return driver is not None and driver.speaks_text
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,4 +66,5 @@ __all__ = [
     "RecordDriver",
     "VirtualDriver",
     "create_driver",
+    "speaks_text",
 ]

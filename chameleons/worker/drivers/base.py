@@ -39,6 +39,8 @@ class Driver(ABC):
     name: ClassVar[str] = ""
     # False: the robot never says when audio ends; the renderer ends speech with the curves.
     reports_speech_end: ClassVar[bool] = True
+    # True: the robot speaks text with its own TTS (:meth:`speak_text`, typed speech).
+    speaks_text: ClassVar[bool] = False
 
     def __init__(self) -> None:
         self._sink: EventSink = _discard
@@ -80,6 +82,13 @@ class Driver(ABC):
     def play_audio(self, prompt_id: str, url: str) -> None:
         """Start the prompt's audio; speech start/end come back as events."""
         self.emit(SPEECH_START, prompt_id=prompt_id)
+
+    def speak_text(self, prompt_id: str, text: str, voice: str | None) -> None:
+        """Say ``text`` with the robot's own TTS (``voice``, or its current one); speech
+        start/end come back as events. Only drivers with ``speaks_text`` get this (the
+        worker refuses typed text for the others), so here it ends unvoiced at once."""
+        self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
+                  error=f"the {self.name or 'robot'} driver has no text-to-speech")  # fmt: skip
 
     def stop_audio(self) -> None:  # noqa: B027 - optional
         """Stop the audio that is playing, if any."""

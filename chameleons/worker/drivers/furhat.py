@@ -12,7 +12,11 @@ Checked against Furhat's own client (PyPI ``furhat-realtime-api`` 0.1.3,
   sends (``face_id``, ``visibility``, ``microexpressions``). ``blinking`` and
   ``head_sway`` are not in it: each goes in a message of its own, so a robot that refuses
   one cannot lose the chosen face with it; a refusal is kept in ``stats()["refused"]``.
-- **Speech.** See :mod:`.furhat_speech`.
+- **Speech.** See :mod:`.furhat_speech`. Typed speech (the wizard's fallback sentence) is
+  ``request.speak.text`` (the vendor's ``request_speak_text``: ``text``, ``abort``) with a
+  ``request_id``, tracked like audio; a voice the study names for the actor is set first
+  with ``request.voice.config`` (``request_voice_config``'s ``name``), else the robot's
+  current voice speaks.
 
 The renderer's calls only append to bounded deques and wake the sender; one asyncio task in
 the driver's own thread drains them, so a slow or absent robot never blocks a tick. Face
@@ -61,6 +65,7 @@ class AuthFailedError(Exception):
 
 class FurhatDriver(Driver):
     name = "furhat"
+    speaks_text = True
 
     def __init__(
         self, url: str = DEFAULT_URL, *, key: str | None = None, face_id: str | None = None,
@@ -85,6 +90,7 @@ class FurhatDriver(Driver):
         self._stream: deque[tuple[str, Any]] = deque(maxlen=queue_size)
         self._control: deque[dict[str, Any]] = deque(maxlen=64)
         self.speech = SpeechTracker()
+        self.voice: str | None = None  # the TTS voice last set on this connection
         self.problem: str | None = None  # why the driver stopped (auth), for the wizard
         self.refused: dict[str, str] = {}  # uncertain face field -> the robot's refusal
         self._pending_fields: dict[str, str] = {}  # request_id -> uncertain field
@@ -127,6 +133,18 @@ class FurhatDriver(Driver):
         self._notify()
 
     def play_audio(self, prompt_id: str, url: str) -> None:
+        # The worker drives the mouth from the prompt's curves: the robot's lip-sync is off.
+        self._speak(prompt_id, {"type": "request.speak.audio", "url": url, "lipsync": False})
+
+    def speak_text(self, prompt_id: str, text: str, voice: str | None) -> None:
+        """Typed speech in the robot's own TTS (its own lip-sync: no curves come with it)."""
+        if voice and voice != self.voice and self.connected:
+            self.voice = voice  # kept: the robot stays in this voice until told otherwise
+            self._queue_control({"type": "request.voice.config", "name": voice})
+        self._speak(prompt_id, {"type": "request.speak.text", "text": text})
+
+    def _speak(self, prompt_id: str, request: dict[str, Any]) -> None:
+        """Send one speech request, tracked by ``request_id``; one under way is stopped."""
         if not self.connected:  # nothing will ever answer: end the speech at once
             self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
                       error=self.problem or "robot not connected")  # fmt: skip
@@ -135,8 +153,7 @@ class FurhatDriver(Driver):
         play, skipped = self.speech.begin(prompt_id)
         if abort:  # the robot would queue it behind the one that plays: stop that first
             self._queue_control({"type": "request.speak.stop"})
-        self._queue_control({"type": "request.speak.audio", "url": url, "lipsync": False,
-                             "abort": abort, "request_id": play.request_id})  # fmt: skip
+        self._queue_control({**request, "abort": abort, "request_id": play.request_id})
         self._credit(skipped)
 
     def stop_audio(self) -> None:
@@ -154,7 +171,7 @@ class FurhatDriver(Driver):
         return {**super().stats(), "dropped": self.dropped, "connects": self.connects,
                 "face_id": self.face_id, "robot_face_id": self.robot_face_id,
                 "unmapped_face": self.unmapped_face, "problem": self.problem,
-                "refused": dict(self.refused),
+                "refused": dict(self.refused), "voice": self.voice,
                 "speech_swallowed": self.speech.swallowed}  # fmt: skip
 
     def _credit(self, credit: Credit | None) -> None:
@@ -295,6 +312,7 @@ class FurhatDriver(Driver):
         self._stream.clear()
         self._control.clear()
         self.connects += 1
+        self.voice = None  # a restarted robot may speak in its default voice again
         await ws.send(json.dumps(self._face_config()))
         for message in self._uncertain_fields():
             await ws.send(json.dumps(message))

@@ -1,6 +1,7 @@
 """In Chromium, the console on a long lab day: a refusal never covers the primary action
-and does not contradict itself (a late undo), and a finished session turns its prompt
-buttons off and says the phone left."""
+(before the session and in the negotiation, at 1280x720 and 1920x1080) and does not
+contradict itself (a late undo), and a finished session turns its prompt buttons off and
+says the phone left."""
 
 from __future__ import annotations
 
@@ -44,6 +45,41 @@ def test_a_refusal_shows_below_the_primary_action(console: Console, size: tuple[
     expect(flash).to_contain_text("Cannot accept now. Allowed now: start the session")
     assert not overlaps(flash, page.locator("#primary-action"))
     expect(page.locator("#primary-action")).to_be_visible()
+
+
+def inside(locator: Locator, size: tuple[int, int]) -> bool:
+    box = locator.bounding_box()
+    assert box is not None
+    return (box["x"] >= 0 and box["y"] >= 0 and box["x"] + box["width"] <= size[0]
+            and box["y"] + box["height"] <= size[1])  # fmt: skip
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1920, 1080)])
+def test_a_refusal_in_the_negotiation_leaves_the_primary_action_uncovered(
+    console: Console, size: tuple[int, int]
+) -> None:
+    """The negotiation is the fullest screen (suggestion, phrasings, replies, ranking): a
+    refusal there still shows beside the big button, not over it, on a laptop too."""
+    page = console.page
+    page.set_viewport_size({"width": size[0], "height": size[1]})
+    into_negotiation(console)
+    primary = page.locator("#primary-action")
+    expect(primary).to_contain_text("Decide suggestion 1")
+    page.locator("#bar-participant").click()
+    page.keyboard.press("u")  # nothing decided yet: nothing to undo
+    flash = page.locator("#flash")
+    expect(flash).to_contain_text("Cannot undo now. Allowed now:")
+    expect(flash).to_be_visible()
+    expect(primary).to_be_visible()
+    assert not overlaps(flash, primary)
+    assert inside(flash, size), "the refusal is off screen"
+    assert inside(primary, size), "the primary action is off screen"
+    # The topmost element at the button's centre is the button (nothing drawn over it).
+    assert primary.evaluate(
+        """(b) => { const r = b.getBoundingClientRect();
+                    const top = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+                    return b.contains(top); }"""
+    )
 
 
 def test_a_late_undo_says_it_is_too_late_and_nothing_else(console: Console, page: Page) -> None:
@@ -111,11 +147,7 @@ def test_the_negotiation_fits_a_laptop_screen(
     }
     assert page.evaluate("window.scrollY") == 0
     for what, locator in needed.items():
-        box = locator.bounding_box()
-        assert box is not None, what
-        inside = (box["x"] >= 0 and box["y"] >= 0 and box["x"] + box["width"] <= size[0]
-                  and box["y"] + box["height"] <= size[1])  # fmt: skip
-        assert inside, f"{what} is outside the {size[0]}x{size[1]} screen: {box}"
+        assert inside(locator, size), f"{what} is outside the {size[0]}x{size[1]} screen"
     # A condition without a natural source says nothing of one (not "null").
     expect(page.locator("#condition-note")).to_contain_text("runs as planned")
     expect(page.locator("#condition-note")).not_to_contain_text("null")

@@ -155,9 +155,17 @@ export class Timeline {
     );
     this.rows.set(event.id, row);
     row.hidden = this.filter !== "all" && row.dataset.category !== this.filter;
-    this.list.prepend(row);
+    this.place(row, event.id);
     this.counter.textContent = `(${this.count})`;
     this.attachLatency(event);
+  }
+
+  /** Newest (highest id) first: a new event goes on top; one committed late (an id below
+   * rows already shown) goes where its id belongs, not on top. */
+  place(row, id) {
+    let next = this.list.firstElementChild;
+    while (next && Number(next.dataset.id) > id) next = next.nextElementSibling;
+    this.list.insertBefore(row, next);
   }
 
   attachLatency(event) {
