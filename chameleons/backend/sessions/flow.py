@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
-from sqlalchemy import select
+from sqlalchemy import ColumnElement, select
 from sqlalchemy.orm import Session
 
 from chameleons.backend.db import write_transaction
@@ -113,35 +113,39 @@ class Flow:
 
 
 def load(db: Session, session_id: int, *, lock: bool = True) -> Flow:
-    query = select(SessionRow).where(SessionRow.id == session_id)
-    if lock:
-        # Serialises changes of one session (two wizards, wizard and phone at once): the
-        # row lock on PostgreSQL, the write lock taken first on SQLite (FOR UPDATE is a
-        # no-op there; see db.write_transaction).
-        write_transaction(db)
-        query = query.with_for_update()
-    session = db.scalars(query).first()
-    if session is None:
-        raise NotFoundError(f"There is no session {session_id}.")
-    return _flow(db, session)
+    return _load(db, SessionRow.id == session_id, lock, f"There is no session {session_id}.")
 
 
 def load_by_token(db: Session, token: str, *, lock: bool = True) -> Flow:
-    query = select(SessionRow).where(SessionRow.phone_token == token)
+    return _load(
+        db,
+        SessionRow.phone_token == token,
+        lock,
+        N_("This link is not valid. Please ask the experimenter for help."),
+    )
+
+
+def _load(db: Session, which: ColumnElement[bool], lock: bool, missing: str) -> Flow:
+    """The session with its study and participant in one statement (every request and
+    every live update loads a flow: statements are most of a request's cost,
+    docs/performance.md), then its interactions."""
+    query = (
+        select(SessionRow, StudyRow, Participant)
+        .join(StudyRow, StudyRow.id == SessionRow.study_id)
+        .join(Participant, Participant.id == SessionRow.participant_id)
+        .where(which)
+    )
     if lock:
+        # Serialises changes of one session (two wizards, wizard and phone at once): the
+        # session's row lock on PostgreSQL (its row only: the study's and participant's are
+        # shared), the write lock taken first on SQLite (FOR UPDATE is a no-op there; see
+        # db.write_transaction).
         write_transaction(db)
-        query = query.with_for_update()
-    session = db.scalars(query).first()
-    if session is None:
-        raise NotFoundError(N_("This link is not valid. Please ask the experimenter for help."))
-    return _flow(db, session)
-
-
-def _flow(db: Session, session: SessionRow) -> Flow:
-    study = db.get(StudyRow, session.study_id)
-    participant = db.get(Participant, session.participant_id)
-    if study is None or participant is None:
-        raise NotFoundError(f"Session {session.id} has lost its study or participant.")
+        query = query.with_for_update(of=SessionRow)
+    found = db.execute(query).first()
+    if found is None:
+        raise NotFoundError(missing)
+    session, study, participant = found._tuple()
     interactions = list(
         db.scalars(
             select(Interaction)
