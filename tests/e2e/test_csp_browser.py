@@ -74,7 +74,7 @@ def watcher() -> Watcher:
 @pytest.fixture
 def phone_page(phone_context: BrowserContext, watcher: Watcher) -> Iterator[Page]:
     page = watcher.attach(phone_context.new_page())
-    page.set_default_timeout(30_000)
+    page.set_default_timeout(60_000)
     yield page
     page.close()
 
@@ -107,7 +107,7 @@ def test_every_page_kind_runs_without_a_policy_violation(
         pi = staff_api(http, engine, "pi", name="pi-api")
         wizard = WizardBot.create(pi, study.study_id, booth="booth-1")
     watcher.attach(page)
-    page.set_default_timeout(30_000)
+    page.set_default_timeout(60_000)
     _log_in(page, base)
     watcher.check(page, "/login then /pi")
 

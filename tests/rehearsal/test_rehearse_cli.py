@@ -164,7 +164,7 @@ def test_a_booth_with_a_real_session_open_is_refused_unless_named(tmp_path: Path
     runner = CliRunner()
     with (
         embedded_system(settings, simulate_face=False) as target,
-        httpx.Client(base_url=target.base_url, trust_env=False) as http,
+        httpx.Client(base_url=target.base_url, timeout=60, trust_env=False) as http,
     ):
         staff = StaffApi(http).login(target.username, target.password)
         real = staff.post("/api/sessions", {"study_id": target.study_id, "booth": target.booth})

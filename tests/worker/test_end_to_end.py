@@ -91,10 +91,13 @@ def test_the_robot_copies_the_face_delay_seconds_later(
     after_step = _first_after(faces, opened.time + 0.03, lambda m: True).message
     assert after_step["params"]["JAW_OPEN"] == pytest.approx(0.8, abs=0.01)
 
-    # Rates over one second of copying: head pose every tick, face parameters at 25 Hz.
+    # Rates over one second of copying: head pose every tick (125 Hz), face parameters at
+    # 25 Hz. Never more; fewer only by the ticks a busy machine misses (76 head poses were
+    # seen at load 12 on 2 cores): the lower bounds only tell a tick rate from a face rate.
+    # The rates and their jitter on a quiet machine are bench/worker_bench.py's figures.
     window = (step1 + DELAY, step1 + DELAY + 1.0)
     in_window = [h for h in heads if window[0] <= h.time < window[1]]
     face_count = sum(window[0] <= f.time < window[1] for f in faces)
-    assert 110 <= len(in_window) <= 126
-    assert 22 <= face_count <= 26
+    assert 50 <= len(in_window) <= 126
+    assert 10 <= face_count <= 26
     assert sum(drops.values()) >= 4  # the garbage was counted and dropped

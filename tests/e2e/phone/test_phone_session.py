@@ -19,6 +19,7 @@ from chameleons.backend.db import build_sessionmaker
 from chameleons.backend.models import Event, QuestionnaireResponse
 from chameleons.settings import Settings
 from tests.support.bots import PASSWORD, StaffApi, WizardBot, add_staff, study_with_plan
+from tests.support.browser import ACTION_TIMEOUT_MS
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
@@ -119,15 +120,17 @@ def test_a_participant_completes_a_whole_session_on_a_phone(
     phone_context: BrowserContext, server: list[LiveServer], engine: Engine, settings: Settings
 ) -> None:
     add_staff(engine, "wiz", "wizard")
-    http = httpx.Client(base_url=server[0].url, limits=httpx.Limits(max_keepalive_connections=0))
+    http = httpx.Client(
+        base_url=server[0].url, timeout=60, limits=httpx.Limits(max_keepalive_connections=0)
+    )
     staff = StaffApi(http).login("wiz", PASSWORD)
-    pi_http = httpx.Client(base_url=server[0].url)
+    pi_http = httpx.Client(base_url=server[0].url, timeout=60)
     add_staff(engine, "pia", "pi")
     study_id = study_with_plan(StaffApi(pi_http).login("pia", PASSWORD))
     pi_http.close()
     wizard = WizardBot.create(staff, study_id)
     page = phone_context.new_page()
-    page.set_default_timeout(10_000)
+    page.set_default_timeout(ACTION_TIMEOUT_MS)
     page.goto(server[0].url + wizard.phone_path)
     page.get_by_role("button", name="I agree to take part").click()
     expect(page.get_by_role("heading", name="About you")).to_be_visible()

@@ -21,6 +21,7 @@ from chameleons.backend.models import Event, Participant, QuestionnaireResponse
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.sessions.bot import ApiError, ParticipantBot
 from tests.support.bots import PASSWORD, StaffApi, WizardBot, add_staff, study_with_plan
+from tests.support.browser import ACTION_TIMEOUT_MS
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
@@ -56,7 +57,9 @@ def fits(page: Page) -> None:
 
 def staff(server: LiveServer, engine: Engine) -> tuple[StaffApi, int, httpx.Client]:
     add_staff(engine, "pia", "pi")
-    http = httpx.Client(base_url=server.url, limits=httpx.Limits(max_keepalive_connections=0))
+    http = httpx.Client(
+        base_url=server.url, timeout=60, limits=httpx.Limits(max_keepalive_connections=0)
+    )
     pi = StaffApi(http).login("pia", PASSWORD)
     return pi, study_with_plan(pi), http
 
@@ -74,7 +77,7 @@ def test_consent_then_skippable_questions_then_the_session_and_a_debriefing(
     wizard = WizardBot.create(pi, study_id)
     context = small_phone(browser, size)
     page = context.new_page()
-    page.set_default_timeout(10_000)
+    page.set_default_timeout(ACTION_TIMEOUT_MS)
     page.goto(server.url + wizard.phone_path)
     expect(page.get_by_role("heading", name="Before we begin")).to_be_visible()
     expect(page.get_by_text("Taking part is voluntary.", exact=False)).to_be_visible()
@@ -142,7 +145,7 @@ def test_declining_ends_the_session_politely_and_keeps_nothing_else(
     wizard = WizardBot.create(pi, study_id)
     context = small_phone(browser, size)
     page = context.new_page()
-    page.set_default_timeout(10_000)
+    page.set_default_timeout(ACTION_TIMEOUT_MS)
     page.goto(server.url + wizard.phone_path)
     page.get_by_role("button", name="I do not want to take part").click()
     expect(page.get_by_text("You have chosen not to take part")).to_be_visible()

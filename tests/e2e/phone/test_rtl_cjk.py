@@ -146,7 +146,9 @@ def test_right_to_left_and_cjk_text_fit_the_phone(
 ) -> None:
     extra_catalogues({code: filler(text) for code, text in PHONE_TEXTS.items()})
     add_staff(engine, "pia", "pi")
-    http = httpx.Client(base_url=server.url, limits=httpx.Limits(max_keepalive_connections=0))
+    http = httpx.Client(
+        base_url=server.url, timeout=60, limits=httpx.Limits(max_keepalive_connections=0)
+    )
     pi = StaffApi(http).login("pia", PASSWORD)
     document = localize(default_document(), language)
     document["languages"] = ["en", language]

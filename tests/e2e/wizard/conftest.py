@@ -13,6 +13,7 @@ from sqlalchemy import Engine
 
 from tests.backend.test_auth import add_user
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot, staff_api, study_with_plan
+from tests.support.browser import ACTION_TIMEOUT_MS
 from tests.support.live_server import LiveServer
 
 PASSWORD = "the wizard's password"
@@ -71,6 +72,6 @@ def console(
 @pytest.fixture
 def phone_page(phone_context: BrowserContext, console: Console) -> Page:
     page = phone_context.new_page()
-    page.set_default_timeout(10_000)
+    page.set_default_timeout(ACTION_TIMEOUT_MS)
     page.goto(console.server.url + console.wizard.phone_path)
     return page

@@ -11,6 +11,7 @@ from playwright.sync_api import Browser, BrowserContext, Page, expect
 
 from tests.e2e.wizard.conftest import Console
 from tests.support.bots import ApiError
+from tests.support.browser import ACTION_TIMEOUT_MS
 
 pytestmark = pytest.mark.browser
 
@@ -33,7 +34,7 @@ def test_two_phones_on_one_link_and_the_extra_one_is_sent_away(
     expect(page.locator("#phone-devices")).to_be_hidden()
 
     extra = second_phone.new_page()
-    extra.set_default_timeout(10_000)
+    extra.set_default_timeout(ACTION_TIMEOUT_MS)
     extra.goto(console.server.url + console.wizard.phone_path)
     expect(extra.locator("#connection")).to_have_text("Connected")
     expect(chip).to_have_text("2 phones on this link")
