@@ -42,6 +42,8 @@ STATUS: Final = "status"
 SPEECH_EVENT: Final = "speech_event"
 RETRY_ROBOT: Final = "retry_robot"  # try the robot again after a refused login
 RESET_PAIRING: Final = "reset_pairing"  # the capture pairs with the next phone that sends
+# The booth check: the copy-delay probe forgets what it saw (measures only from now on).
+RESET_DELAY_PROBE: Final = "reset_delay_probe"
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -59,6 +61,7 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     STATUS: {},
     RETRY_ROBOT: {},
     RESET_PAIRING: {},
+    RESET_DELAY_PROBE: {},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
                    "time": (_NUMBER, False)},
 }  # fmt: skip
