@@ -238,3 +238,21 @@ def test_the_check_is_refused_while_a_participants_interaction_runs_on_the_booth
     assert "Interaction 1 of session" in response.json()["detail"]
     assert "would take the robot from the participant" in response.json()["detail"]
     assert not any(e["kind"] == "booth.checked" for e in timeline(wizard))
+
+
+def test_a_check_without_a_session_is_stored_with_the_study_of_the_booth(
+    app: FastAPI, pi: StaffApi, study_id: int
+) -> None:
+    """No worker: judged at once. The study is the booth's latest session's, so its export
+    has the check (with no participant or session); the plan names the study's delay."""
+    new_session(pi, study_id)
+    plan = pi.get(f"/api/booths/{BOOTH}/check")
+    assert (plan["copy_delay_s"], plan["copy_condition"], plan["study_id"]) == (
+        4.0, "copy", study_id,
+    )  # fmt: skip
+    assert [p["id"] for p in plan["prompts"]] == ["turn", "nod", "copy"]
+    result = pi.post(f"/api/booths/{BOOTH}/check")
+    assert result["passed"] is False
+    with app.state.sessionmaker() as db:
+        row = db.scalars(select(BoothCheck)).one()
+    assert (row.session_id, row.study_id) == (None, study_id)
