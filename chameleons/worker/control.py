@@ -53,6 +53,9 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
         "prompt_id": ((str,), True),
         "audio_url": ((str,), True),
         "lipsync_path": ((str, type(None)), False),
+        # One play's own id: the worker's speech events for it carry it, so the server
+        # credits a start or end to this play only (the same prompt may play twice).
+        "play_id": ((str, type(None)), False),
     },
     STOP_PROMPT: {},
     SET_FACE: {"face_id": ((str,), True)},
@@ -63,7 +66,7 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     RESET_PAIRING: {},
     RESET_DELAY_PROBE: {},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
-                   "time": (_NUMBER, False)},
+                   "play_id": ((str, type(None)), False), "time": (_NUMBER, False)},
 }  # fmt: skip
 SPEECH_EVENTS: Final = frozenset({"start", "end"})
 

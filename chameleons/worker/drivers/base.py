@@ -77,9 +77,10 @@ class Driver(ABC):
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
         """Absolute head pose in degrees."""
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
-        """Start the prompt's audio; speech start/end come back as events."""
-        self.emit(SPEECH_START, prompt_id=prompt_id)
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
+        """Start the prompt's audio; speech start/end come back as events, carrying
+        ``play_id`` (this play's own id: the same prompt may be played twice)."""
+        self.emit(SPEECH_START, prompt_id=prompt_id, play_id=play_id)
 
     def stop_audio(self) -> None:  # noqa: B027 - optional
         """Stop the audio that is playing, if any."""
@@ -90,7 +91,9 @@ class Driver(ABC):
     def retry(self) -> None:  # noqa: B027 - optional
         """Try the robot again after the driver stopped itself (a refused login)."""
 
-    def remote_speech(self, event: str, prompt_id: str | None) -> None:  # noqa: B027
+    def remote_speech(  # noqa: B027
+        self, event: str, prompt_id: str | None, play_id: str | None = None
+    ) -> None:
         """Speech start/end reported by the server (the virtual robot's page)."""
 
     def stats(self) -> dict[str, Any]:

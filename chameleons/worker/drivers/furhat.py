@@ -126,13 +126,13 @@ class FurhatDriver(Driver):
         self._retry.set()
         self._notify()
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         if not self.connected:  # nothing will ever answer: end the speech at once
-            self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
+            self.emit(SPEECH_END, prompt_id=prompt_id, play_id=play_id, outcome="skipped",
                       error=self.problem or "robot not connected")  # fmt: skip
             return
         abort = self.speech.busy
-        play, skipped = self.speech.begin(prompt_id)
+        play, skipped = self.speech.begin(prompt_id, play_id)
         if abort:  # the robot would queue it behind the one that plays: stop that first
             self._queue_control({"type": "request.speak.stop"})
         self._queue_control({"type": "request.speak.audio", "url": url, "lipsync": False,
@@ -161,9 +161,10 @@ class FurhatDriver(Driver):
         if credit is None:
             return
         if credit.kind == "start":
-            self.emit(SPEECH_START, prompt_id=credit.prompt_id)
+            self.emit(SPEECH_START, prompt_id=credit.prompt_id, play_id=credit.play_id)
         else:
-            self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome)
+            self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
+                      outcome=credit.outcome)  # fmt: skip
 
     def _select_face(self, face_id: str | None) -> None:
         self.face_id = face_id
@@ -220,8 +221,8 @@ class FurhatDriver(Driver):
             self._pending_fields.clear()
             credit = self.speech.drop_all()  # a prompt that was playing will never end
             if credit is not None:
-                self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome,
-                          error="robot disconnected")  # fmt: skip
+                self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
+                          outcome=credit.outcome, error="robot disconnected")  # fmt: skip
             if self._stopping.is_set():
                 break
             self.set_state("disconnected", retry_in=delay)
