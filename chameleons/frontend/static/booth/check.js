@@ -31,7 +31,8 @@ function show(id, text) {
 // the check has answered (e.g. at once when the booth has no worker).
 async function guide(answered) {
   let done = false;
-  answered.finally(() => { done = true; });
+  const over = () => { done = true; };
+  answered.then(over, over); // a refusal is shown by run(); here it only ends the prompts
   for (const step of PROMPTS) {
     if (done) return;
     show(step.id, step.text);
