@@ -146,6 +146,10 @@ class Settings(BaseSettings):
     session_length_minutes: float = Field(default=60.0, gt=0)
     # The actor whose first recorded prompt the booth check plays (None: the first actor).
     booth_check_actor: str | None = None
+    # How long the booth check asks for each head movement (turn left, then nod) while the
+    # robot runs the copy behaviour; the copy is then waited for (the study's delay).
+    booth_check_turn_seconds: float = Field(default=4.0, gt=0, le=30)
+    booth_check_nod_seconds: float = Field(default=4.0, gt=0, le=30)
 
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.

@@ -1,14 +1,17 @@
 """``chameleons booth-check BOOTH``: the booth check from a terminal (the same check as the
-page ``/booths/<booth>/check``, run and stored by the server)."""
+page ``/booths/<booth>/check``, run and stored by the server). While the server runs the
+robot in copy and measures, the prompts it plans (turn the head left, nod, hold still) are
+printed in time."""
 
 from __future__ import annotations
 
-import time
+import concurrent.futures
+from typing import Any
 
 import click
 import httpx
 
-HEAD_SECONDS = 12  # the turn and nod, then the robot's copy after the copy delay
+TIMEOUT_S = 120  # the head movement, the robot's copy after the study's delay, the prompt
 
 
 @click.command("booth-check")
@@ -20,26 +23,47 @@ HEAD_SECONDS = 12  # the turn and nod, then the robot's copy after the copy dela
               help="Asked for when not given (or CHAMELEONS_CHECK_PASSWORD).")  # fmt: skip
 @click.option("--session", "session_id", type=int, default=None,
               help="Store the result with this session (its booth must be BOOTH).")  # fmt: skip
-@click.option("--no-wait", is_flag=True, help="Do not wait for the head turn and nod.")
+@click.option(
+    "--no-wait",
+    is_flag=True,
+    help="Skip the head movement and the robot's copy (that step then fails).",
+)
 def booth_check(
     booth: str, server: str, username: str, password: str, session_id: int | None,
     no_wait: bool,
 ) -> None:  # fmt: skip
     """Check a booth before a participant: face stream, head turn and nod, robot, copy
-    delay and disk space. Exits 1 when a step fails."""
+    delay, test prompt and disk space. Exits 1 when a step fails."""
     from chameleons.backend.sessions.bot import ApiError, StaffApi
 
+    query = f"?session_id={session_id}" if session_id is not None else ""
     try:
-        with httpx.Client(base_url=server, timeout=30) as http:
+        with httpx.Client(base_url=server, timeout=TIMEOUT_S) as http:
             staff = StaffApi(http).login(username, password)
-            if not no_wait:
-                click.echo(f"Turn your head to the left and back, then nod ({HEAD_SECONDS} s)...")
-                time.sleep(HEAD_SECONDS)
-            query = f"?session_id={session_id}" if session_id is not None else ""
-            result = staff.post(f"/api/booths/{booth}/check{query}")
+            path = f"/api/booths/{booth}/check{query}"
+            if no_wait:
+                result = staff.post(path + ("&" if query else "?") + "movement=false")
+            else:
+                result = _guided(staff, path)
     except (httpx.HTTPError, ApiError) as exc:
         raise click.ClickException(f"the check could not run: {exc}") from exc
     for step in result["steps"]:
         click.echo(f"{step['status'].upper():5} {step['label']}: {step['value']}")
     click.echo("Booth ready." if result["passed"] else "NOT READY: fix the failing steps.")
     raise SystemExit(0 if result["passed"] else 1)
+
+
+def _guided(staff: Any, path: str) -> dict[str, Any]:
+    """Run the check and print each prompt of the server's plan for its time."""
+    plan = staff.get(path)
+    click.echo(f"Expected: {plan['expected_head']}.")
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+        answer = pool.submit(staff.post, path)
+        for step in plan["prompts"]:
+            click.echo(f">>> {step['text']} ({step['seconds']:g} s)")
+            try:
+                return dict(answer.result(timeout=float(step["seconds"])))
+            except concurrent.futures.TimeoutError:
+                continue
+        click.echo(">>> Listen: the robot says a test prompt...")
+        return dict(answer.result(timeout=TIMEOUT_S))

@@ -18,7 +18,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                 "effect sizes with bootstrap intervals and the regression models."),
     "booth-check": ("booth_check_command", "booth_check",
                     "Check a booth before a participant: face stream, head turn and nod, robot, "
-                    "copy delay and disk space."),
+                    "copy delay, test prompt and disk space."),
     "db": ("db_commands", "db", "Database schema: apply and inspect migrations."),
     "demo": ("demo_command", "demo",
              "Start the whole system on its embedded default: the server on SQLite with the "

@@ -74,8 +74,9 @@ def import_command(
     assert take is not None
     try:
         if natural_name is not None:
-            path = import_natural(take, actor_dir, natural_name, options)
-            click.echo(f"natural recording: {path}")
+            natural = import_natural(take, actor_dir, natural_name, options)
+            click.echo(f"natural recording: {natural.path}")
+            _echo_notes(natural.notes)
             return
         assert prompt_id is not None
         result = import_take(take, actor_dir, prompt_id, options, wav=wav)
@@ -84,6 +85,13 @@ def import_command(
     click.echo(f"{result.prompt_id}: {result.duration:.2f} s from {result.trimmed_start:.2f} s, "
                f"{result.frame_rate:g} Hz take -> {result.audio}, {result.lipsync}, "
                f"{result.natural}")  # fmt: skip
+    _echo_notes(result.notes)
+
+
+def _echo_notes(notes: tuple[str, ...], where: str = "") -> None:
+    """What the take lacks, where the user imports it (not only in a log)."""
+    for note in notes:
+        click.echo(f"note: {where}{note}")
 
 
 def _run_batch(batch: Path, actor_dir: Path, options: ImportOptions) -> None:
@@ -95,6 +103,7 @@ def _run_batch(batch: Path, actor_dir: Path, options: ImportOptions) -> None:
     for outcome in outcomes:
         if outcome.result is not None:
             click.echo(f"ok      {outcome.entry.prompt_id}: {outcome.result.duration:.2f} s")
+            _echo_notes(outcome.result.notes, f"{outcome.entry.prompt_id}: ")
         else:
             click.echo(f"FAILED  {outcome.problem}", err=True)
     click.echo(f"{len(outcomes) - len(failed)} imported, {len(failed)} failed")

@@ -74,6 +74,13 @@ class ImportedPrompt:
     duration: float
     trimmed_start: float
     frame_rate: float  # of the take's rows
+    notes: tuple[str, ...] = ()  # what the take lacks (e.g. head streaming was off)
+
+
+@dataclass(frozen=True, slots=True)
+class ImportedNatural:
+    path: Path  # the natural recording written
+    notes: tuple[str, ...] = ()  # what the take lacks (e.g. head streaming was off)
 
 
 @dataclass(frozen=True, slots=True)
@@ -209,7 +216,7 @@ def import_take(
     result = ImportedPrompt(
         prompt_id, f"audio/{prompt_id}.{options.audio_format}", f"lipsync/{prompt_id}.csv",
         f"natural/{prompt_id}.npz", round(duration, 3), round(start, 3),
-        round(frame_rate(take), 1),
+        round(frame_rate(take), 1), take.notes,
     )  # fmt: skip
     with staging(actor_dir) as stage:
         write_audio(stage / result.audio, audio[first:last], rate, options.audio_format)
@@ -222,7 +229,7 @@ def import_take(
 
 def import_natural(
     take_path: Path, actor_dir: Path, name: str, options: ImportOptions | None = None
-) -> Path:
+) -> ImportedNatural:
     """A take as ``natural/<name>.npz`` for the ``natural`` behaviour (whole face kept)."""
     options = options or ImportOptions()
     _check_name(name)
@@ -232,7 +239,7 @@ def import_natural(
     with staging(actor_dir) as stage:
         write_natural(stage / relative, resampled, keep_mouth=True)
         commit(stage, actor_dir, [relative])
-    return actor_dir / relative
+    return ImportedNatural(actor_dir / relative, take.notes)
 
 
 def _check_name(name: str) -> None:

@@ -50,6 +50,7 @@ class BehaviourStageConfig:
     initial: str = "still"
     initial_params: Mapping[str, Any] = field(default_factory=dict)
     locations: Any = None  # this machine's data_dir/prompts_dir, for marked clip paths
+    rotation_factor: float | None = None  # of Live Link take CSVs replayed as clips
 
 
 class BehaviourStage:
@@ -63,8 +64,10 @@ class BehaviourStage:
         self.config = config or BehaviourStageConfig()
         self.clock = clock
         self.period = 1.0 / self.config.tick_rate
+        behaviours = build_context(self.config.history_seconds, locations=self.config.locations,
+                               rotation_factor=self.config.rotation_factor)  # fmt: skip
         self.router = BehaviourRouter(
-            build_context(self.config.history_seconds, locations=self.config.locations),
+            behaviours,
             self.config.crossfade_seconds,
             initial=self.config.initial, params=self.config.initial_params, start=clock(),
         )  # fmt: skip

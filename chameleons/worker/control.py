@@ -42,6 +42,8 @@ STATUS: Final = "status"
 SPEECH_EVENT: Final = "speech_event"
 RETRY_ROBOT: Final = "retry_robot"  # try the robot again after a refused login
 RESET_PAIRING: Final = "reset_pairing"  # the capture pairs with the next phone that sends
+# The booth check: the copy-delay probe forgets what it saw (measures only from now on).
+RESET_DELAY_PROBE: Final = "reset_delay_probe"
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -55,6 +57,9 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
         # the robot's current voice); ``audio_url`` is then empty.
         "text": ((str,), False),
         "voice": ((str, type(None)), False),
+        # One play's own id: the worker's speech events for it carry it, so the server
+        # credits a start or end to this play only (the same prompt may play twice).
+        "play_id": ((str, type(None)), False),
     },
     STOP_PROMPT: {},
     SET_FACE: {"face_id": ((str,), True)},
@@ -63,8 +68,9 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     STATUS: {},
     RETRY_ROBOT: {},
     RESET_PAIRING: {},
+    RESET_DELAY_PROBE: {},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
-                   "time": (_NUMBER, False)},
+                   "play_id": ((str, type(None)), False), "time": (_NUMBER, False)},
 }  # fmt: skip
 SPEECH_EVENTS: Final = frozenset({"start", "end"})
 

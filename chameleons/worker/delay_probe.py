@@ -37,6 +37,12 @@ class DelayProbe:
         with self._lock:
             self._sent.append((send_time, yaw))
 
+    def reset(self) -> None:
+        """Forget everything seen so far (the booth check's copy step starts)."""
+        with self._lock:
+            self._captured.clear()
+            self._sent.clear()
+
     def measure(self, now: float) -> dict[str, Any] | None:
         """``{"delay_s", "correlation", "motion_deg"}`` for the last window, or None."""
         start = now - self.window_s

@@ -29,6 +29,7 @@ import zmq
 from chameleons import __version__
 from chameleons.worker.control import (
     PLAY_PROMPT,
+    RESET_DELAY_PROBE,
     RETRY_ROBOT,
     SET_BEHAVIOUR,
     SET_FACE,
@@ -62,7 +63,7 @@ log = logging.getLogger(__name__)
 ROUTES: dict[str, str] = {
     SET_BEHAVIOUR: "behaviour", PLAY_PROMPT: "playback", STOP_PROMPT: "playback",
     SET_FACE: "playback", SPEECH_EVENT: "playback", START_RECORDING: "recorder",
-    STOP_RECORDING: "recorder", RETRY_ROBOT: "playback",
+    STOP_RECORDING: "recorder", RETRY_ROBOT: "playback", RESET_DELAY_PROBE: "recorder",
 }  # fmt: skip
 ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
 StatsSource = Callable[[], Mapping[str, Any]]

@@ -1,7 +1,8 @@
 """Playback: plays a prompt, stops it, and relays the robot display's speech events.
 
 ``play_prompt`` loads the prompt's lip-sync curves (:func:`load_lipsync`) and publishes
-``playback.prompt`` (body ``{"prompt_id", "audio_url", "channels", "rows"}``, payload the
+``playback.prompt`` (body ``{"prompt_id", "play_id", "audio_url", "channels", "rows"}``;
+``play_id`` is the server's id of this play, which every speech event of it carries; payload the
 curve times then the ``rows x len(LIPSYNC_NAMES)`` values, float32). The renderer, which owns
 the driver, tells the robot to play the audio and runs the curves on the audio's clock:
 from the moment the driver reports that the audio started (``speech_start``, with the
@@ -40,9 +41,11 @@ from chameleons.worker.stage import POLL_MS, CommandPort, Endpoints, send_messag
 __all__ = ["LipSync", "LipSyncError", "PlaybackStage", "lipsync_from_message", "load_lipsync"]
 
 
-def lipsync_message(prompt_id: str, audio_url: str, lipsync: LipSync | None) -> Message:
-    body: dict[str, Any] = {"prompt_id": prompt_id, "audio_url": audio_url, "rows": 0,
-                            "channels": []}  # fmt: skip
+def lipsync_message(
+    prompt_id: str, audio_url: str, lipsync: LipSync | None, play_id: str | None = None
+) -> Message:
+    body: dict[str, Any] = {"prompt_id": prompt_id, "play_id": play_id, "audio_url": audio_url,
+                            "rows": 0, "channels": []}  # fmt: skip
     payload = b""
     if lipsync is not None:
         body["rows"], body["channels"] = len(lipsync.times), list(lipsync.channels)
@@ -106,11 +109,13 @@ class PlaybackStage:
         except LipSyncError as exc:
             raise CommandError("bad_lipsync", str(exc)) from exc
         prompt_id, url = str(body["prompt_id"]), str(body["audio_url"])
-        self._publish(lipsync_message(prompt_id, url, lipsync))
+        play_id = body.get("play_id") or None
+        self._publish(lipsync_message(prompt_id, url, lipsync, play_id))
         self.prompts += 1
         if lipsync is None:
-            return {"prompt_id": prompt_id, "lipsync_seconds": None, "lipsync_channels": []}
-        return {"prompt_id": prompt_id, "lipsync_seconds": lipsync.duration,
+            return {"prompt_id": prompt_id, "play_id": play_id, "lipsync_seconds": None,
+                    "lipsync_channels": []}  # fmt: skip
+        return {"prompt_id": prompt_id, "play_id": play_id, "lipsync_seconds": lipsync.duration,
                 "lipsync_channels": list(lipsync.channels)}  # fmt: skip
 
     def _say(self, body: Mapping[str, Any]) -> Mapping[str, Any]:

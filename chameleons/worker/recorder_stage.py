@@ -30,7 +30,12 @@ from typing import Any
 import pyarrow as pa
 import zmq
 
-from chameleons.worker.control import START_RECORDING, STOP_RECORDING, CommandError
+from chameleons.worker.control import (
+    RESET_DELAY_PROBE,
+    START_RECORDING,
+    STOP_RECORDING,
+    CommandError,
+)
 from chameleons.worker.delay_probe import DelayProbe
 from chameleons.worker.envelope import EnvelopeError, Message, message_frame
 from chameleons.worker.frames import N_BLENDSHAPES, FaceFrame
@@ -105,7 +110,8 @@ class RecorderStage:
         self._pub.setsockopt(zmq.LINGER, 0)
         self._pub.bind(self.endpoints.recorder)
         port = CommandPort(self.context, self.endpoints.stage_control, self.name,
-                           {START_RECORDING: self._start, STOP_RECORDING: self._stop})  # fmt: skip
+                           {START_RECORDING: self._start, STOP_RECORDING: self._stop,
+                            RESET_DELAY_PROBE: self._reset_probe})  # fmt: skip
         poller = zmq.Poller()
         poller.register(sub, zmq.POLLIN)
         poller.register(port.socket, zmq.POLLIN)
@@ -143,6 +149,12 @@ class RecorderStage:
                 self.probe.sent(message.time, float(message.array()[N_BLENDSHAPES]))
         except (EnvelopeError, KeyError, TypeError, ValueError, IndexError):
             pass  # counted by _record when recording; the probe just skips it
+
+    def _reset_probe(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
+        """The booth check starts its copy step: measure only the movement from now on
+        (head movement while the robot ran another behaviour would blur the match)."""
+        self.probe.reset()
+        return {}
 
     def _record(self, message: Message) -> None:
         self._probe(message)

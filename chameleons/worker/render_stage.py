@@ -64,6 +64,10 @@ class RendererStage:
         self.loop = RenderLoop(self.config.tick_rate, self._on_tick)
         self.errors: Counter[str] = Counter()
         self.speaking: str | None = None
+        # The server's id of the play loaded for the robot, and of the one speaking: a
+        # driver event of another play (the same prompt played again) is that play's.
+        self.loaded_play: str | None = None
+        self.speaking_play: str | None = None
         self.ready = threading.Event()  # set once the first tick ran
         self._requests: queue.SimpleQueue[tuple[Any, ...]] = queue.SimpleQueue()
         self._events: queue.SimpleQueue[DriverEvent] = queue.SimpleQueue()
@@ -129,7 +133,7 @@ class RendererStage:
                 body = message.body
                 self._requests.put(("prompt", str(body["prompt_id"]), str(body["audio_url"]),
                                     lipsync_from_message(message), body.get("text"),
-                                    body.get("voice")))  # fmt: skip
+                                    body.get("voice"), body.get("play_id") or None))  # fmt: skip
             elif message.topic == "playback.stop":
                 self._requests.put(("stop",))
             elif message.topic == "playback.retry":
@@ -138,7 +142,8 @@ class RendererStage:
                 self._requests.put(("face", str(message.body["face_id"])))
             elif message.topic == "playback.speech":
                 self._requests.put(("speech", str(message.body["event"]),
-                                    message.body.get("prompt_id")))  # fmt: skip
+                                    message.body.get("prompt_id"),
+                                    message.body.get("play_id") or None))  # fmt: skip
             else:
                 self.errors["unknown_topic"] += 1
         except (KeyError, TypeError, ValueError):
@@ -182,16 +187,17 @@ class RendererStage:
             request = self._requests.get_nowait()
             kind = request[0]
             if kind == "prompt":
-                _, prompt_id, url, curve, text, voice = request
+                _, prompt_id, url, curve, text, voice, play_id = request
                 if self.speaking is not None:  # cut short by the new prompt: not "played"
                     self.driver.stop_audio()
                     self._speech_event(SPEECH_END, time.monotonic(), self.speaking,
                                        outcome="interrupted")  # fmt: skip
                 self.core.lipsync.load(prompt_id, curve)
+                self.loaded_play = play_id
                 if text:  # typed speech in the robot's own TTS voice
-                    self.driver.speak_text(prompt_id, str(text), voice and str(voice))
+                    self.driver.speak_text(prompt_id, str(text), voice and str(voice), play_id)
                 else:
-                    self.driver.play_audio(prompt_id, url)
+                    self.driver.play_audio(prompt_id, url, play_id)
             elif kind == "stop":
                 self.driver.stop_audio()
                 if self.speaking is not None and not self.driver.reports_speech_end:
@@ -200,7 +206,7 @@ class RendererStage:
             elif kind == "face":
                 self.driver.set_face(request[1])
             elif kind == "speech":
-                self.driver.remote_speech(request[1], request[2])
+                self.driver.remote_speech(request[1], request[2], request[3])
             elif kind == "retry":
                 self.driver.retry()
 
@@ -208,32 +214,46 @@ class RendererStage:
         assert self.core is not None
         while not self._events.empty():
             event = self._events.get_nowait()
-            if event.kind == SPEECH_START:
+            if event.kind in (SPEECH_START, SPEECH_END) and self._replaced(event):
+                # A replaced play's late start or end: report it as its own, keep the
+                # current play's lip-sync and speaking state.
+                self._publish_event("event.speech", event.kind, event.time, **event.body)
+            elif event.kind == SPEECH_START:
                 prompt = event.body.get("prompt_id") or self.core.lipsync.prompt_id
                 self.core.lipsync.begin(event.time)
-                self.speaking = prompt or ""
+                self.speaking, self.speaking_play = prompt or "", self.loaded_play
                 self._publish_event("event.speech", SPEECH_START, event.time,
-                                    prompt_id=prompt)  # fmt: skip
+                                    prompt_id=prompt, play_id=self.loaded_play)  # fmt: skip
                 if not self.driver or not self.driver.reports_speech_end:
                     self.core.lipsync.finish(self.core.lipsync.curve_end())
             elif event.kind == SPEECH_END:
                 prompt = event.body.get("prompt_id") or self.speaking
-                if prompt not in (self.speaking, self.core.lipsync.prompt_id):
-                    # A replaced prompt's end (skipped): report it, keep the current one.
-                    body = {k: v for k, v in event.body.items() if k != "prompt_id"}
-                    self._publish_event("event.speech", SPEECH_END, event.time,
-                                        prompt_id=prompt, **body)  # fmt: skip
-                    continue
                 self._speech_event(SPEECH_END, event.time, prompt, **event.body)
             elif event.kind == ROBOT_STATE:
                 self._publish_event("event.robot", ROBOT_STATE, event.time, **event.body)
 
+    def _replaced(self, event: DriverEvent) -> bool:
+        """The event belongs to a play other than the loaded one: by its play id, or (a
+        server that sends none) an end of another prompt than the current one."""
+        assert self.core is not None
+        play = event.body.get("play_id")
+        if play and self.loaded_play:
+            return bool(play != self.loaded_play)
+        prompt = event.body.get("prompt_id") or self.speaking
+        return event.kind == SPEECH_END and prompt not in (
+            self.speaking,
+            self.core.lipsync.prompt_id,
+        )
+
     def _speech_event(self, kind: str, when: float, prompt: str | None, **extra: Any) -> None:
+        """The end of the speaking (else the loaded) play."""
         assert self.core is not None
         self.core.lipsync.finish(when)
-        self.speaking = None
+        play = self.speaking_play if self.speaking is not None else self.loaded_play
+        self.speaking = self.speaking_play = None
         extra.pop("prompt_id", None)
-        self._publish_event("event.speech", kind, when, prompt_id=prompt, **extra)
+        extra.pop("play_id", None)
+        self._publish_event("event.speech", kind, when, prompt_id=prompt, play_id=play, **extra)
 
     def _publish_event(self, topic: str, kind: str, when: float, **body: Any) -> None:
         wall = time.time() - (time.monotonic() - when)

@@ -28,6 +28,7 @@ from chameleons.worker.control import RESET_PAIRING
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DEFAULT_URL, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
+from chameleons.worker.ingest.livelink import rotation_factor
 from chameleons.worker.ingest.pairing import SenderLock
 from chameleons.worker.playback import PlaybackStage
 from chameleons.worker.recorder_stage import RecorderStage
@@ -133,6 +134,7 @@ class Worker:
             crossfade_seconds=config.crossfade_seconds, history_seconds=config.history_seconds,
             head_lead=config.head_lead, initial=config.behaviour,
             initial_params=config.initial_params(), locations=config,
+            rotation_factor=rotation_factor(config.livelink_rotation_scale),
         ))  # fmt: skip
         self.playback = PlaybackStage(
             self.context, self.endpoints, speaks_text=speaks_text(config.driver)
@@ -185,7 +187,6 @@ class Worker:
             self.stop_event.set()
 
     def _start_capture(self) -> None:
-        from chameleons.worker.ingest.livelink import rotation_factor
         from chameleons.worker.ingest.receivers import FaceCaptureXReceiver, LiveLinkReceiver
         from chameleons.worker.ingest.transform import FrameTransform
 

@@ -237,8 +237,9 @@ def test_silent_audio_and_unknown_prompts_are_reported(actor: Path, tmp_path: Pa
 
 
 def test_a_take_becomes_a_natural_recording_with_the_whole_face(actor: Path, take: Path) -> None:
-    path = import_natural(take, actor, "idle_1")
-    clip = load_clip(path)
+    natural = import_natural(take, actor, "idle_1")
+    assert natural.notes == ()  # the head moved in this take
+    clip = load_clip(natural.path)
     assert clip.duration == pytest.approx(3.0)
     assert clip.vectors[-1, BLENDSHAPE_INDEX["jawOpen"]] == pytest.approx(1.0)
     with pytest.raises(TakeImportError, match="may only use"):
@@ -281,3 +282,30 @@ def test_cli_single_batch_and_errors(actor: Path, tmp_path: Path, take: Path) ->
     bad = runner.invoke(cli, ["prompts", "import", str(actor), str(take), "--prompt-id", "nope"])
     assert bad.exit_code == 1
     assert "not imported" in bad.output
+
+
+def head_off(_k: int, row: list[str]) -> None:
+    row[-9:-6] = ["0", "0", "0"]  # HeadYaw, HeadPitch, HeadRoll: streaming was off
+
+
+def test_a_take_without_head_rotation_is_noted_where_it_is_imported(
+    actor: Path, tmp_path: Path
+) -> None:
+    write_wav(tmp_path / "takes" / "still.wav")
+    still = write_take(tmp_path / "takes" / "still.csv", row_hook=head_off)
+    note = "note: head streaming was off in this take (HeadYaw, HeadPitch, HeadRoll all zero)"
+    runner = CliRunner()
+    one = runner.invoke(cli, ["prompts", "import", str(actor), str(still), "--prompt-id", "ack"])
+    assert one.exit_code == 0, one.output
+    assert note in one.output
+    natural = runner.invoke(cli, ["prompts", "import", str(actor), str(still), "--natural", "n1"])
+    assert natural.exit_code == 0, natural.output
+    assert note in natural.output
+    batch_file = tmp_path / "takes" / "batch.csv"
+    batch_file.write_text("take,prompt_id\nstill.csv,hello\n")
+    batch = runner.invoke(cli, ["prompts", "import", str(actor), "--batch", str(batch_file)])
+    assert batch.exit_code == 0, batch.output
+    assert "note: hello: head streaming was off" in batch.output
+    moving = runner.invoke(cli, ["prompts", "import", str(actor), str(write_take(
+        tmp_path / "takes" / "moving.csv")), "--natural", "n2"])  # fmt: skip
+    assert "head streaming" not in moving.output

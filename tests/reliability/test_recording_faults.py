@@ -127,12 +127,13 @@ def test_a_read_only_recordings_folder_turns_the_chip_red_and_is_flagged(
     caplog.set_level(logging.WARNING)
     with read_only(recordings_dir(app)):
         wizard, _ = new_session(pi, study_id)
+        # The booth check before the participant (refused once an interaction runs).
+        checked = pi.post(f"/api/booths/{BOOTH}/check?movement=false&say=false")
+        disk = next(s for s in checked["steps"] if s["id"] == "disk")
         wizard.start()
         wizard.advance(1, "discussion")
         not_started = wait_for_event(wizard, "recording.not_started")
         chip = until(lambda: failing_chip(bridge), what="a red Recording chip")
-        disk = next(s for s in pi.post(f"/api/booths/{BOOTH}/check")["steps"]
-                    if s["id"] == "disk")  # fmt: skip
     assert disk["status"] == "fail"
     assert "is read-only" in disk["value"]
     detail = not_started["payload"]["detail"]

@@ -22,15 +22,21 @@ def _frames(kind: str, body: dict[str, object], seq: int = 7) -> list[bytes]:
 
 VALID = {
     "set_behaviour": {"name": "copy", "params": {"delay": 4.0}},
-    "play_prompt": {"prompt_id": "p1", "audio_url": "http://x/p1.wav", "lipsync_path": "/a.csv"},
+    "play_prompt": {
+        "prompt_id": "p1",
+        "audio_url": "http://x/p1.wav",
+        "lipsync_path": "/a.csv",
+        "play_id": "play-7",
+    },
     "stop_prompt": {},
     "set_face": {"face_id": "adult-01"},
     "start_recording": {"interaction_id": 12, "directory": "/data/rec"},
     "stop_recording": {"interaction_id": "12"},
     "status": {},
-    "speech_event": {"event": "start", "prompt_id": "p1"},
+    "speech_event": {"event": "start", "prompt_id": "p1", "play_id": "play-7"},
     "retry_robot": {},
     "reset_pairing": {},
+    "reset_delay_probe": {},
 }
 
 

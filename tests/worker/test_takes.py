@@ -233,3 +233,23 @@ def test_all_zero_head_columns_are_reported(
     assert "off.csv: head streaming was off" in caplog.text
     moving = [row(timecode(f), {"HeadPitch": 0.01 * f}) for f in range(5)]
     assert read_take(write(tmp_path / "on.csv", HEADER, moving)).notes == ()
+
+
+def test_a_take_replayed_as_a_natural_clip_reads_its_rotations_in_the_workers_unit(
+    tmp_path: Path,
+) -> None:
+    """``natural`` replaying a take CSV honours the worker's livelink_rotation_scale (the
+    behaviour context's rotation factor), as the capture does; not the reader's default."""
+    from chameleons.worker.behaviours.clips import load_clip
+    from chameleons.worker.behaviours.natural import NaturalBehaviour
+    from chameleons.worker.behaviours.router import build_context
+    from chameleons.worker.ingest.livelink import rotation_factor
+
+    rows = [row(timecode(f), {"HeadYaw": 0.5, "JawOpen": 0.2}) for f in range(5)]
+    path = write(tmp_path / "take.csv", HEADER, rows)
+    assert load_clip(path).vectors[0, 52] == pytest.approx(0.5 * 180 / np.pi, rel=1e-5)
+    assert load_clip(path, rotation_factor=1.0).vectors[0, 52] == pytest.approx(0.5)
+    context = build_context(rotation_factor=rotation_factor("degrees/180"))
+    natural = NaturalBehaviour.from_params(context, {"path": str(path), "loop": False})
+    assert isinstance(natural, NaturalBehaviour)
+    assert natural.clip.vectors[0, 52] == pytest.approx(0.5 * 180)

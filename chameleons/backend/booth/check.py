@@ -13,9 +13,11 @@ with the session's events.
   wrong way is a sign or mirror error; one far beyond 90 degrees a unit error (radians read
   as degrees/180 copies a head turn about three times too large).
 - **Robot**: connected (for the virtual robot: a display page open and playing).
-- **Robot copies**: the copy behaviour runs; its configured delay against the delay the
-  worker measured movement to movement (:mod:`chameleons.worker.delay_probe`), within
-  ``MAX_DELAY_ERROR_S``.
+- **Robot copies**: the check runs the robot in ``copy`` with the study's configured delay
+  while the head turns and nods (:mod:`.check_run`, which restores the behaviour before);
+  the configured delay against the delay the worker measured movement to movement
+  (:mod:`chameleons.worker.delay_probe`). No copy measured, or a delay off by more than
+  ``MAX_DELAY_ERROR_S``, fails.
 - **Test prompt**: the robot says a test prompt; its speech start and end must come back
   from the robot (for the virtual robot: from the display page) (:mod:`.speech_test`).
 - **Disk**: the recordings folder can be written, and its free space covers a session
@@ -28,6 +30,7 @@ from __future__ import annotations
 import shutil
 import tempfile
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -63,23 +66,37 @@ def face_stream(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
     return step("face", label, WARN if slow else PASS, value, fps=fps, latency_ms=latency)
 
 
+def expected_head() -> str:
+    """What the head step wants, in the words the page and the command line show."""
+    return (f"yaw +{MIN_TURN_DEG:g}..+{MAX_TURN_DEG:g}° (a turn to the left) and pitch "
+            f"+{MIN_NOD_DEG:g}..+{MAX_NOD_DEG:g}° (a nod, chin down)")  # fmt: skip
+
+
+def _head_value(yaw: float, pitch: float) -> str:
+    """The measured yaw and pitch, each against its expected sign and size."""
+    return (f"yaw {yaw:+.0f}° (expected +{MIN_TURN_DEG:g}..+{MAX_TURN_DEG:g}: turn left), "
+            f"pitch {pitch:+.0f}° (expected +{MIN_NOD_DEG:g}..+{MAX_NOD_DEG:g}: nod)")  # fmt: skip
+
+
 def head_turn(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
     label = "Turn your head left, then nod"
     ingest = (telemetry or {}).get("ingest")
     heads = ingest.get("head_range") if isinstance(ingest, Mapping) else None
     if not isinstance(heads, Mapping):
-        return step("head", label, FAIL, "no head movement received")
+        return step("head", label, FAIL, f"no head movement received (expected {expected_head()})")
     yaw_max, yaw_min = float(heads["yaw_max"]), float(heads["yaw_min"])
     pitch_max = float(heads["pitch_max"])
     figures = {"yaw_max": yaw_max, "yaw_min": yaw_min, "pitch_max": pitch_max,
                "expected_yaw": f"+{MIN_TURN_DEG:g}..{MAX_TURN_DEG:g}",
                "expected_pitch": f"+{MIN_NOD_DEG:g}..{MAX_NOD_DEG:g}"}  # fmt: skip
-    measured = f"yaw {yaw_max:+.0f}, pitch {pitch_max:+.0f} degrees"
+    # The larger excursion either way: a turn read the wrong way shows as a negative yaw.
+    yaw = yaw_max if yaw_max >= -yaw_min else yaw_min
+    measured = _head_value(yaw, pitch_max)
     if max(yaw_max, -yaw_min) > MAX_TURN_DEG:
         return step("head", label, FAIL, f"{measured}: far too large, check the rotation unit "
                     "(CHAMELEONS_LIVELINK_ROTATION_SCALE)", **figures)  # fmt: skip
     if yaw_max < MIN_TURN_DEG and -yaw_min >= MIN_TURN_DEG:
-        return step("head", label, FAIL, f"yaw {yaw_min:+.0f}: the turn reads the wrong way, "
+        return step("head", label, FAIL, f"{measured}: the turn reads the wrong way, "
                     "check the mirror and mounting settings", **figures)  # fmt: skip
     if yaw_max < MIN_TURN_DEG:
         return step("head", label, FAIL, f"{measured}: no turn to the left seen", **figures)
@@ -95,31 +112,53 @@ def robot(telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None)
     return step("robot", "Robot", PASS if check.ok else FAIL, check.value)
 
 
-def copies(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
+@dataclass(frozen=True)
+class Movement:
+    """What the check saw while it ran the robot in ``copy`` (:mod:`.check_run`): the
+    heartbeat after the head movement and the one after the robot's copy of it."""
+
+    delay_s: float  # the configured copy delay the robot ran
+    condition: str | None  # the study's condition it comes from (None: the worker's default)
+    head: Mapping[str, Any] | None = None
+    copy: Mapping[str, Any] | None = None
+    problem: str | None = None  # why the robot could not be switched to copy
+
+
+def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> dict[str, Any]:
     """The configured copy delay against the one measured movement to movement (the
-    worker's probe: captured head yaw against the yaw sent to the robot)."""
+    worker's probe: captured head yaw against the yaw sent to the robot), while the check
+    ran the robot in ``copy``. Not copying, or a delay off by more than
+    ``MAX_DELAY_ERROR_S``, fails."""
     label = "Robot copies the head"
     if telemetry is None:
         return step("copy", label, FAIL, "no worker for this booth")
-    behaviour = telemetry.get("behaviour")
-    params = telemetry.get("behaviour_params")
-    delay = _number(params.get("delay")) if isinstance(params, Mapping) else None
-    if behaviour != "copy" or delay is None:
-        return step("copy", label, WARN, f"the robot runs {behaviour or 'nothing'}, not copy",
-                    behaviour=behaviour)  # fmt: skip
-    probe = telemetry.get("movement_delay")
+    if movement is None:
+        return step("copy", label, FAIL, "not run: the check ran without the head movement")
+    delay, figures = movement.delay_s, {"delay_s": movement.delay_s, "measured_s": None,
+                                        "condition": movement.condition}  # fmt: skip
+    configured = f"delay {delay:.2f} s configured" + (
+        f" ({movement.condition})" if movement.condition else " (the worker's default)"
+    )
+    if movement.problem:
+        return step("copy", label, FAIL, f"the robot could not be switched to copy: "
+                    f"{movement.problem}", **figures)  # fmt: skip
+    seen = movement.copy or {}
+    if seen.get("behaviour") != "copy":
+        return step("copy", label, FAIL, f"{configured}; the robot ran "
+                    f"{seen.get('behaviour') or 'nothing'}, not copy", **figures)  # fmt: skip
+    probe = seen.get("movement_delay")
     measured = _number(probe.get("delay_s")) if isinstance(probe, Mapping) else None
     if measured is None:
-        return step("copy", label, FAIL, f"delay {delay:.3f} s configured; no copy of a head "
-                    "movement measured (turn the head, wait for the robot)",
-                    delay_s=delay, measured_s=None)  # fmt: skip
+        return step("copy", label, FAIL, f"{configured}; the robot did not copy the head "
+                    "movement (none measured: was the head turned?)", **figures)  # fmt: skip
     off = measured - delay
+    figures.update(measured_s=measured, tolerance_s=MAX_DELAY_ERROR_S,
+                   correlation=_number(probe.get("correlation"))
+                   if isinstance(probe, Mapping) else None)  # fmt: skip
     status = PASS if abs(off) <= MAX_DELAY_ERROR_S else FAIL
-    return step("copy", label, status, f"delay {delay:.3f} s configured, {measured:.3f} s "
-                f"measured movement to movement ({off * 1000:+.0f} ms)", delay_s=delay,
-                measured_s=measured,
-                correlation=_number(probe.get("correlation")) if isinstance(probe, Mapping)
-                else None)  # fmt: skip
+    return step("copy", label, status, f"{configured}, {measured:.2f} s measured movement to "
+                f"movement ({off * 1000:+.0f} ms; allowed ±{MAX_DELAY_ERROR_S * 1000:.0f} ms)",
+                **figures)  # fmt: skip
 
 
 def speech(result: Mapping[str, Any] | None) -> dict[str, Any]:
@@ -162,9 +201,13 @@ def disk(data_dir: Path, minimum: int = MIN_FREE_BYTES) -> dict[str, Any]:
 def run(
     telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None, data_dir: Path,
     disk_needed: int = MIN_FREE_BYTES, spoken: Mapping[str, Any] | None = None,
+    movement: Movement | None = None,
 ) -> dict[str, Any]:  # fmt: skip
-    steps = [face_stream(telemetry), head_turn(telemetry), robot(telemetry, display),
-             copies(telemetry), speech(spoken), disk(data_dir, disk_needed)]  # fmt: skip
+    """Every step; the head step reads the heartbeat taken right after the head movement
+    when there was one (its window would lose the turn while the robot copies it)."""
+    head = movement.head if movement is not None and movement.head is not None else telemetry
+    steps = [face_stream(telemetry), head_turn(head), robot(telemetry, display),
+             copies(telemetry, movement), speech(spoken), disk(data_dir, disk_needed)]  # fmt: skip
     return {"passed": all(s["status"] != FAIL for s in steps), "steps": steps}
 
 

@@ -1,5 +1,7 @@
-"""The booth check's page and API: ``GET /booths/<booth>/check`` (staff) and
-``POST /api/booths/<booth>/check`` (runs the check, logs ``booth.checked``)."""
+"""The booth check's page and API: ``GET /booths/<booth>/check`` (staff),
+``GET /api/booths/<booth>/check`` (what the check will ask for: the head movement's prompts
+and the copy delay) and ``POST /api/booths/<booth>/check`` (runs the check, logs
+``booth.checked``)."""
 
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
-from chameleons.backend.booth import check
+from chameleons.backend.booth import check, check_run
 from chameleons.backend.booth.check_store import store
 from chameleons.backend.booth.speech_test import say_test_prompt
 from chameleons.backend.dependencies import AppSettings, Templates
@@ -25,37 +27,80 @@ from chameleons.backend.wizard.playback import read, write
 
 router = make_router(tags=["booth"])
 Booth = Annotated[str, Path(pattern=BOOTH_PATTERN)]
+SessionId = Annotated[int | None, Query(description="Store the check with this session.")]
 
 
 @router.get("/booths/{booth}/check", response_class=HTMLResponse)
 def check_page(
     request: Request, booth: Booth, user: CurrentStaff, templates: Templates,
-    session_id: Annotated[int | None, Query()] = None,
+    settings: AppSettings, session_id: SessionId = None,
 ) -> Response:  # fmt: skip
-    context = {"user": user, "booth": booth, "session_id": session_id}
+    plan = _plan(request.app.state, booth, session_id, settings)
+    context = {"user": user, "booth": booth, "session_id": session_id, "plan": plan.describe(),
+               "expected_head": check.expected_head()}  # fmt: skip
     return templates.TemplateResponse(request, "booth/check.html", context)
+
+
+@router.get("/api/booths/{booth}/check")
+def check_plan(
+    request: Request, booth: Booth, _user: CurrentStaff, settings: AppSettings,
+    session_id: SessionId = None,
+) -> dict[str, Any]:  # fmt: skip
+    """What the check asks the technician to do and for how long, and the copy delay."""
+    plan = _plan(request.app.state, booth, session_id, settings)
+    return {"booth": booth, **plan.describe(), "expected_head": check.expected_head()}
 
 
 @router.post("/api/booths/{booth}/check", dependencies=[Depends(verify_csrf)])
 async def run_check(
     request: Request, booth: Booth, _user: CurrentStaff, settings: AppSettings,
-    session_id: Annotated[int | None, Query()] = None,
+    session_id: SessionId = None,
     say: Annotated[bool, Query(description="Play the test prompt (speech step).")] = True,
+    movement: Annotated[bool, Query(description="Run the robot in copy for the head "
+                                    "movement (without it the copy step fails).")] = True,
 ) -> dict[str, Any]:  # fmt: skip
-    """Judge every step now; stored as a ``booth_check`` row (and ``booth.checked`` event)
-    with the session when one is given."""
+    """Judge every step; stored as a ``booth_check`` row (and ``booth.checked`` event) with
+    the session when one is given. Refused (409) while an interaction runs on the booth."""
     state = request.app.state
     session = await run_in_threadpool(read, state, _session, session_id)
     if session_id is not None and (session is None or session.booth != booth):
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"No session {session_id} on {booth}.")
-    telemetry, age = worker_link.latest_telemetry(worker_link.bridge_of(state), booth)
-    if age is None or age > health.STALE_AFTER_SECONDS:
-        telemetry = None
-    spoken = await say_test_prompt(state, booth) if say and telemetry is not None else None
-    result = check.run(telemetry, display_presence(state, booth), settings.data_dir,
-                       settings.session_disk_bytes, spoken)  # fmt: skip
-    event_id = await run_in_threadpool(write, state, store, booth, session, result)
+    refused = await run_in_threadpool(read, state, check_run.refusal, booth)
+    if refused is not None:
+        raise HTTPException(status.HTTP_409_CONFLICT, refused)
+    plan = await run_in_threadpool(read, state, check_run.plan_for, booth, session, settings)
+    try:
+        async with check_run.exclusive(state, booth):
+            result = await _judge(state, booth, plan, settings, say=say, movement=movement)
+    except check_run.CheckRefusedError as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    event_id = await run_in_threadpool(write, state, store, booth, session, result, plan.study_id)
     return {"event_id": event_id, "booth": booth, **result}
+
+
+async def _judge(
+    state: Any, booth: str, plan: check_run.Plan, settings: Any, *, say: bool, movement: bool
+) -> dict[str, Any]:
+    telemetry = _fresh_telemetry(state, booth)
+    moved = None
+    if movement and telemetry is not None:
+        moved = await check_run.exercise(state, booth, plan, telemetry)
+    spoken = await say_test_prompt(state, booth) if say and telemetry is not None else None
+    telemetry = _fresh_telemetry(state, booth) if telemetry is not None else None
+    return check.run(telemetry, display_presence(state, booth), settings.data_dir,
+                     settings.session_disk_bytes, spoken, moved)  # fmt: skip
+
+
+def _fresh_telemetry(state: Any, booth: str) -> dict[str, Any] | None:
+    telemetry, age = worker_link.latest_telemetry(worker_link.bridge_of(state), booth)
+    return telemetry if age is not None and age <= health.STALE_AFTER_SECONDS else None
+
+
+def _plan(state: Any, booth: str, session_id: int | None, settings: Any) -> check_run.Plan:
+    session = read(state, _session, session_id)
+    if session_id is not None and (session is None or session.booth != booth):
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"No session {session_id} on {booth}.")
+    return read(state, check_run.plan_for, booth, session, settings)
 
 
 def _session(db: DbSession, session_id: int | None) -> Session | None:

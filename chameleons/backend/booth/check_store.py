@@ -19,12 +19,16 @@ def _figure(steps: dict[str, Mapping[str, Any]], step: str, name: str) -> Any:
     return value if isinstance(value, int | float) and not isinstance(value, bool) else None
 
 
-def store(db: DbSession, booth: str, session: Session | None, result: dict[str, Any]) -> int:
-    """Add the row and the event; returns the event's id."""
+def store(
+    db: DbSession, booth: str, session: Session | None, result: dict[str, Any],
+    study_id: int | None = None,
+) -> int:  # fmt: skip
+    """Add the row and the event; returns the event's id. A check without a session belongs
+    to ``study_id`` (the study whose copy delay it ran with), so its study's export has it."""
     steps = {s["id"]: s for s in result["steps"]}
     speech = steps.get("speech") or {}
     row = BoothCheck(
-        booth=booth, study_id=session.study_id if session else None,
+        booth=booth, study_id=session.study_id if session else study_id,
         session_id=session.id if session else None, passed=bool(result["passed"]),
         steps=list(result["steps"]),
         face_fps=_figure(steps, "face", "fps"),

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+import uuid
 from types import SimpleNamespace
 from typing import Any, cast
 
@@ -63,28 +64,31 @@ async def say_test_prompt(state: Any, booth: str) -> dict[str, Any]:
                 "problem": "no recorded prompt in the catalogue to test with"}  # fmt: skip
     catalogue, prompt = chosen
     prompt_id = f"{PREFIX}{prompt.id}"
+    play_id = f"booth-check-{uuid.uuid4().hex[:12]}"
     result: dict[str, Any] = {"prompt_id": prompt_id, "start_ms": None, "ended": False,
                               "problem": None}  # fmt: skip
     bridge = worker_link.bridge_of(state)
     events = speech.open_events(bridge, booth)
-    body = {"prompt_id": prompt_id, "audio_url": _audio_url(state, catalogue.actor, prompt, booth)}
+    body = {"prompt_id": prompt_id, "play_id": play_id,
+            "audio_url": _audio_url(state, catalogue.actor, prompt, booth)}  # fmt: skip
     sent_at = time.monotonic()
     try:
         outcome = await worker_link.send_command(bridge, booth, PLAY_PROMPT, body)
         if not outcome.sent or events is None:
             result["problem"] = outcome.detail or "no events from the worker"
             return result
-        await _follow(events, prompt_id, catalogue.duration(prompt), sent_at, result)
+        await _follow(events, prompt_id, play_id, catalogue.duration(prompt), sent_at, result)
     finally:
         speech.close(events)
     return result
 
 
 async def _follow(
-    events: Any, prompt_id: str, duration: float, sent_at: float, result: dict[str, Any]
-) -> None:
+    events: Any, prompt_id: str, play_id: str, duration: float, sent_at: float,
+    result: dict[str, Any],
+) -> None:  # fmt: skip
     try:
-        kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id),
+        kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
                                          speech.START_TIMEOUT_SECONDS)  # fmt: skip
     except TimeoutError:
         return
@@ -94,7 +98,7 @@ async def _follow(
     result["start_ms"] = round((time.monotonic() - sent_at) * 1000.0, 1)
     try:
         while kind != speech.SPEECH_END:
-            kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id),
+            kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
                                              duration + speech.END_MARGIN_SECONDS)  # fmt: skip
     except TimeoutError:
         return

@@ -29,6 +29,9 @@ from chameleons.worker.envelope import Message as Envelope
 from chameleons.worker.frames import N_BLENDSHAPES
 
 DISPLAY_TOPIC_PREFIX = "display."
+# A play id the relay makes itself (``prompt#seq``) for a worker that sent none: it names the
+# play on the page only and is not sent back to the worker.
+RELAY_PLAY_MARK = "#"
 LipsyncResolver = Callable[[str], str | None]
 SendCommand = Callable[[str, str, dict[str, Any]], Awaitable[object] | object]
 
@@ -108,8 +111,11 @@ def _play_audio(envelope: Envelope) -> Message:
     prompt_id = body.get("prompt_id")
     prompt_id = prompt_id if isinstance(prompt_id, str) else None
     lipsync = body.get("lipsync_url")
+    play_id = body.get("play_id")
     return play_audio_message(
-        f"{prompt_id or 'audio'}#{envelope.seq}",
+        play_id
+        if isinstance(play_id, str) and play_id and RELAY_PLAY_MARK not in play_id
+        else f"{prompt_id or 'audio'}{RELAY_PLAY_MARK}{envelope.seq}",
         str(body["url"]),
         prompt_id=prompt_id,
         lipsync_url=lipsync if isinstance(lipsync, str) else None,
@@ -143,8 +149,13 @@ def relay_envelope(
 
 
 def speech_command_body(message: Message) -> dict[str, Any]:
-    """The ``speech_event`` command body for a page's speech report."""
-    return {"event": message["event"], "prompt_id": message.get("prompt_id")}
+    """The ``speech_event`` command body for a page's speech report, with the worker's own
+    id of the play when it gave one."""
+    body = {"event": message["event"], "prompt_id": message.get("prompt_id")}
+    play_id = message.get("play_id")
+    if isinstance(play_id, str) and play_id and RELAY_PLAY_MARK not in play_id:
+        body["play_id"] = play_id
+    return body
 
 
 def forward_speech_events(channel: DisplayChannel, send_command: SendCommand) -> None:

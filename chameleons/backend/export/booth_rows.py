@@ -1,15 +1,18 @@
-"""Rows of the ``booth_checks`` export table: every booth check run for a counted session
-(:class:`~chameleons.backend.models.BoothCheck`), in time order."""
+"""Rows of the ``booth_checks`` export table: every booth check of the study
+(:class:`~chameleons.backend.models.BoothCheck`), in time order: those run for a counted
+session with its participant and session, and those run without a session (a booth
+checked between participants, stored with the study whose copy delay it ran) with both
+empty."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import and_, or_, select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.queries import BATCH, joined
+from chameleons.backend.export.queries import BATCH, session_filter
 from chameleons.backend.export.selection import iso
 from chameleons.backend.models import BoothCheck, Participant, Session, Study
 
@@ -21,9 +24,16 @@ FIGURES = ("face_fps", "capture_to_send_ms", "head_yaw_deg", "head_pitch_deg", "
 def booth_check_rows(
     db: DbSession, study: Study, include_rehearsal: bool
 ) -> Iterator[dict[str, Any]]:
-    query = select(BoothCheck, Participant.code).join(Session, Session.id == BoothCheck.session_id)
-    query = joined(query, study.id, include_rehearsal).order_by(BoothCheck.checked_at,
-                                                                BoothCheck.id)  # fmt: skip
+    query = (
+        select(BoothCheck, Participant.code)
+        .outerjoin(Session, Session.id == BoothCheck.session_id)
+        .outerjoin(Participant, Participant.id == Session.participant_id)
+        .where(or_(
+            and_(BoothCheck.session_id.is_(None), BoothCheck.study_id == study.id),
+            and_(BoothCheck.session_id.is_not(None), *session_filter(study.id, include_rehearsal)),
+        ))
+        .order_by(BoothCheck.checked_at, BoothCheck.id)
+    )  # fmt: skip
     for check, code in db.execute(query.execution_options(yield_per=BATCH)):
         statuses = {s.get("id"): s.get("status") for s in check.steps or []}
         yield {

@@ -450,17 +450,32 @@ def booth_checks_table(spec: StudySpec) -> TableSpec:
         ("face", "Face stream (frames arrive, capture to robot latency)"),
         ("head", "Turn your head left, then nod (sign and size of yaw and pitch)"),
         ("robot", "Robot connected (virtual robot: display page open and playing)"),
-        ("copy", "Robot copies the head: measured copy delay within 0.25 s of the configured"),
+        (
+            "copy",
+            "Robot copies the head: the check runs the robot in copy with the study's"
+            " delay; fails when it does not copy or the measured delay is more than 0.25 s"
+            " off the configured",
+        ),
         ("speech", "Robot says a test prompt and reports its speech start and end"),
         ("disk", "Recordings folder writable, free space for a session"),
     )
     return TableSpec(
         "booth_checks",
-        "One row per booth check run for a session (the check a technician runs before each"
-        " participant), in time order.",
+        "One row per booth check (the check a technician runs before each participant), in"
+        " time order: those run for a session of this study, and those run without a session"
+        " (from the booths monitor, or between participants) with the study's copy delay.",
         (
-            _participant(),
-            _session(),
+            Column(
+                "participant",
+                "string",
+                "Pseudonymous participant code of the session the"
+                " check was run for; empty: run without a session.",
+            ),
+            Column(
+                "session",
+                "integer",
+                "Session id the check was run for; empty: run without a session.",
+            ),
             Column("booth", "string", "Booth id."),
             _time("checked_at", "When the check ran"),
             Column("passed", "boolean", "No step failed (warnings allowed)."),
@@ -469,7 +484,11 @@ def booth_checks_table(spec: StudySpec) -> TableSpec:
             Column("capture_to_send_ms", "number", "Capture to send latency (ms)."),
             Column("head_yaw_deg", "number", "Largest head yaw measured (degrees, left > 0)."),
             Column("head_pitch_deg", "number", "Largest head pitch measured (degrees, down > 0)."),
-            Column("copy_delay_s", "number", "Configured copy delay (s)."),
+            Column(
+                "copy_delay_s",
+                "number",
+                "Copy delay the check ran the robot with: the study's configured delay (s).",
+            ),
             Column(
                 "measured_delay_s",
                 "number",

@@ -74,14 +74,16 @@ async def say(state: Any, session_id: int, text: str) -> dict[str, Any]:
 async def _deliver(state: Any, cue: Cue, body: dict[str, Any]) -> dict[str, Any]:
     """Send a logged play to the booth's worker; log its outcome and watch its speech."""
     bridge = worker_link.bridge_of(state)
+    play_id = play_id_of(cue)
     events = speech.open_events(bridge, cue.booth)
-    display = speech.open_display(state, cue.booth, cue.prompt.id)
-    outcome = await worker_link.send_command(bridge, cue.booth, PLAY_PROMPT, body)
+    display = speech.open_display(state, cue.booth, cue.prompt.id, play_id)
+    outcome = await worker_link.send_command(bridge, cue.booth, PLAY_PROMPT,
+                                             {**body, "play_id": play_id})  # fmt: skip
     acked_at = utcnow()
     event = await run_in_threadpool(write, state, service.record_outcome, cue, outcome, acked_at)
     if outcome.sent and events is not None:
         _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue),
-                                   _not_voiced_logger(state, cue, display)))  # fmt: skip
+                                   _not_voiced_logger(state, cue, display), play_id))  # fmt: skip
         if display is not None:
             _spawn(state, display.wait(_failure_logger(state, cue)))
     else:
@@ -95,6 +97,12 @@ async def _deliver(state: Any, cue: Cue, body: dict[str, Any]) -> dict[str, Any]
         "detail": outcome.detail,
         "click_to_ack_ms": event.payload.get("click_to_ack_ms"),
     }
+
+
+def play_id_of(cue: Cue) -> str:
+    """This play's own id on the wire: its ``prompt.played`` event's id (the worker's
+    speech events carry it back; the same prompt may be played twice)."""
+    return f"play-{cue.event_id}"
 
 
 async def stop(state: Any, session_id: int) -> dict[str, Any]:

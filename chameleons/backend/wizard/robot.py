@@ -165,12 +165,12 @@ def _unchanged(outcome: Outcome) -> bool:
 async def _send(
     bridge: Any | None, booth: str, command: str, body: dict[str, Any], only_changes: bool
 ) -> Outcome:
-    if only_changes and _acknowledged(bridge, booth, command) == body:
+    if only_changes and acknowledged(bridge, booth, command) == body:
         return Outcome(True, result={"unchanged": True})
     return await worker_link.send_command(bridge, booth, command, body)
 
 
-def _acknowledged(bridge: Any | None, booth: str, command: str) -> dict[str, Any] | None:
+def acknowledged(bridge: Any | None, booth: str, command: str) -> dict[str, Any] | None:
     """What the bridge last had acknowledged for this command on this booth."""
     reader = getattr(bridge, "state", None)
     if not callable(reader):

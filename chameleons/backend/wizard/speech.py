@@ -2,7 +2,12 @@
 
 The subscription to the booth's events is opened before the command goes out, so a worker
 that starts speaking at once is not missed. Events are ``event.<booth>`` messages of type
-``speech_start``/``speech_end`` whose body carries ``prompt_id`` and ``worker_time``.
+``speech_start``/``speech_end`` whose body carries ``prompt_id``, ``play_id`` and
+``worker_time``. Each play has its own ``play_id`` (sent with ``play_prompt``, carried by
+the worker's speech events of that play): an event is credited to a play only when its
+``play_id`` is the play's, so when the same prompt is played again while it speaks, the
+first play's interrupted end is never taken for the second's. (An event without a
+``play_id``, from a worker that sends none, is placed by its ``prompt_id``.)
 
 A play that no robot voices is not voiced: no speech start within
 :data:`START_TIMEOUT_SECONDS`, or an end before any start (the robot skipped it, or was not
@@ -23,6 +28,8 @@ import contextlib
 import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
+
+from chameleons.backend.display.relay import RELAY_PLAY_MARK
 
 log = logging.getLogger(__name__)
 SPEECH_START = "speech_start"
@@ -45,8 +52,11 @@ class DisplayWatch:
     """Listens on the display channel (from its creation, before the command goes out) for
     the page's report that this play could not start; call :meth:`wait` once."""
 
-    def __init__(self, channel: Any, booth: str, prompt_id: str) -> None:
+    def __init__(
+        self, channel: Any, booth: str, prompt_id: str, play_id: str | None = None
+    ) -> None:
         self.channel, self.booth, self.prompt_id = channel, booth, prompt_id
+        self.play_id = play_id
         self.failed: asyncio.Future[str] = asyncio.get_running_loop().create_future()
         channel.add_listener(self._hear)
 
@@ -55,6 +65,7 @@ class DisplayWatch:
         if (booth == self.booth and message.get("type") == "speech"
                 and message.get("event") == "end" and reason in DISPLAY_FAILURES
                 and message.get("prompt_id") == self.prompt_id
+                and _same_play(message.get("play_id"), self.play_id)
                 and not self.failed.done()):  # fmt: skip
             self.failed.set_result(str(reason))
 
@@ -80,13 +91,23 @@ class DisplayWatch:
             self.close()
 
 
-def open_display(state: Any, booth: str, prompt_id: str) -> DisplayWatch | None:
+def open_display(
+    state: Any, booth: str, prompt_id: str, play_id: str | None = None
+) -> DisplayWatch | None:
     """A watch on the booth's display page, or None when this server has no display channel
     (no page ever connected: only a physical robot speaks)."""
     channel = getattr(state, "display_channel", None)
     if channel is None or not callable(getattr(channel, "add_listener", None)):
         return None
-    return DisplayWatch(channel, booth, prompt_id)
+    return DisplayWatch(channel, booth, prompt_id, play_id)
+
+
+def _same_play(reported: Any, play_id: str | None) -> bool:
+    """An event of this play: its ``play_id`` is the play's (one without is placed by its
+    prompt id alone: a worker or page that sends none)."""
+    if play_id is None or not reported or RELAY_PLAY_MARK in str(reported):
+        return True  # no play id from the worker: the page knows the relay's own id only
+    return bool(reported == play_id)
 
 
 def open_events(bridge: Any | None, booth: str) -> Any | None:
@@ -107,19 +128,24 @@ def close(subscription: Any | None) -> None:
             subscription.close()
 
 
-async def _next(subscription: Any, prompt_id: str) -> tuple[str, dict[str, Any]]:
-    """The next speech event (type, body) of ``prompt_id``."""
+async def _next(
+    subscription: Any, prompt_id: str, play_id: str | None = None
+) -> tuple[str, dict[str, Any]]:
+    """The next speech event (type, body) of this play of ``prompt_id``."""
     async for message in subscription:
         body = getattr(message, "body", {}) or {}
         kind = getattr(message, "type", None)
-        if kind in (SPEECH_START, SPEECH_END) and body.get("prompt_id") == prompt_id:
+        if (kind in (SPEECH_START, SPEECH_END) and body.get("prompt_id") == prompt_id
+                and _same_play(body.get("play_id"), play_id)):  # fmt: skip
             return str(kind), dict(body)
     raise TimeoutError("the event subscription closed")
 
 
-async def next_speech(subscription: Any, prompt_id: str) -> tuple[str, dict[str, Any]]:
-    """The next speech event of ``prompt_id`` (also for the booth check's test prompt)."""
-    return await _next(subscription, prompt_id)
+async def next_speech(
+    subscription: Any, prompt_id: str, play_id: str | None = None
+) -> tuple[str, dict[str, Any]]:
+    """The next speech event of this play (also for the booth check's test prompt)."""
+    return await _next(subscription, prompt_id, play_id)
 
 
 def _time(body: dict[str, Any]) -> float | None:
@@ -139,13 +165,14 @@ def _why_silent(body: dict[str, Any]) -> str:
 
 async def watch(
     subscription: Any, prompt_id: str, duration: float, on_speech: OnSpeech,
-    on_not_voiced: OnNotVoiced | None = None,
+    on_not_voiced: OnNotVoiced | None = None, play_id: str | None = None,
 ) -> None:  # fmt: skip
-    """Report speech start, then end, of ``prompt_id``; a play that never starts (no start
-    in time, or an end first) goes to ``on_not_voiced``; a late end is given up quietly."""
+    """Report speech start, then end, of this play (``play_id``) of ``prompt_id``; a play
+    that never starts (no start in time, or an end first) goes to ``on_not_voiced``; a late
+    end is given up quietly."""
     try:
         try:
-            kind, body = await asyncio.wait_for(_next(subscription, prompt_id),
+            kind, body = await asyncio.wait_for(_next(subscription, prompt_id, play_id),
                                                 START_TIMEOUT_SECONDS)  # fmt: skip
         except TimeoutError:
             if on_not_voiced is not None:
@@ -157,7 +184,7 @@ async def watch(
             return
         await on_speech(True, _time(body), None)
         while kind != SPEECH_END:
-            kind, body = await asyncio.wait_for(_next(subscription, prompt_id),
+            kind, body = await asyncio.wait_for(_next(subscription, prompt_id, play_id),
                                                 duration + END_MARGIN_SECONDS)  # fmt: skip
         outcome = body.get("outcome")
         await on_speech(False, _time(body), str(outcome) if outcome else None)

@@ -46,6 +46,9 @@ class BehaviourContext:
     # This machine's folders (``data_dir``, ``prompts_dir``) for marked paths such as
     # ``prompts:_natural/demo-natural.npz``; see chameleons.prompts.locations.
     locations: Any = None
+    # Degrees per unit of a Live Link take CSV's rotations (the livelink_rotation_scale
+    # setting), for clips read from takes; None: the take reader's default.
+    rotation_factor: float | None = None
 
 
 class Behaviour(ABC):

@@ -65,9 +65,11 @@ class MotionClip:
             out += self.vectors[i - 1]
 
 
-def load_clip(path: str | Path) -> MotionClip:
+def load_clip(path: str | Path, *, rotation_factor: float | None = None) -> MotionClip:
     """A clip from a Live Link take CSV, a face-stream recording (Parquet) or an ``.npz``
-    with arrays ``times``, ``blendshapes`` and optionally ``head``, ``eyes``."""
+    with arrays ``times``, ``blendshapes`` and optionally ``head``, ``eyes``. A take's
+    rotations are read with ``rotation_factor`` (degrees per unit: the worker's
+    ``livelink_rotation_scale``; None: the take reader's default)."""
     path = Path(path)
     if not path.is_file():
         raise BehaviourError(f"motion recording not found: {path}")
@@ -80,17 +82,18 @@ def load_clip(path: str | Path) -> MotionClip:
                 data["times"], data["blendshapes"], data.get("head"), data.get("eyes")
             )
     if suffix == ".csv":
-        return _load_take(path)
+        return _load_take(path, rotation_factor)
     if suffix == ".parquet":
         return _load_recording(path)
     raise BehaviourError(f"{path}: unsupported motion recording type {suffix!r}")
 
 
-def _load_take(path: Path) -> MotionClip:
+def _load_take(path: Path, rotation_factor: float | None) -> MotionClip:
     from chameleons.worker.takes import TakeError, read_take
 
     try:
-        take = read_take(path)
+        take = read_take(path) if rotation_factor is None else read_take(
+            path, rotation_factor=rotation_factor)  # fmt: skip
     except TakeError as exc:
         raise BehaviourError(str(exc)) from exc
     return MotionClip.from_arrays(take.times, take.blendshapes, take.head, take.eyes)

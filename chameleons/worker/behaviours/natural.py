@@ -112,7 +112,8 @@ class NaturalBehaviour(Behaviour):
             raise BehaviourError("natural needs a 'path' to a take CSV, Parquet recording or "
                                  ".npz clip (or a 'seed' for a synthetic face)")  # fmt: skip
         local = resolve_marked_path(path, context.locations)  # "prompts:..." / "data:..."
-        return cls(context, load_clip(local), offset=offset, loop=loop, source=path)
+        clip = load_clip(local, rotation_factor=context.rotation_factor)
+        return cls(context, clip, offset=offset, loop=loop, source=path)
 
     def start(self, t: float) -> None:
         self._start = t

@@ -60,11 +60,11 @@ def build_context(
     history_seconds: float = DEFAULT_HISTORY_SECONDS,
     max_input_rate: float = DEFAULT_MAX_INPUT_RATE,
     locations: Any = None,
+    rotation_factor: float | None = None,
 ) -> BehaviourContext:
     capacity = math.ceil(history_seconds * max_input_rate)
-    return BehaviourContext(
-        FrameHistory(capacity), history_seconds=history_seconds, locations=locations
-    )
+    return BehaviourContext(FrameHistory(capacity), history_seconds=history_seconds,
+                            locations=locations, rotation_factor=rotation_factor)  # fmt: skip
 
 
 class BehaviourRouter:

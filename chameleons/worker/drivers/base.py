@@ -79,15 +79,19 @@ class Driver(ABC):
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
         """Absolute head pose in degrees."""
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
-        """Start the prompt's audio; speech start/end come back as events."""
-        self.emit(SPEECH_START, prompt_id=prompt_id)
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
+        """Start the prompt's audio; speech start/end come back as events, carrying
+        ``play_id`` (this play's own id: the same prompt may be played twice)."""
+        self.emit(SPEECH_START, prompt_id=prompt_id, play_id=play_id)
 
-    def speak_text(self, prompt_id: str, text: str, voice: str | None) -> None:
+    def speak_text(
+        self, prompt_id: str, text: str, voice: str | None, play_id: str | None = None
+    ) -> None:
         """Say ``text`` with the robot's own TTS (``voice``, or its current one); speech
-        start/end come back as events. Only drivers with ``speaks_text`` get this (the
-        worker refuses typed text for the others), so here it ends unvoiced at once."""
-        self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
+        start/end come back as events carrying ``play_id``. Only drivers with
+        ``speaks_text`` get this (the worker refuses typed text for the others), so here it
+        ends unvoiced at once."""
+        self.emit(SPEECH_END, prompt_id=prompt_id, play_id=play_id, outcome="skipped",
                   error=f"the {self.name or 'robot'} driver has no text-to-speech")  # fmt: skip
 
     def stop_audio(self) -> None:  # noqa: B027 - optional
@@ -99,7 +103,9 @@ class Driver(ABC):
     def retry(self) -> None:  # noqa: B027 - optional
         """Try the robot again after the driver stopped itself (a refused login)."""
 
-    def remote_speech(self, event: str, prompt_id: str | None) -> None:  # noqa: B027
+    def remote_speech(  # noqa: B027
+        self, event: str, prompt_id: str | None, play_id: str | None = None
+    ) -> None:
         """Speech start/end reported by the server (the virtual robot's page)."""
 
     def stats(self) -> dict[str, Any]:

@@ -132,25 +132,28 @@ class FurhatDriver(Driver):
         self._retry.set()
         self._notify()
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         # The worker drives the mouth from the prompt's curves: the robot's lip-sync is off.
-        self._speak(prompt_id, {"type": "request.speak.audio", "url": url, "lipsync": False})
+        request = {"type": "request.speak.audio", "url": url, "lipsync": False}
+        self._speak(prompt_id, request, play_id)
 
-    def speak_text(self, prompt_id: str, text: str, voice: str | None) -> None:
+    def speak_text(
+        self, prompt_id: str, text: str, voice: str | None, play_id: str | None = None
+    ) -> None:
         """Typed speech in the robot's own TTS (its own lip-sync: no curves come with it)."""
         if voice and voice != self.voice and self.connected:
             self.voice = voice  # kept: the robot stays in this voice until told otherwise
             self._queue_control({"type": "request.voice.config", "name": voice})
-        self._speak(prompt_id, {"type": "request.speak.text", "text": text})
+        self._speak(prompt_id, {"type": "request.speak.text", "text": text}, play_id)
 
-    def _speak(self, prompt_id: str, request: dict[str, Any]) -> None:
+    def _speak(self, prompt_id: str, request: dict[str, Any], play_id: str | None) -> None:
         """Send one speech request, tracked by ``request_id``; one under way is stopped."""
         if not self.connected:  # nothing will ever answer: end the speech at once
-            self.emit(SPEECH_END, prompt_id=prompt_id, outcome="skipped",
+            self.emit(SPEECH_END, prompt_id=prompt_id, play_id=play_id, outcome="skipped",
                       error=self.problem or "robot not connected")  # fmt: skip
             return
         abort = self.speech.busy
-        play, skipped = self.speech.begin(prompt_id)
+        play, skipped = self.speech.begin(prompt_id, play_id)
         if abort:  # the robot would queue it behind the one that plays: stop that first
             self._queue_control({"type": "request.speak.stop"})
         self._queue_control({**request, "abort": abort, "request_id": play.request_id})
@@ -178,9 +181,10 @@ class FurhatDriver(Driver):
         if credit is None:
             return
         if credit.kind == "start":
-            self.emit(SPEECH_START, prompt_id=credit.prompt_id)
+            self.emit(SPEECH_START, prompt_id=credit.prompt_id, play_id=credit.play_id)
         else:
-            self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome)
+            self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
+                      outcome=credit.outcome)  # fmt: skip
 
     def _select_face(self, face_id: str | None) -> None:
         self.face_id = face_id
@@ -237,8 +241,8 @@ class FurhatDriver(Driver):
             self._pending_fields.clear()
             credit = self.speech.drop_all()  # a prompt that was playing will never end
             if credit is not None:
-                self.emit(SPEECH_END, prompt_id=credit.prompt_id, outcome=credit.outcome,
-                          error="robot disconnected")  # fmt: skip
+                self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
+                          outcome=credit.outcome, error="robot disconnected")  # fmt: skip
             if self._stopping.is_set():
                 break
             self.set_state("disconnected", retry_in=delay)

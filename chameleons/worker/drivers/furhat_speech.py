@@ -31,6 +31,7 @@ PLAYED, INTERRUPTED, SKIPPED, STOPPED = "played", "interrupted", "skipped", "sto
 class Play:
     prompt_id: str
     request_id: str
+    play_id: str | None = None  # the server's id of this play (its events carry it)
     started: bool = False
     stopping: bool = False  # the wizard stopped it: its end is not "played"
     outcome: str | None = None  # set once the play is over (or replaced)
@@ -43,6 +44,7 @@ class Credit:
     kind: str
     prompt_id: str
     outcome: str | None = None
+    play_id: str | None = None
 
 
 class SpeechTracker:
@@ -57,7 +59,7 @@ class SpeechTracker:
         """A play is under way: a new one must stop/abort it first."""
         return self.current is not None and self.current.outcome is None
 
-    def begin(self, prompt_id: str) -> tuple[Play, Credit | None]:
+    def begin(self, prompt_id: str, play_id: str | None = None) -> tuple[Play, Credit | None]:
         """A new play; the replaced play's credit when it never started (``skipped``: the
         renderer has not heard of it speaking, so nobody else will end it)."""
         credit = None
@@ -66,8 +68,8 @@ class SpeechTracker:
             old.outcome = INTERRUPTED if old.started else SKIPPED
             self.replaced = [*self.replaced[-15:], old]
             if not old.started:
-                credit = Credit("end", old.prompt_id, SKIPPED)
-        play = Play(prompt_id, uuid.uuid4().hex)
+                credit = Credit("end", old.prompt_id, SKIPPED, old.play_id)
+        play = Play(prompt_id, uuid.uuid4().hex, play_id)
         self.current = play
         self._by_id[play.request_id] = play
         return play, credit
@@ -85,9 +87,9 @@ class SpeechTracker:
             return None
         if kind == "response.speak.start":
             play.started = True
-            return Credit("start", play.prompt_id)
+            return Credit("start", play.prompt_id, play_id=play.play_id)
         play.outcome = SKIPPED if not play.started else STOPPED if play.stopping else PLAYED
-        return Credit("end", play.prompt_id, play.outcome)
+        return Credit("end", play.prompt_id, play.outcome, play.play_id)
 
     def stop(self) -> Credit | None:
         """The wizard stopped the prompt. One that never started ends now (``skipped``);
@@ -99,7 +101,7 @@ class SpeechTracker:
         if play.started:
             return None
         play.outcome = SKIPPED
-        return Credit("end", play.prompt_id, SKIPPED)
+        return Credit("end", play.prompt_id, SKIPPED, play.play_id)
 
     def drop_all(self) -> Credit | None:
         """The connection is gone: nothing sent will be answered. The current play's end."""
@@ -108,7 +110,7 @@ class SpeechTracker:
         if play is None or play.outcome is not None:
             return None
         play.outcome = INTERRUPTED if play.started else SKIPPED
-        return Credit("end", play.prompt_id, play.outcome)
+        return Credit("end", play.prompt_id, play.outcome, play.play_id)
 
     def _find(self, kind: str, request_id: object) -> Play | None:
         if isinstance(request_id, str) and request_id:

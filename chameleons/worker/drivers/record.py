@@ -58,9 +58,9 @@ class RecordDriver(Driver):
         self.heads_sent += 1
         self._write({"type": "head", "yaw": yaw, "pitch": pitch, "roll": roll})
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         self._write({"type": "play_audio", "prompt_id": prompt_id, "url": url})
-        super().play_audio(prompt_id, url)
+        super().play_audio(prompt_id, url, play_id)
 
     def stop_audio(self) -> None:
         self._write({"type": "stop_audio"})

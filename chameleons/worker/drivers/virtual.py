@@ -6,7 +6,8 @@ PUB connection to the server, which relays it to the booth's robot display page:
 - ``face``: payload 52 float32 blendshapes in canonical order (``frames.BLENDSHAPE_NAMES``);
 - ``head``: body ``{"yaw", "pitch", "roll"}`` in degrees, at most ``head_rate`` per second
   (the page draws at display rate; more would only load the relay);
-- ``play_audio`` ``{"prompt_id", "url"}``, ``stop_audio``, ``set_face`` ``{"face_id"}``.
+- ``play_audio`` ``{"prompt_id", "url", "play_id"}``, ``stop_audio``, ``set_face``
+  ``{"face_id"}``. The page reports speech start/end with the play's ``play_id``.
 
 The page reports when the audio really starts and ends; the server sends those back as
 ``speech_event`` commands, which reach :meth:`VirtualDriver.remote_speech`.
@@ -57,8 +58,11 @@ class VirtualDriver(Driver):
         self.heads_sent += 1
         self._send("head", {"yaw": yaw, "pitch": pitch, "roll": roll})
 
-    def play_audio(self, prompt_id: str, url: str) -> None:
-        self._send("play_audio", {"prompt_id": prompt_id, "url": url})
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
+        body = {"prompt_id": prompt_id, "url": url}
+        if play_id:
+            body["play_id"] = play_id
+        self._send("play_audio", body)
 
     def stop_audio(self) -> None:
         self._send("stop_audio")
@@ -66,5 +70,6 @@ class VirtualDriver(Driver):
     def set_face(self, face_id: str) -> None:
         self._send("set_face", {"face_id": face_id})
 
-    def remote_speech(self, event: str, prompt_id: str | None) -> None:
-        self.emit(SPEECH_START if event == "start" else SPEECH_END, prompt_id=prompt_id)
+    def remote_speech(self, event: str, prompt_id: str | None, play_id: str | None = None) -> None:
+        self.emit(SPEECH_START if event == "start" else SPEECH_END, prompt_id=prompt_id,
+                  play_id=play_id)  # fmt: skip

@@ -22,6 +22,7 @@ from chameleons.backend.display.relay import (
     display_message,
     forward_speech_events,
     relay_envelope,
+    speech_command_body,
 )
 from chameleons.worker.drivers.virtual import VirtualDriver
 from chameleons.worker.envelope import Message as Envelope
@@ -125,6 +126,26 @@ def test_virtual_driver_envelopes_become_page_messages() -> None:
     )  # fmt: skip
     assert play["play_id"].startswith("hello#")
     assert stop["type"] == "stop_audio"
+
+
+def test_the_worker_s_play_id_reaches_the_page_and_comes_back_to_the_worker() -> None:
+    """The same prompt played twice: each play keeps the id the server gave it, on the page
+    and back in the page's speech reports; an id the relay made itself stays here."""
+    sent: list[Envelope] = []
+    driver = VirtualDriver(BOOTH, sent.append)
+    driver.play_audio("hello", "/a.mp3", "play-41")
+    driver.play_audio("hello", "/a.mp3", "play-42")
+    driver.play_audio("hello", "/a.mp3")  # a server that sends no play id
+    first, second, bare = (display_message(deserialize(serialize(e))) for e in sent)
+    assert (first["play_id"], second["play_id"]) == ("play-41", "play-42")
+    assert bare["play_id"].startswith("hello#")
+    report = {"type": "speech", "event": "end", "prompt_id": "hello", "reason": "interrupted"}
+    assert speech_command_body({**report, "play_id": "play-41"}) == {
+        "event": "end", "prompt_id": "hello", "play_id": "play-41",
+    }  # fmt: skip
+    assert speech_command_body({**report, "play_id": bare["play_id"]}) == {
+        "event": "end", "prompt_id": "hello",
+    }  # fmt: skip
 
 
 @pytest.mark.parametrize(

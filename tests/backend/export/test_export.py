@@ -282,3 +282,27 @@ def test_booth_checks_are_exported_with_their_figures_and_in_the_codebook(
     described = {r["column"] for r in book if r["table"] == "booth_checks"}
     assert set(header) == described
     assert "measured_delay_s" in described
+
+
+def test_a_booth_check_run_without_a_session_is_exported_with_empty_participant_and_session(
+    db_session: DbSession, populated: PopulatedStudy, tmp_path: Path
+) -> None:
+    from chameleons.backend.models import BoothCheck
+
+    steps = [{"id": "copy", "status": "fail", "value": "", "figures": {}}]
+    between = BoothCheck(booth="booth-4", study_id=populated.study_id, session_id=None,
+                         passed=False, steps=steps, copy_delay_s=4.0)  # fmt: skip
+    no_study = BoothCheck(booth="booth-5", study_id=None, session_id=None, passed=True, steps=[])
+    db_session.add_all([between, no_study])
+    db_session.commit()
+    export_to_directory(db_session, ExportRequest(formats=("csv",)), tmp_path)
+    _, rows = read_csv(tmp_path / "booth_checks.csv")
+    assert len(rows) == 13  # the 12 before participants, and the one between them
+    alone = [r for r in rows if r["booth"] == "booth-4"]
+    assert len(alone) == 1
+    assert (alone[0]["participant"], alone[0]["session"]) == ("", "")
+    assert (alone[0]["copy_status"], alone[0]["passed"]) == ("fail", "false")
+    assert all(r["booth"] != "booth-5" for r in rows)  # no study: in no study's export
+    _, book = read_csv(tmp_path / "codebook.csv")
+    session = next(r for r in book if r["table"] == "booth_checks" and r["column"] == "session")
+    assert "empty: run without a session" in session["description"]

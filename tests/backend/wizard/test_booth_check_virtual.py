@@ -42,7 +42,7 @@ def test_the_display_page_voices_the_test_prompt(
     answer: dict[str, Any] = {}
 
     def run_check() -> None:
-        answer.update(wizard.staff.post(f"/api/booths/{BOOTH}/check"))
+        answer.update(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
 
     with client.websocket_connect(path) as page:
         page.send_text(json.dumps(TELEMETRY))
@@ -64,6 +64,6 @@ def test_without_a_display_page_the_test_prompt_fails(
     app: FastAPI, wizard: WizardBot, virtual_worker: Worker,  # noqa: F811
 ) -> None:  # fmt: skip
     until(lambda: heartbeat(app))
-    step = speech_step(wizard.staff.post(f"/api/booths/{BOOTH}/check"))
+    step = speech_step(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
     assert step["status"] == "fail"
     assert step["value"] == "the robot never started speaking"

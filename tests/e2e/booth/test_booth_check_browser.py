@@ -31,7 +31,6 @@ def test_the_booth_check_page_runs_the_check_and_stores_it(
         expect(page.get_by_role("heading", name="Booth check: booth-7")).to_be_visible()
         expect(page.locator("#booth-check")).to_contain_text("turn your head to the left")
 
-        page.locator("#booth-check").evaluate("root => { root.dataset.wait = '0'; }")
         page.get_by_role("button", name="Run the check").click()
         expect(page.locator("#check-summary")).to_contain_text("NOT READY")
         rows = page.locator("#check-steps tbody tr")
@@ -74,3 +73,26 @@ def test_the_booth_check_command_runs_the_same_check(
     )  # fmt: skip
     assert wrong.exit_code == 1
     assert "the check could not run" in wrong.output
+
+
+def test_the_page_refuses_the_check_while_an_interaction_runs_on_the_booth(
+    live_server: LiveServer, page: Page, engine: Engine
+) -> None:
+    with httpx.Client(base_url=live_server.url, timeout=30) as http:
+        pi = staff_api(http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi, participants=2), booth="booth-8")
+        wizard.start()
+        wizard.advance(1, "discussion")
+        add_user(engine, "tech", "correct horse battery", "wizard")
+        page.goto(f"{live_server.url}/login?next=/booths/booth-8/check")
+        page.get_by_label("Username").fill("tech")
+        page.get_by_label("Password").fill("correct horse battery")
+        page.get_by_role("button", name="Log in").click()
+        page.get_by_role("button", name="Run the check").click()
+        summary = page.locator("#check-summary")
+        expect(summary).to_contain_text("The check could not run: Interaction 1 of session")
+        expect(summary).to_contain_text("would take the robot from the participant")
+        expect(page.locator("#check-prompt")).to_be_hidden()
+        expect(page.get_by_role("button", name="Run the check")).to_be_enabled()
+        events = pi.get(f"/api/sessions/{wizard.session_id}/events")
+        assert not [e for e in events if e["kind"] == "booth.checked"]

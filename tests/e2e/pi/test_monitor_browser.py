@@ -39,6 +39,13 @@ def test_the_monitor_shows_booths_live_with_alarms(
     expect(two).to_have_class("booth warn")  # waiting for its participant: no alarm
     expect(page.locator("#monitor-alarms")).to_have_text("1 alarm")
     expect(one.locator(".who")).to_contain_text("running")
+    # The booth check of each booth, for its open session (after the page's own redraw).
+    check = one.locator("a.booth-check-link")
+    expect(check).to_have_attribute("href", f"/booths/booth-1/check?session_id={first.session_id}")
+    check.click()
+    expect(page.get_by_role("heading", name="Booth check: booth-1")).to_be_visible()
+    expect(page.locator("#booth-check")).to_contain_text(f"For session {first.session_id}")
+    page.go_back()
 
     first.advance(1, "discussion")  # the page follows without a reload
     expect(one.locator(".who")).to_contain_text("interaction 1 · discussion")

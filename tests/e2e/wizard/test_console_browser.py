@@ -210,6 +210,22 @@ def test_cancelling_a_condition_switch_changes_nothing(console: Console) -> None
     assert not [e for e in console.events() if e["kind"] == "condition.switched"]
 
 
+def test_the_console_links_the_booth_check_of_its_booth_for_this_session(
+    console: Console,
+) -> None:
+    page = console.page
+    session_id = console.wizard.session_id
+    link = page.locator("#booth-check-link")
+    expect(link).to_have_attribute("href", f"/booths/booth-1/check?session_id={session_id}")
+    link.click()
+    expect(page.get_by_role("heading", name="Booth check: booth-1")).to_be_visible()
+    expect(page.locator("#booth-check")).to_have_attribute("data-session", str(session_id))
+    page.get_by_role("button", name="Run the check").click()  # no worker: NOT READY, stored
+    expect(page.locator("#check-summary")).to_contain_text("NOT READY")
+    checked = [e for e in console.events() if e["kind"] == "booth.checked"]
+    assert [e["session_id"] for e in checked] == [session_id]
+
+
 def test_the_console_says_when_the_worker_and_the_server_are_unreachable(
     console: Console,
 ) -> None:

@@ -1,10 +1,13 @@
-// The booth check page: runs the check on the server (which stores it) and shows each step.
+// The booth check page: runs the check on the server (which puts the robot in copy, stores
+// the result) and, while the server measures, tells the technician what to do: turn the
+// head left, then nod, then hold still while the robot copies; then shows each step.
 
 const root = document.getElementById("booth-check");
 const body = document.querySelector("#check-steps tbody");
 const summary = document.getElementById("check-summary");
+const prompt = document.getElementById("check-prompt");
 const button = document.getElementById("run-check");
-const HEAD_SECONDS = 12; // the turn, then the robot's copy of it after the copy delay
+const PROMPTS = JSON.parse(root.dataset.prompts || "[]"); // [{id, text, seconds}], the server's plan
 
 function row(step) {
   const tr = document.createElement("tr");
@@ -18,25 +21,55 @@ function row(step) {
   return tr;
 }
 
+function show(id, text) {
+  prompt.hidden = false;
+  prompt.dataset.phase = id;
+  prompt.textContent = text;
+}
+
+// Shows each prompt for its time, in step with the server's own timing; stops as soon as
+// the check has answered (e.g. at once when the booth has no worker).
+async function guide(answered) {
+  let done = false;
+  const over = () => { done = true; };
+  answered.then(over, over); // a refusal is shown by run(); here it only ends the prompts
+  for (const step of PROMPTS) {
+    if (done) return;
+    show(step.id, step.text);
+    await Promise.race([answered.catch(() => {}), new Promise((r) => setTimeout(r, step.seconds * 1000))]);
+  }
+  if (!done) show("speech", "Listen: the robot says a test prompt…");
+}
+
+async function post() {
+  const session = root.dataset.session ? `?session_id=${encodeURIComponent(root.dataset.session)}` : "";
+  const response = await fetch(`/api/booths/${encodeURIComponent(root.dataset.booth)}/check${session}`, {
+    method: "POST",
+    headers: { "X-CSRF-Token": root.dataset.csrf, "Content-Type": "application/json" },
+    body: "{}",
+  });
+  const result = await response.json();
+  if (!response.ok) throw new Error(result.detail || `the server answered ${response.status}`);
+  return result;
+}
+
 async function run() {
   button.disabled = true;
-  summary.textContent = `Turn your head to the left and back, then nod (${HEAD_SECONDS} s)…`;
-  await new Promise((resolve) => setTimeout(resolve, HEAD_SECONDS * 1000 * Number(root.dataset.wait ?? 1)));
-  const session = root.dataset.session ? `?session_id=${encodeURIComponent(root.dataset.session)}` : "";
+  summary.textContent = "Checking: follow the prompts.";
+  delete summary.dataset.passed;
+  const answered = post();
+  const guided = guide(answered);
   try {
-    const response = await fetch(`/api/booths/${encodeURIComponent(root.dataset.booth)}/check${session}`, {
-      method: "POST",
-      headers: { "X-CSRF-Token": root.dataset.csrf, "Content-Type": "application/json" },
-      body: "{}",
-    });
-    const result = await response.json();
-    if (!response.ok) throw new Error(result.detail || `the server answered ${response.status}`);
+    const result = await answered;
     body.replaceChildren(...result.steps.map(row));
     summary.textContent = result.passed ? "Booth ready: every step passed." : "NOT READY: fix the failing steps and run the check again.";
     summary.dataset.passed = String(result.passed);
   } catch (error) {
     summary.textContent = `The check could not run: ${error.message}`;
   } finally {
+    await guided;
+    prompt.hidden = true;
+    delete prompt.dataset.phase;
     button.disabled = false;
   }
 }

@@ -33,8 +33,13 @@ function card(booth) {
   const recent = el("ol", { class: "recent" },
     (s ? s.events : []).map((e) => el("li", { text: describe(e, NO_NAMES) })));
   const state = booth.alarm ? " alarm" : booth.problems.length ? " warn" : "";
+  // The booth check for this booth, stored with its open session when there is one.
+  const check = el("p", { class: "small" }, el("a", {
+    class: "booth-check-link", text: "Booth check",
+    href: `/booths/${encodeURIComponent(booth.booth)}/check${s ? `?session_id=${s.id}` : ""}`,
+  }));
   return el("article", { class: `booth${state}`, dataset: { booth: booth.booth } },
-    el("h2", { text: booth.booth }), who, chips, problems, recent);
+    el("h2", { text: booth.booth }), check, who, chips, problems, recent);
 }
 
 async function refresh() {
