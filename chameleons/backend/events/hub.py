@@ -12,8 +12,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import threading
 import time
-from collections import Counter, defaultdict
+from collections import Counter, OrderedDict, defaultdict
 from collections.abc import AsyncIterator, Callable, Iterator
 from typing import Any, Protocol
 
@@ -21,6 +22,7 @@ log = logging.getLogger(__name__)
 Message = dict[str, Any]
 Listener = Callable[[str, Message], None]
 RESYNC: Message = {"type": "resync"}
+RETAINED_CHANNELS = 1024
 
 
 def session_channel(session_id: int) -> str:
@@ -74,6 +76,8 @@ class LiveHub:
         # Other processes' presence maps, each counted until its expiry (monotonic time).
         self._peers: dict[str, tuple[dict[str, int], float]] = {}
         self._peer_details: dict[str, dict[str, list[Message]]] = {}
+        self._retained: OrderedDict[str, Message] = OrderedDict()
+        self._retained_lock = threading.Lock()
 
     def attach_relay(self, relay: Relay | None) -> None:
         """Also send every message published here through ``relay`` (from the loop)."""
@@ -117,6 +121,25 @@ class LiveHub:
         self._deliver(channel, message)
         if self._relay is not None:
             self._relay.send(channel, message)
+
+    def retain(self, channel: str, value: Message) -> None:
+        """Keep ``value`` as the channel's latest committed state, for readers in this process
+        (as MQTT's retained message; not relayed to other processes). Safe from any thread;
+        the least recently retained channels are forgotten beyond ``RETAINED_CHANNELS``."""
+        with self._retained_lock:
+            self._retained[channel] = value
+            self._retained.move_to_end(channel)
+            while len(self._retained) > RETAINED_CHANNELS:
+                self._retained.popitem(last=False)
+
+    def retained(self, channel: str) -> Message | None:
+        """The value last retained on ``channel`` (shared: readers must not change it)."""
+        with self._retained_lock:
+            return self._retained.get(channel)
+
+    def forget(self, channel: str) -> None:
+        with self._retained_lock:
+            self._retained.pop(channel, None)
 
     def subscriber_count(self, channel: str) -> int:
         return len(self._subscribers.get(channel, ()))

@@ -15,6 +15,7 @@ from chameleons.backend.models.base import utcnow
 OUTBOX_KEY = "live_outbox"
 GONE_KEY = "live_gone_sessions"
 RESYNC_KEY = "live_resync_sessions"
+RETAIN_KEY = "live_retained"
 GONE: dict[str, Any] = {"type": "gone"}
 
 
@@ -22,6 +23,12 @@ def announce_gone(db: Session, session_ids: list[int]) -> None:
     """After the commit, tell whoever watches these sessions live that they no longer exist
     (a withdrawal deleted them): an open console tab says so instead of going stale."""
     db.info.setdefault(GONE_KEY, []).extend(session_ids)
+
+
+def retain_after_commit(db: Session, channel: str, value: dict[str, Any]) -> None:
+    """After the commit (never on rollback), keep ``value`` as the channel's latest
+    committed state in the live hub (``LiveHub.retain``)."""
+    db.info.setdefault(RETAIN_KEY, {})[channel] = value
 
 
 def announce_rewritten(db: Session, session_ids: set[int]) -> None:

@@ -24,6 +24,7 @@ from chameleons.backend.events.repository import (
     GONE_KEY,
     OUTBOX_KEY,
     RESYNC_KEY,
+    RETAIN_KEY,
     to_dict,
 )
 from chameleons.backend.models import Event
@@ -38,6 +39,9 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
     """Publish the events recorded in ``db`` after each commit; forget them on rollback."""
 
     def after_commit(session: Session) -> None:
+        # Retained first: a reader woken by the events below finds the state they made.
+        for channel, value in session.info.pop(RETAIN_KEY, {}).items():
+            hub.retain(channel, value)
         published: list[Event] = session.info.pop(OUTBOX_KEY, [])
         for event in published:
             if event.session_id is not None:
@@ -45,14 +49,17 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
                     session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
                 )
         for session_id in session.info.pop(RESYNC_KEY, []):
+            hub.forget(session_channel(session_id))
             hub.publish(session_channel(session_id), RESYNC)
         for session_id in session.info.pop(GONE_KEY, []):
+            hub.forget(session_channel(session_id))
             hub.publish(session_channel(session_id), GONE)
 
     def after_rollback(session: Session) -> None:
         session.info.pop(OUTBOX_KEY, None)
         session.info.pop(GONE_KEY, None)
         session.info.pop(RESYNC_KEY, None)
+        session.info.pop(RETAIN_KEY, None)
 
     sa_event.listen(db, "after_commit", after_commit)
     sa_event.listen(db, "after_rollback", after_rollback)

@@ -63,9 +63,13 @@ def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
 
 def answered(flow: Flow, position: int) -> set[str]:
     """Ids of the questionnaires of this position already stored."""
-    query = select(QuestionnaireResponse.questionnaire).distinct().where(
-        QuestionnaireResponse.session_id == flow.session.id,
-        QuestionnaireResponse.position == position,
+    query = (
+        select(QuestionnaireResponse.questionnaire)
+        .distinct()
+        .where(
+            QuestionnaireResponse.session_id == flow.session.id,
+            QuestionnaireResponse.position == position,
+        )
     )
     return set(flow.db.scalars(query))
 

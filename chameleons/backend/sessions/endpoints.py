@@ -60,7 +60,7 @@ from chameleons.backend.sessions.schemas import (
     UndoRequest,
     WizardNoteCreate,
 )
-from chameleons.backend.sessions.snapshot import session_snapshot
+from chameleons.backend.sessions.snapshot import retain, session_snapshot
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import http_errors
 
@@ -75,7 +75,12 @@ def base_url(request: Request) -> str:
 
 
 def snapshot_of(flow: Flow, request: Request, hub: LiveHub) -> Snapshot:
-    return session_snapshot(flow, base_url(request), devices.phones(hub, flow.session.id))
+    """The session as the response shows it, retained for the live consoles once committed
+    (they are woken by this change's events and would otherwise load it again)."""
+    url = base_url(request)
+    snapshot = session_snapshot(flow, url, devices.phones(hub, flow.session.id))
+    retain(flow.db, snapshot, url)
+    return snapshot
 
 
 @router.post("", status_code=status.HTTP_201_CREATED, dependencies=WRITE)

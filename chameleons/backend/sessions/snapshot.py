@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from sqlalchemy.orm import Session
+
 from chameleons.backend.events import repository as events
+from chameleons.backend.events.hub import LiveHub, session_channel
 from chameleons.backend.models import Interaction, Suggestion
 from chameleons.backend.sessions.answers import (
     FINAL_POSITION,
@@ -55,9 +58,7 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
             "join_url": f"{base_url}/join",
             "short_code": session.short_code,
             "qr_svg": f"/api/sessions/{session.id}/phone-qr.svg",
-            "connected": bool(phones),
-            "connections": len(phones),
-            "devices": phones,
+            **_phones(phones),
         },
         "conditions": list(flow.spec.condition_ids),
         "suggestions_per_interaction": flow.spec.suggestions_per_interaction,
@@ -71,6 +72,32 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
         "allowed_sentence": allowed_sentence(actions),
         "version": events.last_id(flow.db, session.id),
     }
+
+
+def _phones(phones: list[dict[str, Any]]) -> dict[str, Any]:
+    return {"connected": bool(phones), "connections": len(phones), "devices": phones}
+
+
+def retain(db: Session, snapshot: dict[str, Any], base_url: str) -> None:
+    """Once the transaction that made ``snapshot`` commits, the live hub keeps it as the
+    session's latest state: a console woken by the same commit's events takes it from
+    there (``committed``) instead of loading the session again."""
+    value = {"version": snapshot["version"], "base_url": base_url, "snapshot": snapshot}
+    events.retain_after_commit(db, session_channel(snapshot["id"]), value)
+
+
+def committed(
+    hub: LiveHub, session_id: int, version: int, base_url: str, phones: list[dict[str, Any]]
+) -> dict[str, Any] | None:
+    """The retained snapshot of ``session_id`` if it is the state as of event ``version``
+    (the newest event a live reader was sent) for ``base_url``; with ``phones`` as they are
+    now. None otherwise: the caller loads the session."""
+    found = hub.retained(session_channel(session_id))
+    if found is None or found["version"] != version or found["base_url"] != base_url:
+        return None
+    snapshot: dict[str, Any] = found["snapshot"]
+    # A copy where it changes: the retained one is shared between threads.
+    return {**snapshot, "phone": {**snapshot["phone"], **_phones(phones)}}
 
 
 def _condition(condition: Condition) -> dict[str, Any]:

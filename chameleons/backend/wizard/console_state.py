@@ -15,9 +15,8 @@ from sqlalchemy.orm import Session
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.phone import devices
-from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.sessions.flow import load as load_flow
-from chameleons.backend.sessions.snapshot import session_snapshot
+from chameleons.backend.sessions.snapshot import committed, session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.backend.wizard import layout
 from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
@@ -39,10 +38,15 @@ def console_state(
     timeline it holds instead of the server reading and sending the whole timeline after
     every change (the largest cost of a busy server, docs/performance.md). Without, the
     whole timeline (first message, a reload, or a subscriber that fell behind)."""
-    flow = load_flow(db, session_id, lock=False)
     hub: LiveHub = app_state.live_hub
-    snapshot = session_snapshot(flow, base_url, devices.phones(hub, session_id))
-    position = prompt_position(flow)
+    phones = devices.phones(hub, session_id)
+    snapshot = None
+    if new_events:
+        newest = max(int(event["id"]) for event in new_events)
+        snapshot = committed(hub, session_id, newest, base_url, phones)
+    if snapshot is None:
+        snapshot = session_snapshot(load_flow(db, session_id, lock=False), base_url, phones)
+    position = prompt_position(snapshot)
     state: dict[str, Any] = {
         "session": snapshot,
         "prompt_position": position,
@@ -59,13 +63,14 @@ def console_state(
     return state
 
 
-def prompt_position(flow: Flow) -> int:
+def prompt_position(snapshot: dict[str, Any]) -> int:
     """The interaction whose prompts the wizard needs: the current one, or the next once the
     current one is done (the session flow's own rule for "upcoming")."""
-    current = flow.current
-    if current.state == "done" and not flow.is_last:
-        return current.position + 1
-    return current.position
+    current = snapshot["current_position"]
+    state = next(i["state"] for i in snapshot["interactions"] if i["position"] == current)
+    if state == "done" and current < snapshot["interaction_count"]:
+        return int(current) + 1
+    return int(current)
 
 
 def _suggestion_prompts(app_state: Any, snapshot: dict[str, Any], position: int) -> list[str]:

@@ -1,0 +1,98 @@
+"""A wizard action's committed snapshot is kept by the live hub, so the console woken by that
+action's events takes it instead of loading the session again (docs/performance.md); any
+other change (the phone's, or one the retained state does not include) is read from the
+database."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+from sqlalchemy import event
+from sqlalchemy.engine import Engine
+
+from chameleons.backend.wizard.console_state import console_state
+from tests.backend.wizard.conftest import to_negotiation
+from tests.support.bots import ParticipantBot, WizardBot
+
+BASE_URL = "http://testserver"  # the TestClient's, as the wizard's requests carry it
+
+
+@contextmanager
+def statements_here() -> Iterator[list[str]]:
+    """The SQL statements this thread runs inside the block (the app's server thread idles)."""
+    seen: list[str] = []
+    here = threading.get_ident()
+
+    def count(_conn: Any, _cursor: Any, statement: str, *_args: Any) -> None:
+        if threading.get_ident() == here:
+            seen.append(statement)
+
+    event.listen(Engine, "before_cursor_execute", count)
+    try:
+        yield seen
+    finally:
+        event.remove(Engine, "before_cursor_execute", count)
+
+
+def read_console(app: FastAPI, session_id: int, new_events: list[dict[str, Any]] | None) -> Any:
+    with app.state.sessionmaker() as db:
+        return console_state(db, app.state, session_id, BASE_URL, new_events)
+
+
+def newest_event(app: FastAPI, session_id: int) -> dict[str, Any]:
+    events = read_console(app, session_id, None)["events"]
+    return dict(events[-1])
+
+
+def test_the_console_takes_the_state_a_wizard_action_committed(
+    app: FastAPI, client: TestClient, wizard: WizardBot, phone: ParticipantBot
+) -> None:
+    to_negotiation(wizard, phone)
+    answered = wizard.decide(1, 1, True)  # the response's snapshot is retained
+    decided = newest_event(app, wizard.session_id)
+    assert decided["id"] == answered["version"]
+    with statements_here() as statements:
+        retained = read_console(app, wizard.session_id, [decided])
+    assert statements == []  # nothing loaded: the decision's own snapshot
+    fresh = read_console(app, wizard.session_id, None)
+    assert retained["session"] == fresh["session"]
+    assert retained["prompt_position"] == fresh["prompt_position"] == 1
+    assert retained["suggestion_prompts"] == fresh["suggestion_prompts"]
+    assert retained["events"] == [decided] and retained["events_delta"] is True
+
+
+def test_a_change_the_retained_state_does_not_hold_is_read_from_the_database(
+    app: FastAPI, client: TestClient, wizard: WizardBot, phone: ParticipantBot
+) -> None:
+    wizard.start()
+    wizard.advance(1, "discussion")
+    before = wizard.advance(1, "ranking")
+    ranking = list(wizard.interaction(1)["presented_order"])
+    phone.submit_ranking(1, list(reversed(ranking)))  # the phone's change retains nothing
+    submitted = newest_event(app, wizard.session_id)
+    assert submitted["id"] > before["version"]
+    with statements_here() as statements:
+        state = read_console(app, wizard.session_id, [submitted])
+    assert statements  # the session was loaded: the retained snapshot is older
+    interaction = state["session"]["interactions"][0]
+    assert interaction["initial_ranking"] == list(reversed(ranking))
+    assert state["session"]["version"] == submitted["id"]
+
+
+def test_a_console_on_another_address_loads_its_own_links(
+    app: FastAPI, client: TestClient, wizard: WizardBot
+) -> None:
+    started = wizard.start()
+    started_event = newest_event(app, wizard.session_id)
+    assert started_event["id"] == started["version"]
+    with app.state.sessionmaker() as db, statements_here() as statements:
+        state = console_state(
+            db, app.state, wizard.session_id, "http://lab.example", [started_event]
+        )
+    assert statements  # the retained snapshot's links name the wizard's address
+    assert state["session"]["phone"]["url"].startswith("http://lab.example/p/")
