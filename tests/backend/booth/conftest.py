@@ -27,7 +27,7 @@ ANY_PORT = "tcp://127.0.0.1:*"
 BOOTH = "booth-1"
 
 
-def until(condition: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> Any:
+def until(condition: Callable[[], Any], timeout: float = 30.0, what: str = "condition") -> Any:
     """Poll ``condition`` until it gives something truthy, up to a deadline."""
     deadline = time.monotonic() + timeout
     while not (result := condition()):

@@ -27,7 +27,7 @@ ANY_PORT = "tcp://127.0.0.1:*"
 BOOTH = "booth-1"
 
 
-def until(condition: Callable[[], Any], timeout: float = 10.0) -> Any:
+def until(condition: Callable[[], Any], timeout: float = 30.0) -> Any:
     """Poll ``condition`` until it gives something truthy (not a fixed wait)."""
     deadline = time.monotonic() + timeout
     while not (result := condition()):
