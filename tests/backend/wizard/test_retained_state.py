@@ -63,7 +63,8 @@ def test_the_console_takes_the_state_a_wizard_action_committed(
     assert retained["session"] == fresh["session"]
     assert retained["prompt_position"] == fresh["prompt_position"] == 1
     assert retained["suggestion_prompts"] == fresh["suggestion_prompts"]
-    assert retained["events"] == [decided] and retained["events_delta"] is True
+    assert retained["events"] == [decided]
+    assert retained["events_delta"] is True
 
 
 def test_a_change_the_retained_state_does_not_hold_is_read_from_the_database(
