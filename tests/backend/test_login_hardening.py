@@ -3,16 +3,25 @@ username and source address with backoff, so nobody can keep the PI locked out."
 
 from __future__ import annotations
 
+import gzip
+import secrets
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
 from sqlalchemy import Engine
 
+from chameleons.backend.auth import passwords as passwords_module
 from chameleons.backend.auth.passwords import password_problem
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.auth.throttle import ADDRESS_FACTOR, LoginThrottle
 from tests.backend.test_auth import add_user, login
+
+DJANGO_LIST = Path(passwords_module.__file__).with_name("django_common_passwords.txt.gz")
 
 
 @pytest.mark.parametrize(
@@ -20,7 +29,7 @@ from tests.backend.test_auth import add_user, login
     [
         ("Password1", "too common"),
         ("qwertyuiop", "too common"),
-        ("12345678901", "only digits"),
+        ("83920174652", "only digits"),
         ("aaaaaaaaaaaa", "different characters"),
         ("maryjones1", "similar to the user name"),
     ],
@@ -36,6 +45,37 @@ def test_short_passwords_are_refused_and_good_ones_pass() -> None:
         StaffUserCreate(username="mary", password="x7#k", role="pi")
     assert password_problem("tall green ladder", "mary") is None
     StaffUserCreate(username="mary", password="tall green ladder", role="pi")
+    strong = secrets.token_urlsafe(12)
+    assert password_problem(strong, "mary") is None
+    StaffUserCreate(username="mary", password=strong, role="pi")
+
+
+@pytest.mark.parametrize("password", ["dragon123", "michael1", "Superman1", "iloveyou2"])
+def test_passwords_on_djangos_common_list_are_refused(password: str) -> None:
+    with gzip.open(DJANGO_LIST, "rt", encoding="utf-8") as listing:
+        assert password.lower() in {line.strip() for line in listing}  # the list has it
+    assert "too common" in (password_problem(password, "mary") or "")
+    assert "too common" in (password_problem(f" {password.upper()} ", "mary") or "")
+
+
+def test_the_common_list_is_djangos_whole_list_and_read_only_when_needed() -> None:
+    loaded = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from chameleons.backend.auth import passwords as p\n"
+            "before = p._common.cache_info().currsize\n"
+            "print(before, len(p._common()))",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    before, size = map(int, loaded.stdout.split())
+    assert before == 0  # importing the module did not read the list
+    assert size >= 19_000
+    notice = DJANGO_LIST.with_name("django_common_passwords_LICENSE.txt").read_text()
+    assert "Django Software Foundation" in notice
 
 
 class Clock:
