@@ -51,6 +51,10 @@ class Settings(BaseSettings):
     request_threads: int | None = Field(default=None, ge=1)
     # How long a staff login lasts (server-side: logout and deactivation end it at once).
     staff_session_hours: float = Field(default=12.0, gt=0, le=24 * 30)
+    # How often each server process re-checks the sessions of its open staff WebSockets
+    # (an ended session closes them at once anyway; this catches expiry and
+    # `chameleons user deactivate` on SQLite, which has no live channel to the server).
+    staff_socket_recheck_s: float = Field(default=30.0, gt=0)
     # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
     # incoming messages per second (sustained, and at once), and how long one send may wait
     # for a client that is not reading before it is disconnected.

@@ -22,6 +22,7 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, session_channel
 from chameleons.backend.events.repository import (
     GONE,
     GONE_KEY,
+    NOTICES_KEY,
     OUTBOX_KEY,
     RESYNC_KEY,
     to_dict,
@@ -48,11 +49,14 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
             hub.publish(session_channel(session_id), RESYNC)
         for session_id in session.info.pop(GONE_KEY, []):
             hub.publish(session_channel(session_id), GONE)
+        for channel, message in session.info.pop(NOTICES_KEY, []):
+            hub.publish(channel, message)
 
     def after_rollback(session: Session) -> None:
         session.info.pop(OUTBOX_KEY, None)
         session.info.pop(GONE_KEY, None)
         session.info.pop(RESYNC_KEY, None)
+        session.info.pop(NOTICES_KEY, None)
 
     sa_event.listen(db, "after_commit", after_commit)
     sa_event.listen(db, "after_rollback", after_rollback)
