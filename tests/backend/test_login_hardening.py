@@ -18,7 +18,12 @@ from sqlalchemy import Engine
 from chameleons.backend.auth import passwords as passwords_module
 from chameleons.backend.auth.passwords import password_problem
 from chameleons.backend.auth.schemas import StaffUserCreate
-from chameleons.backend.auth.throttle import ADDRESS_FACTOR, LoginThrottle
+from chameleons.backend.auth.throttle import (
+    ADDRESS_FACTOR,
+    MAX_LOCKOUT_SECONDS,
+    SWEEP_SECONDS,
+    LoginThrottle,
+)
 from tests.backend.test_auth import add_user, login
 
 DJANGO_LIST = Path(passwords_module.__file__).with_name("django_common_passwords.txt.gz")
@@ -120,6 +125,33 @@ def test_an_address_spraying_many_names_is_locked_too() -> None:
         assert throttle.retry_after(*keys) == 0
         throttle.record_failure(*keys)
     assert throttle.retry_after(*LoginThrottle.keys("someone", "203.0.113.9")) > 0
+
+
+def test_records_without_effect_are_swept_so_memory_stays_bounded() -> None:
+    clock = Clock()
+    throttle = LoginThrottle(max_failures=3, lockout_seconds=30, clock=clock)
+    for k in range(1000):  # names and addresses that never come back
+        throttle.record_failure(*LoginThrottle.keys(f"user{k}", f"10.0.{k // 256}.{k % 256}"))
+    assert len(throttle) == 2000
+    locked = LoginThrottle.keys("pia", "10.9.9.9")
+    for _ in range(4):
+        throttle.record_failure(*locked)
+    clock.now += MAX_LOCKOUT_SECONDS + SWEEP_SECONDS + 1  # longer than any lock-out
+    throttle.record_failure(*LoginThrottle.keys("new", "10.8.8.8"))
+    assert len(throttle) == 2  # only the new failure's records are left
+
+
+def test_above_the_cap_the_oldest_records_go_and_recent_lockouts_hold() -> None:
+    clock = Clock()
+    throttle = LoginThrottle(max_failures=3, lockout_seconds=30, clock=clock, max_records=100)
+    for k in range(500):  # many addresses within one lock-out
+        clock.now += 0.01
+        throttle.record_failure(*LoginThrottle.keys("pia", f"10.1.{k // 256}.{k % 256}"))
+        assert len(throttle) <= 100
+    recent = LoginThrottle.keys("pia", "10.7.7.7")
+    for _ in range(3):
+        throttle.record_failure(*recent)
+    assert throttle.retry_after(*recent) > 0  # the newest lock-out is kept
 
 
 def test_the_pi_logs_in_while_a_stranger_fails_on_her_name(app: FastAPI, engine: Engine) -> None:

@@ -150,7 +150,9 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
                     await task
             with anyio.CancelScope(shield=True):  # even when the server cancels the handler
                 await asyncio.gather(*reads, return_exceptions=True)
-        if tasks[0].done() and not tasks[0].cancelled() and tasks[0].result() is GONE:
+        forward = tasks[0]  # its SocketClosed (a slow client) was handled by guarded above
+        ended = forward.done() and not forward.cancelled() and forward.exception() is None
+        if ended and forward.result() is GONE:
             with contextlib.suppress(WebSocketDisconnect, RuntimeError):
                 await websocket.close(code=NOT_FOUND)
 
