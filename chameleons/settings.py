@@ -5,14 +5,14 @@ Settings are built explicitly (``Settings()`` in ``create_app``/CLI), never at i
 
 from __future__ import annotations
 
-import math
-from collections import Counter
 from pathlib import Path
 from typing import Literal
 
 from pydantic import Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 from sqlalchemy.engine import make_url
+
+from chameleons.key_entropy import estimated_bits
 
 # Secrets that ship in the repository (demo, .env.example). They never work outside demo mode.
 KNOWN_INSECURE_SECRETS = frozenset(
@@ -22,18 +22,6 @@ DEFAULT_DATA_DIR = Path("data")
 
 
 MIN_SECRET_BITS = 128
-
-
-def estimated_bits(secret: str) -> float:
-    """An upper estimate of a key's entropy: its length times the Shannon entropy of its
-    characters. A key of one repeated character has 0 bits, however long; the README's
-    ``secrets.token_urlsafe(32)`` has about 210."""
-    if not secret:
-        return 0.0
-    counts = Counter(secret)
-    n = len(secret)
-    per_char = -sum(c / n * math.log2(c / n) for c in counts.values())
-    return n * per_char
 
 
 class InsecureSettingsError(ValueError):
@@ -63,6 +51,10 @@ class Settings(BaseSettings):
     request_threads: int | None = Field(default=None, ge=1)
     # How long a staff login lasts (server-side: logout and deactivation end it at once).
     staff_session_hours: float = Field(default=12.0, gt=0, le=24 * 30)
+    # How often each server process re-checks the sessions of its open staff WebSockets
+    # (an ended session closes them at once anyway; this catches expiry and
+    # `chameleons user deactivate` on SQLite, which has no live channel to the server).
+    staff_socket_recheck_s: float = Field(default=30.0, gt=0)
     # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
     # incoming messages per second (sustained, and at once), and how long one send may wait
     # for a client that is not reading before it is disconnected.
@@ -204,9 +196,9 @@ class Settings(BaseSettings):
         secret = self.secret_key.get_secret_value()
         if secret in KNOWN_INSECURE_SECRETS or estimated_bits(secret) < MIN_SECRET_BITS:
             raise InsecureSettingsError(
-                "CHAMELEONS_SECRET_KEY is missing, guessable (under 128 bits by its length "
-                "and variety of characters) or an example "
-                "value. Generate one with: python -c 'import secrets; "
+                "CHAMELEONS_SECRET_KEY is missing, guessable (under 128 bits by its length, "
+                "variety of characters and repetition) or an example value. "
+                "Generate one with: python -c 'import secrets; "
                 "print(secrets.token_urlsafe(32))' and set it in the environment or .env. "
                 "(`chameleons demo` runs without one, for trying the system out.)"
             )

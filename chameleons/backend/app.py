@@ -20,7 +20,7 @@ from chameleons.backend import apidocs, logredact
 from chameleons.backend.analysis import pages as analysis_pages
 from chameleons.backend.auth import endpoints as auth_endpoints
 from chameleons.backend.auth import pages as auth_pages
-from chameleons.backend.auth import staff_pages
+from chameleons.backend.auth import socket_revocation, staff_pages
 from chameleons.backend.auth.csrf import csrf_token
 from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredError
 from chameleons.backend.auth.throttle import LoginThrottle
@@ -84,6 +84,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         limiter.total_tokens = min(wanted, request_threads(engine))
         app.state.request_limiter = limiter  # read by tests and the benchmark
         async with AsyncExitStack() as stack:
+            await stack.enter_async_context(
+                socket_revocation.revoking(app, settings.staff_socket_recheck_s)
+            )
             if settings.live_fanout:
                 app.state.live_fanout = await stack.enter_async_context(
                     fan_out(app.state.live_hub, settings.effective_database_url)
@@ -107,6 +110,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.templates = build_templates()
     app.state.live_hub = LiveHub()
     app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code
+    app.state.staff_sockets = socket_revocation.StaffSockets()  # open staff WebSockets
     app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.live_fanout = None  # PostgreSQL: set while the server runs (lifespan)
     app.state.login_throttle = LoginThrottle(

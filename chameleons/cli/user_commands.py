@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 from chameleons.backend.auth import repository, service, sessions
 from chameleons.backend.auth.schemas import StaffUserCreate
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
+from chameleons.backend.events.pg_fanout import notify_on_commit
 from chameleons.backend.migrate import current_revision, head_revision
 from chameleons.backend.models import StaffUser
 from chameleons.cli.common import load_settings
@@ -58,6 +59,9 @@ def _database() -> Iterator[Session]:
             )
         with session_scope(build_sessionmaker(engine)) as db:
             yield db
+            # Ended staff sessions: their open sockets on a PostgreSQL server close at once
+            # (on SQLite, at the server's next re-check: CHAMELEONS_STAFF_SOCKET_RECHECK_S).
+            notify_on_commit(db)
     finally:
         engine.dispose()
 

@@ -16,6 +16,7 @@ import httpx
 import pytest
 from fastapi import FastAPI
 from sqlalchemy import Engine, text
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 from websockets.sync.connection import Connection
 
@@ -47,6 +48,9 @@ Served = tuple[LiveServer, FastAPI]
 def two_servers(settings: Settings, engine: Engine) -> Iterator[tuple[Served, Served]]:
     if engine.dialect.name != "postgresql":
         pytest.skip("one SQLite server is one process: the fan-out is PostgreSQL's")
+    # Staff sockets are not re-checked meanwhile: a logout on one server must reach the
+    # other's sockets through the fan-out itself.
+    settings = settings.model_copy(update={"staff_socket_recheck_s": 3600.0})
     apps = [create_app(settings), create_app(settings)]
     with LiveServer(apps[0]) as first, LiveServer(apps[1]) as second:
         for app in apps:
@@ -162,4 +166,28 @@ def test_a_server_whose_database_connections_drop_reconnects_and_carries_on(
                 lambda m: (
                     m.get("type") == "event" and m["event"].get("client_id") == "after-reconnect"
                 ),
+            )
+
+
+def test_a_logout_on_one_server_closes_the_staff_sockets_on_the_other(
+    two_servers: tuple[Served, Served], engine: Engine
+) -> None:
+    (first, _), (second, _) = two_servers
+    with (
+        httpx.Client(base_url=first.url, timeout=WAIT_S) as on_first,
+        httpx.Client(base_url=second.url, timeout=WAIT_S) as on_second,
+    ):
+        pi = staff_api(on_first, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi))
+        # The same login (its cookie) on the second server: a console open there.
+        on_second.cookies.update(on_first.cookies)
+        with _console(second, wizard.session_id, on_second) as console:
+            _next_matching(console, lambda m: m.get("type") == "snapshot")
+            logout = on_first.post("/logout", headers={"X-CSRF-Token": pi.csrf})
+            assert logout.status_code == 303
+            with pytest.raises(ConnectionClosed):
+                _next_matching(console, lambda _m: False)
+            assert (console.close_code, console.close_reason) == (
+                4401,
+                "staff session ended (logout)",
             )

@@ -1,6 +1,8 @@
 """Through a real uvicorn server and raw TCP sockets: a display client that floods pings and
 never reads, and one that stops reading what the server sends, are both disconnected (with
-a logged reason) while another page of the same booth gets every update.
+a logged reason) while another page of the same booth gets every update; so are a phone,
+a console and a console's live feed that stop reading, while another of their kind on the
+same session carries on.
 
 The flooder speaks RFC 6455 by hand (masked text frames, no reads at all), because every
 client library reads in the background. The test waits on events only (no timing
@@ -18,13 +20,18 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 
+import httpx
 import pytest
 from fastapi import FastAPI
+from sqlalchemy import Engine
 from websockets.sync.client import ClientConnection, connect
 
 from chameleons.backend.display.channel import get_display_channel
 from chameleons.backend.display.protocol import play_audio_message, set_face_message
 from chameleons.backend.display.tokens import display_token, signing_key
+from chameleons.backend.events.hub import session_channel
+from chameleons.backend.sessions.snapshot import phone_presence_key
+from tests.support.bots import WizardBot, staff_api, study_with_plan
 from tests.support.live_server import LiveServer
 
 BOOTH = "booth-1"
@@ -60,8 +67,9 @@ def text_frame(text: str) -> bytes:
     return header + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
 
 
-def raw_client(port: int, path: str) -> socket.socket:
-    """Open a WebSocket by hand; read the handshake response and nothing else, ever."""
+def raw_client(port: int, path: str, headers: str = "") -> socket.socket:
+    """Open a WebSocket by hand; read the handshake response and nothing else, ever.
+    ``headers``: more request header lines, each ending in CRLF (a staff cookie)."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # fills up fast
     sock.connect(("127.0.0.1", port))
@@ -70,7 +78,7 @@ def raw_client(port: int, path: str) -> socket.socket:
         (
             f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
             f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-            "Sec-WebSocket-Version: 13\r\n\r\n"
+            f"Sec-WebSocket-Version: 13\r\n{headers}\r\n"
         ).encode()
     )
     response = b""
@@ -85,9 +93,11 @@ def raw_client(port: int, path: str) -> socket.socket:
 class Reader:
     """A well-behaved page: reads everything in a thread and remembers it."""
 
-    def __init__(self, url: str) -> None:
+    def __init__(self, url: str, headers: dict[str, str] | None = None) -> None:
         self.messages: list[dict[str, object]] = []
-        self._socket: ClientConnection = connect(url, max_size=None)
+        self._socket: ClientConnection = connect(
+            url, max_size=None, additional_headers=headers, open_timeout=DEADLINE
+        )
         self._thread = threading.Thread(target=self._read, daemon=True)
         self._thread.start()
 
@@ -183,5 +193,129 @@ def test_a_page_that_stops_reading_is_shed_and_the_other_page_gets_everything(
     ids = [m["play_id"] for m in reader.messages if m["type"] == "play_audio"]
     assert ids == [f"p#{k}" for k in range(published)]  # nothing lost, in order
     assert any("(1013): client is not reading" in r.getMessage() for r in caplog.records)
+    stalled.close()
+    reader.close()
+
+
+# --- phones, consoles and live feeds ---------------------------------------------------
+# The same guard on the session sockets: a client that stops reading is shed with 1013
+# (after ws_send_timeout_s) while another client of the same session gets every update.
+
+BLOB = "x" * 2000  # big messages fill the stalled client's TCP window quickly
+
+
+@pytest.fixture
+def tight_server(app: FastAPI) -> Iterator[LiveServer]:
+    """A server with small socket send buffers: a phone's state is ~1 kB, and megabytes of
+    them (the kernel's autotuned buffer) would take longer than uvicorn's own keepalive
+    (ping unanswered: closed after ~40 s), which would then shed the client before the
+    guard under test."""
+    with LiveServer(app, send_buffer=16_384) as live:
+        yield live
+
+
+@pytest.fixture
+def staff_cookie(tight_server: LiveServer, engine: Engine) -> Iterator[tuple[WizardBot, str]]:
+    """A session of the default study, and the PI's login cookie for its sockets."""
+    with httpx.Client(base_url=tight_server.url, timeout=DEADLINE) as http:
+        pi = staff_api(http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi))
+        yield wizard, "; ".join(f"{k}={v}" for k, v in http.cookies.items())
+
+
+def _shed(
+    app: FastAPI, push: Callable[[int], None], caught_up: Callable[[int], bool], every: int = 50
+) -> int:
+    """Push updates until the guard sheds a client (1013); let the reader catch up after
+    each ``every`` (an event, not a pause). Returns how many were pushed."""
+    counters = app.state.socket_guard_counters
+    pushed = 0
+    while counters["closed.1013"] == 0:
+        push(pushed)
+        pushed += 1
+        if pushed % every == 0:
+
+            def breathed(last: int = pushed - 1) -> bool:
+                return caught_up(last) or counters["closed.1013"] > 0
+
+            wait_for(breathed, "the reader to catch up")
+        assert pushed < 100_000, "the stalled client was never shed"
+    return pushed
+
+
+@pytest.mark.parametrize("kind", ["console", "feed"])
+def test_a_console_that_stops_reading_is_shed_and_the_other_console_gets_everything(
+    app: FastAPI,
+    tight_server: LiveServer,
+    staff_cookie: tuple[WizardBot, str],
+    caplog: pytest.LogCaptureFixture,
+    kind: str,
+) -> None:
+    wizard, cookie = staff_cookie
+    session_id = wizard.session_id
+    path = {"console": f"/ws/wizard/sessions/{session_id}", "feed": f"/ws/sessions/{session_id}"}
+    headers = {"Origin": tight_server.url, "Cookie": cookie}
+    hub, channel = app.state.live_hub, session_channel(session_id)
+    reader = Reader(f"ws://127.0.0.1:{tight_server.port}{path[kind]}", headers)
+    stalled = raw_client(
+        tight_server.port, path[kind], "".join(f"{k}: {v}\r\n" for k, v in headers.items())
+    )
+    wait_for(lambda: hub.subscriber_count(channel) == 2, "both consoles")
+
+    def saw(n: object) -> bool:
+        return reader.saw(lambda m: m.get("type") == "telemetry" and m.get("n") == n)
+
+    with caplog.at_level("WARNING", logger="chameleons.backend.events.guard"):
+        pushed = _shed(
+            app, lambda n: hub.publish(channel, {"type": "telemetry", "n": n, "blob": BLOB}), saw
+        )
+        hub.publish(channel, {"type": "telemetry", "n": "last"})
+        wait_for(lambda: saw("last"), "the last update")
+    wait_for(lambda: hub.subscriber_count(channel) == 1, "the stalled console to be gone")
+    got = [m["n"] for m in reader.messages if m.get("type") == "telemetry"]
+    assert got == [*range(pushed), "last"]  # nothing lost, in order
+    assert any("(1013): client is not reading" in r.getMessage() for r in caplog.records)
+    stalled.close()
+    reader.close()
+
+
+def test_a_phone_that_stops_reading_is_shed_and_the_other_phone_carries_on(
+    app: FastAPI,
+    tight_server: LiveServer,
+    staff_cookie: tuple[WizardBot, str],
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    wizard, _ = staff_cookie
+    hub, channel = app.state.live_hub, session_channel(wizard.session_id)
+    path = f"/ws/p/{wizard.token}"
+    reader = Reader(f"ws://127.0.0.1:{tight_server.port}{path}?device=aaaaaaaaaaaaaaaa")
+    stalled = raw_client(tight_server.port, f"{path}?device=bbbbbbbbbbbbbbbb")
+    wait_for(lambda: hub.present(phone_presence_key(wizard.session_id)) == 2, "both phones")
+
+    # Every change on the session sends each phone its whole state (~1 kB, no counter in
+    # it): the reader has caught up when a state came since the last time it had. Changes
+    # one at a time, so that each reaches the stalled phone too (not merged into one).
+    def states() -> int:
+        return sum(m.get("type") == "state" for m in list(reader.messages))
+
+    seen = [states()]
+
+    def caught_up(_last: int) -> bool:
+        if states() <= seen[0]:
+            return False
+        seen[0] = states()
+        return True
+
+    def poke(_n: int) -> None:
+        hub.publish(channel, {"type": "presence", "kind": "poke", "blob": BLOB})
+
+    with caplog.at_level("WARNING", logger="chameleons.backend.events.guard"):
+        _shed(app, poke, caught_up, every=1)
+        wait_for(lambda: hub.present(phone_presence_key(wizard.session_id)) == 1, "one phone")
+        now = states()
+        poke(0)
+        wait_for(lambda: states() > now, "the other phone's next state")
+    assert any("/ws/p/" in r.getMessage() and "(1013)" in r.getMessage() for r in caplog.records)
+    assert not any(wizard.token in r.getMessage() for r in caplog.records)  # redacted
     stalled.close()
     reader.close()

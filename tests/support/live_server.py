@@ -1,7 +1,9 @@
 """A real uvicorn server on a loopback port, in a background thread.
 
 ``port=0`` picks a free port; a given port lets a test stop a server and start a new app on
-the same address (a server restart as a phone or a display page sees it).
+the same address (a server restart as a phone or a display page sees it). ``send_buffer``
+fixes the kernel's send buffer of every connection (a client that stops reading then
+makes the server's writes wait after kilobytes, not megabytes).
 """
 
 from __future__ import annotations
@@ -16,9 +18,19 @@ from fastapi import FastAPI
 
 
 class LiveServer:
-    def __init__(self, app: FastAPI, port: int = 0, lifespan: Literal["on", "off"] = "on") -> None:
+    def __init__(
+        self,
+        app: FastAPI,
+        port: int = 0,
+        lifespan: Literal["on", "off"] = "on",
+        send_buffer: int | None = None,
+    ) -> None:
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        if send_buffer is not None:
+            # Accepted connections inherit it (and lose the kernel's autotuning, which grows
+            # a stalled client's backlog to megabytes before the server's writes wait).
+            self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, send_buffer)
         self._sock.bind(("127.0.0.1", port))
         self.port: int = self._sock.getsockname()[1]
         config = uvicorn.Config(

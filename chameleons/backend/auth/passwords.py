@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 from difflib import SequenceMatcher
 from functools import cache
 from pathlib import Path
@@ -20,20 +21,31 @@ def _dummy_hash() -> str:
 
 
 MIN_PASSWORD_LENGTH = 8  # Django's MinimumLengthValidator default; NIST SP 800-63B's floor
-_COMMON_FILE = Path(__file__).with_name("common_passwords.txt")
+_HERE = Path(__file__).parent
+# Django's CommonPasswordValidator list (20,000 entries, BSD licence: see
+# django_common_passwords_LICENSE.txt) and this project's additions.
+_DJANGO_COMMON_FILE = _HERE / "django_common_passwords.txt.gz"
+_COMMON_FILE = _HERE / "common_passwords.txt"
 
 
 @cache
 def _common() -> frozenset[str]:
-    lines = _COMMON_FILE.read_text(encoding="utf-8").splitlines()
-    return frozenset(line.strip().lower() for line in lines if line and not line.startswith("#"))
+    """Read on the first password check, not at import: the CLI starts without it."""
+    with gzip.open(_DJANGO_COMMON_FILE, "rt", encoding="utf-8") as listing:
+        django = [line.strip() for line in listing]
+    ours = [
+        line.strip().lower()
+        for line in _COMMON_FILE.read_text(encoding="utf-8").splitlines()
+        if not line.startswith("#")
+    ]
+    return frozenset(word for word in (*django, *ours) if word)
 
 
 def password_problem(password: str, username: str = "") -> str | None:
     """Why a new staff password is refused (None when it is fine): Django's validators
     (common passwords, similarity to the user name, all digits) in short."""
     lowered = password.lower()
-    if lowered in _common():
+    if lowered.strip() in _common():
         return "This password is too common: choose one that is not on breach lists."
     # Django's UserAttributeSimilarityValidator: a password too like the user name.
     if username and SequenceMatcher(a=lowered, b=username.lower()).quick_ratio() >= 0.7:

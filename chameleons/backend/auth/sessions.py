@@ -4,7 +4,9 @@ The signed cookie holds a random key (``SESSION_KEY``); the database holds its S
 the user, an expiry (``CHAMELEONS_STAFF_SESSION_HOURS``) and, once ended, why. A cookie is
 good only while its record is open, unexpired and its user active, so logout, "log out
 everywhere" and deactivation take effect at once (OWASP Session Management Cheat Sheet:
-server-side invalidation on logout). Flushes only; the caller commits.
+server-side invalidation on logout), for WebSockets already open too: ending a session
+announces it after the commit and its sockets are closed (:mod:`.socket_revocation`).
+Flushes only; the caller commits.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
+from chameleons.backend.auth.socket_revocation import announce_ended
 from chameleons.backend.models import StaffSession, StaffUser
 from chameleons.backend.models.base import utcnow
 
@@ -55,15 +58,22 @@ def _record(db: Session, cookie: Mapping[str, Any]) -> StaffSession | None:
     return db.scalars(select(StaffSession).where(StaffSession.key_hash == _hash(key))).first()
 
 
-def staff_of(db: Session, cookie: Mapping[str, Any]) -> StaffUser | None:
-    """The active staff member whose open, unexpired session the cookie names."""
+def signed_in(db: Session, cookie: Mapping[str, Any]) -> tuple[StaffUser, int] | None:
+    """The active staff member whose open, unexpired session the cookie names, with that
+    session's id (a WebSocket watches it: see :mod:`.socket_revocation`)."""
     record = _record(db, cookie)
     if record is None or record.ended_at is not None:
         return None
     if _aware(record.expires_at) <= datetime.now(UTC):
         return None
     user = db.get(StaffUser, record.user_id)
-    return user if user is not None and user.is_active else None
+    return (user, record.id) if user is not None and user.is_active else None
+
+
+def staff_of(db: Session, cookie: Mapping[str, Any]) -> StaffUser | None:
+    """The active staff member whose open, unexpired session the cookie names."""
+    found = signed_in(db, cookie)
+    return found[0] if found is not None else None
 
 
 def end(db: Session, cookie: Mapping[str, Any], reason: str = "logout") -> None:
@@ -72,17 +82,27 @@ def end(db: Session, cookie: Mapping[str, Any], reason: str = "logout") -> None:
         record.ended_at = utcnow()
         record.end_reason = reason
         db.flush()
+        announce_ended(db, [record.id], reason)
 
 
 def end_all(db: Session, user_id: int, reason: str) -> int:
     """End every open session of the user (log out everywhere, deactivation)."""
-    result = db.execute(
-        update(StaffSession)
-        .where(StaffSession.user_id == user_id, StaffSession.ended_at.is_(None))
-        .values(ended_at=utcnow(), end_reason=reason)
+    ids = list(
+        db.scalars(
+            select(StaffSession.id).where(
+                StaffSession.user_id == user_id, StaffSession.ended_at.is_(None)
+            )
+        )
     )
-    db.flush()
-    return int(getattr(result, "rowcount", 0) or 0)
+    if ids:
+        db.execute(
+            update(StaffSession)
+            .where(StaffSession.id.in_(ids), StaffSession.ended_at.is_(None))
+            .values(ended_at=utcnow(), end_reason=reason)
+        )
+        db.flush()
+        announce_ended(db, ids, reason)
+    return len(ids)
 
 
 def open_counts(db: Session) -> dict[int, int]:

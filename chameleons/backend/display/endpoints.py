@@ -17,6 +17,7 @@ from fastapi import WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.auth.socket_revocation import serve_while_signed_in
 from chameleons.backend.db import session_scope
 from chameleons.backend.display import links
 from chameleons.backend.display.channel import DisplayChannel, Subscription, get_display_channel
@@ -37,10 +38,18 @@ POLICY_VIOLATION = 1008
 
 @router.websocket("/ws/display/{booth}")
 async def display_socket(websocket: WebSocket, booth: str, token: str | None = None) -> None:
-    if not is_valid_booth(booth) or not await _authorised(websocket, booth, token):
+    allowed, staff_session = False, None
+    if is_valid_booth(booth):
+        allowed, staff_session = await _authorised(websocket, booth, token)
+    if not allowed:
         await websocket.close(code=POLICY_VIOLATION)
         return
     await websocket.accept()
+    # A page let in by a staff cookie closes (4401) when that login ends; by link, it stays.
+    await serve_while_signed_in(websocket, staff_session, lambda: _serve(websocket, booth, token))
+
+
+async def _serve(websocket: WebSocket, booth: str, token: str | None) -> None:
     channel = get_display_channel(websocket.app)
     async with guard.guarded(websocket):
         with channel.subscribe(booth, by_link=token is not None) as subscription:
@@ -59,12 +68,16 @@ async def display_socket(websocket: WebSocket, booth: str, token: str | None = N
                         await task
 
 
-async def _authorised(websocket: WebSocket, booth: str, token: str | None) -> bool:
+async def _authorised(
+    websocket: WebSocket, booth: str, token: str | None
+) -> tuple[bool, int | None]:
+    """Whether the page may connect, and the staff session it came in on (None by link)."""
     if token is not None:
-        return await run_in_threadpool(_token_works, websocket, booth, token)
+        return await run_in_threadpool(_token_works, websocket, booth, token), None
     if not _same_origin(websocket):
-        return False
-    return await run_in_threadpool(_active_staff, websocket, dict(websocket.session))
+        return False, None
+    staff_session = await run_in_threadpool(_staff_session, websocket, dict(websocket.session))
+    return staff_session is not None, staff_session
 
 
 def _same_origin(websocket: WebSocket) -> bool:
@@ -78,9 +91,10 @@ def _token_works(websocket: WebSocket, booth: str, token: str) -> bool:
         return links.token_works(db, websocket.app, booth, token)
 
 
-def _active_staff(websocket: WebSocket, cookie: dict[str, Any]) -> bool:
+def _staff_session(websocket: WebSocket, cookie: dict[str, Any]) -> int | None:
     with session_scope(websocket.app.state.sessionmaker) as db:
-        return staff_sessions.staff_of(db, cookie) is not None
+        found = staff_sessions.signed_in(db, cookie)
+        return found[1] if found is not None else None
 
 
 async def _send_loop(websocket: WebSocket, subscription: Subscription) -> None:

@@ -31,9 +31,12 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import psycopg
+from sqlalchemy import text
 from sqlalchemy.engine import make_url
+from sqlalchemy.orm import Session
 
 from chameleons.backend.events.hub import RESYNC, LiveHub, Message
+from chameleons.backend.events.repository import pending_notices
 
 log = logging.getLogger(__name__)
 
@@ -57,6 +60,21 @@ def encode(origin: str, channel: str, message: Message) -> str:
     if len(payload.encode()) <= MAX_PAYLOAD:
         return payload
     return json.dumps({"o": origin, "c": channel, "m": RESYNC}, separators=(",", ":"))
+
+
+def notify_on_commit(db: Session) -> int:
+    """For commands run outside the server (``chameleons user deactivate``): send what the
+    transaction queued with ``publish_after_commit`` to the running server processes, by
+    NOTIFY in the same transaction, so PostgreSQL delivers it only if it commits. Nothing
+    on SQLite (no channel to the server). Returns how many notices were queued."""
+    if db.get_bind().dialect.name != "postgresql":
+        return 0
+    origin = f"command-{uuid.uuid4().hex}"
+    notices = pending_notices(db)
+    for channel, message in notices:
+        payload = encode(origin, channel, message)
+        db.execute(text("SELECT pg_notify(:pg, :payload)"), {"pg": PG_CHANNEL, "payload": payload})
+    return len(notices)
 
 
 class PgFanout:

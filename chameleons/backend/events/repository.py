@@ -16,6 +16,7 @@ OUTBOX_KEY = "live_outbox"
 GONE_KEY = "live_gone_sessions"
 RESYNC_KEY = "live_resync_sessions"
 RETAIN_KEY = "live_retained"
+NOTICES_KEY = "live_notices"  # (channel, message) pairs
 GONE: dict[str, Any] = {"type": "gone"}
 
 
@@ -36,6 +37,17 @@ def announce_rewritten(db: Session, session_ids: set[int]) -> None:
     have changed (a withdrawal emptied the ones quoting the withdrawn participant): they
     read the whole timeline again instead of keeping the old texts."""
     db.info.setdefault(RESYNC_KEY, []).extend(sorted(session_ids))
+
+
+def publish_after_commit(db: Session, channel: str, message: dict[str, Any]) -> None:
+    """Publish ``message`` on the live hub's ``channel`` once the transaction commits (and
+    through it to the other server processes); a rollback drops it."""
+    db.info.setdefault(NOTICES_KEY, []).append((channel, message))
+
+
+def pending_notices(db: Session) -> list[tuple[str, dict[str, Any]]]:
+    """What ``publish_after_commit`` queued in this transaction so far."""
+    return list(db.info.get(NOTICES_KEY, []))
 
 
 def record(

@@ -22,6 +22,7 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, session_channel
 from chameleons.backend.events.repository import (
     GONE,
     GONE_KEY,
+    NOTICES_KEY,
     OUTBOX_KEY,
     RESYNC_KEY,
     RETAIN_KEY,
@@ -54,12 +55,15 @@ def attach_hub(db: Session, hub: LiveHub) -> None:
         for session_id in session.info.pop(GONE_KEY, []):
             hub.forget(session_channel(session_id))
             hub.publish(session_channel(session_id), GONE)
+        for channel, message in session.info.pop(NOTICES_KEY, []):
+            hub.publish(channel, message)
 
     def after_rollback(session: Session) -> None:
         session.info.pop(OUTBOX_KEY, None)
         session.info.pop(GONE_KEY, None)
         session.info.pop(RESYNC_KEY, None)
         session.info.pop(RETAIN_KEY, None)
+        session.info.pop(NOTICES_KEY, None)
 
     sa_event.listen(db, "after_commit", after_commit)
     sa_event.listen(db, "after_rollback", after_rollback)

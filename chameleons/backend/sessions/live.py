@@ -15,6 +15,7 @@ from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session, sessionmaker
 
 from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.auth.socket_revocation import serve_while_signed_in
 from chameleons.backend.events import live
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import write_session
@@ -27,9 +28,10 @@ from chameleons.backend.studies.errors import NotFoundError
 router = make_router(tags=["sessions"])
 
 
-def _is_staff(factory: sessionmaker[Session], cookie: dict[str, Any]) -> bool:
+def _staff_session(factory: sessionmaker[Session], cookie: dict[str, Any]) -> int | None:
     with factory() as db:
-        return staff_sessions.staff_of(db, cookie) is not None
+        found = staff_sessions.signed_in(db, cookie)
+        return found[1] if found is not None else None
 
 
 def _snapshot(
@@ -44,11 +46,20 @@ def _snapshot(
 @router.websocket("/ws/sessions/{session_id}")
 async def wizard_socket(websocket: WebSocket, session_id: int) -> None:
     factory = websocket.app.state.sessionmaker
-    hub: LiveHub = websocket.app.state.live_hub
     cookie = dict(websocket.session)
-    if not live.same_origin(websocket) or not await run_in_threadpool(_is_staff, factory, cookie):
+    staff_session = None
+    if live.same_origin(websocket):
+        staff_session = await run_in_threadpool(_staff_session, factory, cookie)
+    if staff_session is None:
         await websocket.close(code=4401)
         return
+    # Closed with 4401 when this login ends (logout, deactivation): not only at the handshake.
+    await serve_while_signed_in(websocket, staff_session, lambda: _serve(websocket, session_id))
+
+
+async def _serve(websocket: WebSocket, session_id: int) -> None:
+    factory = websocket.app.state.sessionmaker
+    hub: LiveHub = websocket.app.state.live_hub
     base_url = live.base_url(websocket)
     try:
         first = await run_in_threadpool(_snapshot, factory, hub, session_id, base_url)

@@ -20,6 +20,7 @@ from fastapi import WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth import sessions as staff_sessions
+from chameleons.backend.auth.socket_revocation import serve_while_signed_in
 from chameleons.backend.events import guard, live
 from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_channel
 from chameleons.backend.events.repository import GONE
@@ -47,8 +48,9 @@ class Sender:
             await live.send_json(self._websocket, message)
 
 
-def _is_staff(db: Any, cookie: dict[str, Any]) -> bool:
-    return staff_sessions.staff_of(db, cookie) is not None
+def _staff_session(db: Any, cookie: dict[str, Any]) -> int | None:
+    found = staff_sessions.signed_in(db, cookie)
+    return found[1] if found is not None else None
 
 
 def _state_message(
@@ -69,11 +71,18 @@ def _new_events(messages: list[Message]) -> list[Message] | None:
 async def console_feed(websocket: WebSocket, session_id: int) -> None:
     state = websocket.app.state
     cookie = dict(websocket.session)
-    if not live.same_origin(websocket) or not await run_in_threadpool(
-        read, state, _is_staff, cookie
-    ):
+    staff_session = None
+    if live.same_origin(websocket):
+        staff_session = await run_in_threadpool(read, state, _staff_session, cookie)
+    if staff_session is None:
         await websocket.close(code=UNAUTHORIZED)
         return
+    # Closed with 4401 when this login ends (logout, deactivation): not only at the handshake.
+    await serve_while_signed_in(websocket, staff_session, lambda: _serve(websocket, session_id))
+
+
+async def _serve(websocket: WebSocket, session_id: int) -> None:
+    state = websocket.app.state
     base_url = live.base_url(websocket)
     hub: LiveHub = state.live_hub
     # Subscribed before the first read: a change committed meanwhile reaches this console
@@ -141,7 +150,9 @@ async def console_feed(websocket: WebSocket, session_id: int) -> None:
                     await task
             with anyio.CancelScope(shield=True):  # even when the server cancels the handler
                 await asyncio.gather(*reads, return_exceptions=True)
-        if tasks[0].done() and not tasks[0].cancelled() and tasks[0].result() is GONE:
+        forward = tasks[0]  # its SocketClosed (a slow client) was handled by guarded above
+        ended = forward.done() and not forward.cancelled() and forward.exception() is None
+        if ended and forward.result() is GONE:
             with contextlib.suppress(WebSocketDisconnect, RuntimeError):
                 await websocket.close(code=NOT_FOUND)
 

@@ -11,8 +11,10 @@ import re
 
 import pytest
 from playwright.sync_api import Page, expect
-from sqlalchemy import Engine
+from sqlalchemy import Engine, select
 
+from chameleons.backend.db import build_sessionmaker, session_scope
+from chameleons.backend.models import StaffUser
 from tests.e2e.wizard.conftest import Console, log_in
 from tests.support.bots import StaffApi, study_with_plan
 from tests.support.live_server import LiveServer
@@ -254,3 +256,18 @@ def test_the_wizard_opens_the_next_participant_s_session_from_the_picker(
     expect(page.locator("#primary-action")).to_contain_text("Waiting for the participant's consent")
     expect(page.locator("#phone-qr")).to_be_visible()
     expect(page.locator("#health")).to_contain_text("Robot booth-2")
+
+
+def test_a_console_whose_login_is_ended_goes_to_the_login_page(
+    console: Console, staff: StaffApi, engine: Engine
+) -> None:
+    """The PI deactivates the wizard while the console is open: its socket is closed
+    (4401) and the page asks for a login instead of reconnecting for ever."""
+    page = console.page
+    expect(page.locator("#timeline")).to_be_visible()
+    with session_scope(build_sessionmaker(engine)) as db:
+        wiz_id = db.scalars(select(StaffUser.id).where(StaffUser.username == "wiz")).one()
+    done = staff.http.post(f"/pi/staff/{wiz_id}/deactivate", headers={"X-CSRF-Token": staff.csrf})
+    assert done.status_code == 303
+    page.wait_for_url(re.compile(r"/login\?next=%2Fwizard%2Fsessions%2F\d+$"))
+    expect(page.get_by_label("Username")).to_be_visible()

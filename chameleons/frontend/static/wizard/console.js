@@ -410,6 +410,9 @@ const feed = connectLive(sessionId, {
     if (open) link.server = true;
     showLink();
   },
+  onSignedOut() {
+    location.assign(`/login?next=${encodeURIComponent(location.pathname)}`);
+  },
   onMessage(message) {
     if (message.type === "gone") showGone();
     else if (message.type === "console") apply(message);

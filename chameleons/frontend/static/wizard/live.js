@@ -2,6 +2,7 @@
 
 const PING_EVERY_MS = 5000;
 const DEAD_AFTER_MS = 12000;
+const SIGNED_OUT = 4401; // the server closed the socket: this login has ended
 
 export function connectLive(sessionId, handlers) {
   let socket = null;
@@ -33,6 +34,11 @@ export function connectLive(sessionId, handlers) {
       clearInterval(pinger);
       handlers.onStatus(false, event.code);
       if (closedByUs) return;
+      if (event.code === SIGNED_OUT && handlers.onSignedOut) {
+        // Logged out elsewhere or deactivated: retrying would only be refused.
+        handlers.onSignedOut();
+        return;
+      }
       const delay = Math.min(8000, 500 * 2 ** retry);
       retry += 1;
       setTimeout(open, delay);
