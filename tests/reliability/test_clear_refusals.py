@@ -216,3 +216,15 @@ def test_staff_refusals_stay_in_english_whatever_the_browser_asks_for(
     path = f"/api/sessions/{wizard.session_id}/notes"
     answer = client.post(path, content=b'{"text": "a\\u0000b"}', headers=headers)
     assert (answer.status_code, answer.json()["detail"]) == (422, NUL_IN_TEXT)
+
+
+@pytest.mark.parametrize("query", ["limit=-107", "limit=0", "limit=5001", "after=-59"])
+def test_the_timeline_refuses_a_count_it_cannot_read_with_a_sentence(
+    client: TestClient, wizard: WizardBot, query: str
+) -> None:
+    """A negative LIMIT is an error on PostgreSQL (the OpenAPI fuzz found it as a 500)."""
+    response = client.get(f"/api/sessions/{wizard.session_id}/events?{query}")
+    assert response.status_code == 422
+    name = query.split("=")[0]
+    assert any(name in str(problem.get("loc")) for problem in response.json()["detail"])
+    assert client.get(f"/api/sessions/{wizard.session_id}/events?limit=5000").status_code == 200
