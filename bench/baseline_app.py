@@ -2,8 +2,9 @@
 
 ``POST /api/submit/{channel}`` answers at once and pushes ``{"client_id": ...}`` to every
 WebSocket on ``/ws/{channel}``: the shape of a phone's submission reaching the wizard's
-console, with no database, no session logic and no console state. Run by
-``bench.server_bench`` as its own uvicorn process, exactly as the real server is.
+console, with no database, no session logic and no console state. The WebSocket ``/echo``
+returns each text message at once (the bare round trip of ``bench.speech_bench``). Run by
+the benchmarks as its own uvicorn process, exactly as the real server is.
 """
 
 from __future__ import annotations
@@ -46,3 +47,13 @@ async def listen(websocket: WebSocket, channel: str) -> None:
         pass
     finally:
         _listeners[channel].discard(queue)
+
+
+@app.websocket("/echo")
+async def echo(websocket: WebSocket) -> None:
+    await websocket.accept()
+    try:
+        while True:
+            await websocket.send_text(await websocket.receive_text())
+    except WebSocketDisconnect:
+        pass
