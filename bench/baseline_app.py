@@ -37,15 +37,24 @@ async def healthz() -> dict[str, str]:
 
 @app.websocket("/ws/{channel}")
 async def listen(websocket: WebSocket, channel: str) -> None:
+    """Pushes the channel's submissions; reads (and ignores) what the client sends, which
+    is how it learns at once that the client left (the real server does the same)."""
     await websocket.accept()
     queue: asyncio.Queue[str] = asyncio.Queue()
     _listeners[channel].add(queue)
-    try:
+
+    async def push() -> None:
         while True:
             await websocket.send_json({"type": "event", "client_id": await queue.get()})
+
+    pushing = asyncio.create_task(push())
+    try:
+        while True:
+            await websocket.receive_text()
     except WebSocketDisconnect:
         pass
     finally:
+        pushing.cancel()
         _listeners[channel].discard(queue)
 
 

@@ -41,6 +41,7 @@ import os
 import random
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import partial
@@ -94,9 +95,10 @@ def server_cpu(server: Server, figures: Figures) -> Iterator[None]:
     """The server process's CPU time over the block, noted in ``figures`` (the wizard's
     actions of the think scenario are in it too: per submission, it is the server's cost of
     a whole session divided by the phone's submissions)."""
-    before = cpu_seconds(server.process.pid)
+    before, started = cpu_seconds(server.process.pid), time.monotonic()
     yield
     figures.server_cpu_s = cpu_seconds(server.process.pid) - before
+    figures.seconds = time.monotonic() - started
 
 
 def submit_ranking(phone: Phone, figures: Figures) -> None:
@@ -154,7 +156,10 @@ def print_table(name: str, result: dict[str, Any], baseline: dict[str, Any]) -> 
             print(f"{label:<32} {what:<26} {p50:>8.1f} {p99:>8.1f} {ratio:>10.1f}x {faults}")
         cpu, base_cpu = ours["server_cpu_ms_per_submission"], base["server_cpu_ms_per_submission"]
         ratio = f"{cpu / base_cpu:>10.1f}x" if base_cpu else f"{'n/a':>11}"  # 0: under a tick
-        print(f"{label:<32} {'server CPU / submission':<26} {cpu:>8.1f} {'':>8} {ratio}")
+        print(
+            f"{label:<32} {'server CPU / submission':<26} {cpu:>8.1f} {'':>8} {ratio} "
+            f"({ours['submissions']} submissions in {ours['seconds']:g} s)"
+        )
 
 
 def goals(report: dict[str, Any], hold_phones: int) -> dict[str, dict[str, bool]]:
@@ -190,7 +195,7 @@ def parser() -> argparse.ArgumentParser:
     found.add_argument(
         "--quick",
         action="store_true",
-        help="10 phones, 0.5 s think, 0.5 s wizard, hold 20 phones for 10 s.",
+        help="6 phones, 0.3 s think, 0.3 s wizard, hold 10 phones for 8 s.",
     )
     found.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
     found.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
@@ -208,8 +213,8 @@ def parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     if args.quick:
-        args.phones, args.think_max, args.wizard_think = 10, 0.5, 0.5
-        args.hold_phones, args.hold_seconds = 20, 10.0
+        args.phones, args.think_max, args.wizard_think = 6, 0.3, 0.3
+        args.hold_phones, args.hold_seconds = 10, 8.0
     print(f"{args.phones} phones, think time 0-{args.think_max:g} s, wizard 0 (stress) and "
           f"0-{args.wizard_think:g} s; hold {args.hold_phones} phones for "
           f"{args.hold_seconds:g} s; baseline: bare FastAPI POST + WebSocket push "

@@ -47,8 +47,8 @@ class Window:
     def close(self, figures: Figures, phones: int, held: int, sockets: int) -> dict[str, Any]:
         wall = time.monotonic() - self.started
         figures.server_cpu_s = cpu_seconds(self.pid) - self.cpu_before
+        figures.seconds = wall
         return {**figures.summary(), "phones": phones, "held": held, "sockets_opened": sockets,
-                "seconds": round(wall, 1),
                 "server_cpu_share": round(figures.server_cpu_s / wall, 3) if wall else 0.0,
                 **memory_mib(self.pid)}  # fmt: skip
 

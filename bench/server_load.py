@@ -57,6 +57,7 @@ class Figures:
     errors: Counter[str] = field(default_factory=Counter)
     dropped: Counter[str] = field(default_factory=Counter)  # sockets closed under the bench
     server_cpu_s: float = 0.0  # the server process's CPU time over the scenario
+    seconds: float = 0.0  # the scenario's wall time
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def add(self, *, http: float | None, update: float | None) -> None:
@@ -85,7 +86,7 @@ class Figures:
             submissions = len(self.http) + sum(self.errors.values())
             cpu_ms = 1000 * self.server_cpu_s / submissions if submissions else 0.0
             return {**ms, "submissions": submissions, "errors": dict(self.errors),
-                    "dropped_sockets": dict(self.dropped),
+                    "dropped_sockets": dict(self.dropped), "seconds": round(self.seconds, 1),
                     "server_cpu_ms_per_submission": round(cpu_ms, 2)}  # fmt: skip
 
 
