@@ -16,7 +16,10 @@ factory), then, through the real app (ASGI, logged in as a PI):
   stack with a database round trip).
 
 Figures are medians over R repetitions (after one warm-up request, which also pays the
-one-off imports), with their ratio to the baseline.
+one-off imports), with their ratio to the baseline; then the **peak memory** of one more
+first render and one more cold extended load, each in a run of its own under tracemalloc
+(Python's allocations, NumPy's and pandas' buffers included; tracing slows the code, so
+these runs are not timed), against the paper's analysis alone traced the same way.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import secrets
 import statistics
 import tempfile
 import time
+import tracemalloc
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -51,6 +55,18 @@ def _median_seconds(action: Callable[[], object], repeat: int, before: Callable[
         action()
         times.append(time.perf_counter() - start)
     return statistics.median(times)
+
+
+def _peak_mib(action: Callable[[], object], before: Callable[[], None]) -> float:
+    """The peak of Python's allocations during one run of ``action``, in MiB."""
+    before()
+    tracemalloc.start()
+    try:
+        action()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return round(peak / 2**20, 2)
 
 
 def run(participants: int, repeat: int) -> dict[str, Any]:
@@ -97,12 +113,18 @@ def run(participants: int, repeat: int) -> dict[str, Any]:
                 "extended_warm_s": _median_seconds(get("/pi/analysis/extended"), repeat, nothing),
                 "json_cold_s": _median_seconds(get("/api/pi/analysis"), repeat, analyses.clear),
             }
+            memory = {
+                "baseline_paper_analysis_peak_mib": _peak_mib(classic, nothing),
+                "first_render_peak_mib": _peak_mib(get("/pi/analysis"), analyses.clear),
+                "extended_cold_peak_mib": _peak_mib(get("/pi/analysis/extended"), analyses.clear),
+            }
         engine.dispose()
     base = figures["baseline_paper_analysis_s"]
     return {
         "participants": participants,
         "repeat": repeat,
         **{k: round(v, 4) for k, v in figures.items()},
+        **memory,
         "first_render_vs_paper_analysis": round(figures["first_render_s"] / base, 2),
         "extended_cold_vs_paper_analysis": round(figures["extended_cold_s"] / base, 2),
         "first_render_under_1s": figures["first_render_s"] < 1.0,

@@ -9,8 +9,9 @@ baseline measured in the same run.
 - **export**: ``export_to_directory`` (CSV, every table and the codebook) of N completed
   participants (the tests' data factory on a SQLite file built by the migrations) against
   a bare pandas dump of the same database tables (``read_sql_table`` + ``to_csv``).
-- **analysis**: the analysis page's first render for N participants
-  (``bench.analysis_bench``, which sets it against the paper's analysis alone).
+- **analysis**: the analysis page for 100 and N participants (``bench.analysis_bench``:
+  its first render and its effect sizes and models, each set against the paper's
+  analysis alone, with their peak memory).
 
 Times are medians over ``--repeat`` runs; peak memory is Python's allocations (tracemalloc,
 which also sees NumPy's and pandas' buffers) in a separate run, since tracing slows the
@@ -101,14 +102,18 @@ def export(participants: int, repeat: int, folder: Path) -> dict[str, Any]:
             "baseline_pandas_dump": dump, "x_baseline": ratio(csv, dump)}  # fmt: skip
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--participants", type=int, default=1000)
-    parser.add_argument("--plan-rows", type=int, default=1200)
-    parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--quick", action="store_true", help="20 participants, 120 rows, 1 run")
-    parser.add_argument("--json", type=Path, default=None, help="also write the figures here")
-    args = parser.parse_args()
+def parser() -> argparse.ArgumentParser:
+    found = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    found.add_argument("--participants", type=int, default=1000)
+    found.add_argument("--plan-rows", type=int, default=1200)
+    found.add_argument("--repeat", type=int, default=3)
+    found.add_argument("--quick", action="store_true", help="20 participants, 120 rows, 1 run")
+    found.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    return found
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parser().parse_args(argv)
     if args.quick:
         args.participants, args.plan_rows, args.repeat = 20, 120, 1
     figures: dict[str, Any] = {"planning": planning(args.plan_rows, args.repeat)}

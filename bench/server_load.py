@@ -12,9 +12,9 @@ import sys
 import threading
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -55,7 +55,9 @@ class Figures:
     http: list[float] = field(default_factory=list)
     update: list[float] = field(default_factory=list)
     errors: Counter[str] = field(default_factory=Counter)
+    dropped: Counter[str] = field(default_factory=Counter)  # sockets closed under the bench
     server_cpu_s: float = 0.0  # the server process's CPU time over the scenario
+    seconds: float = 0.0  # the scenario's wall time
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def add(self, *, http: float | None, update: float | None) -> None:
@@ -69,6 +71,13 @@ class Figures:
         with self._lock:
             self.errors[what] += 1
 
+    def release(self, name: str, socket: Listener) -> None:
+        """Close a socket the bench held, counting it as dropped if it was closed under it."""
+        if socket.dropped:
+            with self._lock:
+                self.dropped[name] += 1
+        socket.close()
+
     def summary(self) -> dict[str, Any]:
         with self._lock:
             ms = {f"{name}_{label}_ms": round(percentile(values, q) * 1000, 2)
@@ -77,23 +86,33 @@ class Figures:
             submissions = len(self.http) + sum(self.errors.values())
             cpu_ms = 1000 * self.server_cpu_s / submissions if submissions else 0.0
             return {**ms, "submissions": submissions, "errors": dict(self.errors),
+                    "dropped_sockets": dict(self.dropped), "seconds": round(self.seconds, 1),
                     "server_cpu_ms_per_submission": round(cpu_ms, 2)}  # fmt: skip
 
 
-class Console:
-    """A WebSocket whose reader thread notes when each client id first arrives."""
+class Listener:
+    """A WebSocket whose reader thread notes when each event key first arrives: the
+    submission's client id, and ``kind:play_event_id`` for a prompt's speech events.
+
+    Only event messages are parsed (the console's state messages can be large, and parsing
+    them would put the load generator's CPU into the figures). ``ended_codes`` are close
+    codes that end the socket normally (the phone's 4410 when its session is over); any
+    other close the bench did not ask for is a **dropped** socket."""
 
     clock = staticmethod(time.perf_counter)
 
-    def __init__(self, url: str, origin: str, cookies: dict[str, str]) -> None:
+    def __init__(self, url: str, origin: str, cookies: dict[str, str] | None = None,
+                 *, ended_codes: tuple[int, ...] = ()) -> None:  # fmt: skip
         headers = {"Origin": origin}
         if cookies:
             headers["Cookie"] = "; ".join(f"{k}={v}" for k, v in cookies.items())
         self._connection = connect(url, additional_headers=headers, proxy=None,
                                    max_size=None, open_timeout=60)  # fmt: skip
+        self._ended_codes = ended_codes
         self._seen: dict[str, float] = {}
         self._condition = threading.Condition()
-        self._closed = False
+        self._closed = self._closing = False
+        self.messages = 0
         self._thread = threading.Thread(target=self._read, daemon=True)
         self._thread.start()
 
@@ -105,10 +124,14 @@ class Console:
         try:
             for raw in self._connection:
                 now = self.clock()
-                client_id = _client_id(json.loads(raw))
-                if client_id:
+                self.messages += 1
+                if not _is_event(raw):
+                    continue
+                keys = _event_keys(json.loads(raw))
+                if keys:
                     with self._condition:
-                        self._seen.setdefault(client_id, now)
+                        for key in keys:
+                            self._seen.setdefault(key, now)
                         self._condition.notify_all()
         except (ConnectionClosed, OSError, ValueError):
             pass
@@ -117,27 +140,48 @@ class Console:
                 self._closed = True
                 self._condition.notify_all()
 
-    def wait_for(self, client_id: str, timeout: float) -> float | None:
+    def wait_for(self, key: str, timeout: float) -> float | None:
         with self._condition:
-            self._condition.wait_for(lambda: client_id in self._seen or self._closed, timeout)
-            return self._seen.get(client_id)
+            self._condition.wait_for(lambda: key in self._seen or self._closed, timeout)
+            return self._seen.get(key)
+
+    @property
+    def dropped(self) -> bool:
+        """Closed by the other side (or the network) while the bench still held it."""
+        if not self._closed or self._closing:
+            return False
+        return self._connection.close_code not in self._ended_codes
 
     def close(self) -> None:
+        self._closing = not self._closed
         self._connection.close()
         self._thread.join(timeout=10)
 
 
-def _client_id(message: Any) -> str | None:
-    """The submission's client id of an event message: the real console nests the event
+Console = Listener  # the wizard console's socket; the phone's is a Listener too
+
+
+def _is_event(raw: str | bytes) -> bool:
+    head = raw[:24] if isinstance(raw, str) else raw[:24].decode("utf-8", "replace")
+    return head.replace(" ", "").startswith('{"type":"event"')
+
+
+def _event_keys(message: Any) -> list[str]:
+    """The keys of an event message: the real console nests the event
     (``{"type": "event", "event": {...}}``), the baseline sends it flat."""
     if not isinstance(message, dict) or message.get("type") != "event":
-        return None
+        return []
     event = message.get("event", message)
-    found = event.get("client_id") if isinstance(event, dict) else None
-    return found if isinstance(found, str) else None
+    if not isinstance(event, dict):
+        return []
+    keys = [event["client_id"]] if isinstance(event.get("client_id"), str) else []
+    payload = event.get("payload")
+    if isinstance(payload, dict) and payload.get("play_event_id") is not None:
+        keys.append(f"{event.get('kind')}:{payload['play_event_id']}")
+    return keys
 
 
-def run_threads(jobs: list[Callable[[], Any]], *, together: bool = False) -> None:
+def run_threads(jobs: Sequence[Callable[[], Any]], *, together: bool = False) -> None:
     """Each job in a thread of its own; with ``together`` they start at one barrier."""
     barrier = threading.Barrier(len(jobs)) if together else None
     failures: list[BaseException] = []
@@ -217,22 +261,39 @@ class Server:
     @classmethod
     @contextmanager
     def chameleons(
-        cls, database_url: str, sessions: int
-    ) -> Iterator[tuple[Server, dict[str, Any]]]:
-        """``chameleons serve`` on ``database_url`` (migrated, with a study whose plan has
-        room for ``sessions`` and a wizard), and a logged-in wizard's cookie and CSRF."""
-        study_id, password = _prepare(database_url, sessions)
+        cls, database_url: str, sessions: int, *, role: str = "wizard",
+        env: dict[str, str] | None = None,
+    ) -> Iterator[tuple[Server, dict[str, Any]]]:  # fmt: skip
+        """``chameleons serve`` on ``database_url`` (migrated, with studies whose plans have
+        room for ``sessions`` and a staff member of ``role``), that staff member's cookie
+        and CSRF, and the studies' ids. ``env`` adds settings (the worker link is off
+        unless it says so)."""
+        study_ids, username, password = _prepare(database_url, sessions, role)
         port = free_port()
+        secret = secrets.token_urlsafe(32)
         with tempfile_dir() as data_dir:
-            env = {**os.environ, "CHAMELEONS_DATABASE_URL": database_url,
-                   "CHAMELEONS_DATA_DIR": str(data_dir),
-                   "CHAMELEONS_SECRET_KEY": secrets.token_urlsafe(32),
-                   "CHAMELEONS_BRIDGE_ENABLED": "false",
-                   "CHAMELEONS_LOG_LEVEL": "warning"}  # fmt: skip
+            server_env = {**os.environ, "CHAMELEONS_DATABASE_URL": database_url,
+                          "CHAMELEONS_DATA_DIR": str(data_dir),
+                          "CHAMELEONS_SECRET_KEY": secret,
+                          "CHAMELEONS_BRIDGE_ENABLED": "false",
+                          "CHAMELEONS_LOG_LEVEL": "warning", **(env or {})}  # fmt: skip
             command = [sys.executable, "-m", "chameleons", "serve", "--host", "127.0.0.1",
                        "--port", str(port)]  # fmt: skip
-            with cls._running(command, env, port) as server:
-                yield server, _log_in(server, password) | {"study_id": study_id}
+            with cls._running(command, server_env, port) as server:
+                login = _log_in(server, username, password)
+                yield server, login | {"study_ids": study_ids, "secret_key": secret}
+
+
+def memory_mib(pid: int) -> dict[str, float]:
+    """Resident memory of a process now and at its peak (``VmRSS``, ``VmHWM``), MiB."""
+    found = {}
+    with open(f"/proc/{pid}/status") as handle:
+        for line in handle:
+            name, _, value = line.partition(":")
+            if name in ("VmRSS", "VmHWM"):
+                found[name] = int(value.split()[0]) / 1024  # kB
+    return {"rss_mib": round(found.get("VmRSS", 0.0), 1),
+            "peak_rss_mib": round(found.get("VmHWM", 0.0), 1)}  # fmt: skip
 
 
 @contextmanager
@@ -243,7 +304,9 @@ def tempfile_dir() -> Iterator[Path]:
         yield Path(tmp)
 
 
-def _prepare(database_url: str, sessions: int) -> tuple[int, str]:
+def _prepare(database_url: str, sessions: int, role: str) -> tuple[list[int], str, str]:
+    """Migrate, add a staff member (a fresh name: scenarios may share a database) and
+    studies whose plans have room for ``sessions`` (a plan holds at most 1,000 rows)."""
     from chameleons.backend.auth import service as auth
     from chameleons.backend.auth.schemas import StaffUserCreate
     from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
@@ -252,24 +315,30 @@ def _prepare(database_url: str, sessions: int) -> tuple[int, str]:
     from chameleons.experiment.study import load_default_study
 
     upgrade(database_url)
-    password = secrets.token_urlsafe(16)
+    tag = secrets.token_hex(4)
+    username, password = f"bench-{tag}", secrets.token_urlsafe(16)
+    count = -(-sessions // studies.MAX_PLAN_ROWS)
     engine = build_engine(database_url)
     try:
         with session_scope(build_sessionmaker(engine)) as db:
-            auth.create_user(db, StaffUserCreate(username="bench-wizard", password=password,
-                                                 role="wizard"))  # fmt: skip
-            study = studies.create_study(db, load_default_study(), plan_seed=1)
-            studies.generate_plan(db, study, sessions)
-            return study.id, password
+            auth.create_user(db, StaffUserCreate(username=username, password=password,
+                                                 role=role))  # fmt: skip
+            found = []
+            for index in range(count):
+                spec = replace(load_default_study(), name=f"Bench {tag}-{index}")
+                study = studies.create_study(db, spec, plan_seed=1)
+                studies.generate_plan(db, study, -(-sessions // count))
+                found.append(study.id)
+            return found, username, password
     finally:
         engine.dispose()
 
 
-def _log_in(server: Server, password: str) -> dict[str, Any]:
+def _log_in(server: Server, username: str, password: str) -> dict[str, Any]:
     from chameleons.backend.sessions.bot import StaffApi
 
     with server.client() as http:
-        staff = StaffApi(http).login("bench-wizard", password)
+        staff = StaffApi(http).login(username, password)
         return {"cookies": dict(http.cookies.items()), "csrf": staff.csrf}
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from bench import analysis_bench
 from bench.data_bench import export, planning
 
 pytestmark = pytest.mark.slow
@@ -27,3 +28,13 @@ def test_planning_and_export_figures_with_baselines(tmp_path: Path) -> None:
     participants = (ours[0] / "participants.csv").read_text().splitlines()
     assert len(participants) == 1 + 4  # header and the four participants
     assert sorted(p.name for p in tmp_path.glob("bare*/participant.csv"))
+
+
+def test_the_analysis_page_figures_come_with_their_peak_memory() -> None:
+    figures = analysis_bench.run(4, 1)
+    assert figures["participants"] == 4
+    for name in ("baseline_paper_analysis", "first_render", "extended_cold"):
+        assert figures[f"{name}_peak_mib"] > 0
+    # The page renders from the paper's analysis of the same rows, and then some.
+    assert figures["first_render_peak_mib"] > 0.5 * figures["baseline_paper_analysis_peak_mib"]
+    assert figures["first_render_vs_paper_analysis"] > 0

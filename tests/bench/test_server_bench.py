@@ -1,5 +1,6 @@
-"""The server benchmark runs (two phones, no think time): every phone submission of a whole
-session reaches its console socket, against the real server and the baseline alike."""
+"""The server benchmark runs (two phones, no think time, a two-second hold): every phone
+submission of a whole session reaches its console socket, with the phone's own socket open,
+against the real server and the baseline alike; and its goals fail on any error."""
 
 from __future__ import annotations
 
@@ -7,29 +8,70 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
+from bench.server_bench import goals
+
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
+SCENARIOS = ("think_instant", "think_paced", "burst")
 
 
 def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     out = tmp_path / "figures.json"
     command = [sys.executable, "-m", "bench.server_bench", "--phones", "2", "--think-max", "0",
-               "--only", "sqlite", "--json", str(out)]  # fmt: skip
-    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=600,
+               "--wizard-think", "0.05", "--hold-phones", "2", "--hold-seconds", "2",
+               "--only", "sqlite", "--report-only", "--json", str(out)]  # fmt: skip
+    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=900,
                           check=False)  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr
     report = json.loads(out.read_text())
     real, baseline = report["SQLite"], report["SQLite baseline"]
     # A session of the default study: 3 rankings and every questionnaire page, per phone.
-    assert real["think"]["submissions"] >= 2 * 3 * 2
+    for scenario in ("think_instant", "think_paced"):
+        assert real[scenario]["submissions"] >= 2 * 3 * 2
     assert real["burst"]["submissions"] == 2
-    for scenario in (real["think"], real["burst"], baseline["think"], baseline["burst"]):
+    for scenario in [real[name] for name in SCENARIOS] + [baseline[name] for name in SCENARIOS]:
         assert scenario["errors"] == {}
+        assert scenario["dropped_sockets"] == {}
         assert scenario["update_p99_ms"] > 0
         assert scenario["server_cpu_ms_per_submission"] >= 0  # clock ticks: a burst of 2 may be 0
-    assert real["think"]["server_cpu_ms_per_submission"] > 0  # two whole sessions cost CPU
-    assert "submit -> console update" in done.stdout
-    assert "server CPU / submission" in done.stdout
+    assert real["think_paced"]["server_cpu_ms_per_submission"] > 0  # two sessions cost CPU
+    for hold in (real["hold"], baseline["hold"]):
+        assert hold["phones"] == hold["held"] == 2
+        assert hold["sockets_opened"] >= 4  # a phone socket and a console socket per phone
+        assert hold["submissions"] > 0
+        assert hold["update_p99_ms"] > 0
+        assert hold["rss_mib"] > 0
+        assert hold["peak_rss_mib"] >= hold["rss_mib"]
+        assert hold["errors"] == {}
+        assert hold["dropped_sockets"] == {}
+    for line in ("think, instant wizard (stress)", "think, human-paced wizard",
+                 "submit -> console update", "server CPU / submission", "hold, 2 phones",
+                 "server RSS MiB (peak)", "goals:"):  # fmt: skip
+        assert line in done.stdout
+
+
+def _scenario(p99: float, errors: dict[str, int] | None = None) -> dict[str, Any]:
+    return {"update_p99_ms": p99, "errors": errors or {}, "dropped_sockets": {}}
+
+
+def test_a_goal_fails_on_slow_updates_and_on_an_error_in_any_scenario() -> None:
+    fast = {name: _scenario(10.0) for name in SCENARIOS}
+    hold = {**_scenario(20.0), "phones": 200, "held": 200}
+    met = goals({"SQLite": {**fast, "hold": hold}}, hold_phones=200)["SQLite"]
+    assert all(met.values()), met
+    slow = goals({"SQLite": {**fast, "think_paced": _scenario(80.0)}}, 200)["SQLite"]
+    assert slow["think p99 <= 50 ms (human-paced wizard)"] is False
+    # The stress run's p99 is reported, not a goal; its errors fail the run all the same.
+    stressed = {**fast, "think_instant": _scenario(900.0, {"wizard action: HTTP 500": 1})}
+    failed = goals({"PostgreSQL": stressed}, 200)["PostgreSQL"]
+    assert failed["think p99 <= 50 ms (human-paced wizard)"] is True
+    assert failed["no error or dropped socket in any scenario"] is False
+    dropped = {**hold, "dropped_sockets": {"phone socket": 1}}
+    held = goals({"SQLite": {**fast, "hold": dropped}}, 200)["SQLite"]
+    assert held["no error or dropped socket in any scenario"] is False
+    short = goals({"SQLite": {**fast, "hold": {**hold, "held": 199}}}, 200)["SQLite"]
+    assert short["200 phones held"] is False

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import fnmatch
+import importlib
+import pkgutil
 import re
 from pathlib import Path
 from typing import Any
 
 import click
 import pytest
+import uvicorn
 import yaml
 
 from chameleons.cli.main import cli
@@ -59,7 +63,7 @@ def test_every_command_exists_in_the_cli(name: str) -> None:
 def test_every_environment_variable_is_a_setting(name: str) -> None:
     fields = {f"CHAMELEONS_{field.upper()}" for field in Settings.model_fields}
     for key in APP_SERVICES[name].get("environment", {}):
-        assert key in fields, f"{name}: {key} is not a setting"
+        assert key in fields | DEPENDENCY_VARIABLES, f"{name}: {key} is not a setting"
 
 
 def test_env_example_names_real_settings_and_is_refused() -> None:
@@ -109,3 +113,75 @@ def test_dockerfile_installs_the_package() -> None:
     # The image ships the prompt catalogue and points the server at it.
     assert "COPY prompts ./prompts" in dockerfile
     assert "CHAMELEONS_PROMPTS_DIR=/app/prompts" in dockerfile
+
+
+# --- the scale profile: more server processes behind a proxy --------------------------------
+
+CADDYFILE = ROOT / "deploy" / "Caddyfile"
+# Variables a dependency reads itself (not settings): uvicorn's trust in X-Forwarded-For.
+DEPENDENCY_VARIABLES = {"FORWARDED_ALLOW_IPS"}
+
+
+def _phone_patterns() -> list[str]:
+    match = re.search(r"^\s*@phones path (.+)$", CADDYFILE.read_text(), re.MULTILINE)
+    assert match, "deploy/Caddyfile has no @phones path matcher"
+    return match.group(1).split()
+
+
+def _route_paths() -> dict[str, str]:
+    """Every route path of the server (HTTP and WebSocket) -> the module that serves it."""
+    import chameleons.backend as backend
+
+    found = {}
+    for module in pkgutil.walk_packages(backend.__path__, "chameleons.backend."):
+        router = getattr(importlib.import_module(module.name), "router", None)
+        for route in getattr(router, "routes", []):
+            found[route.path] = module.name
+    return found
+
+
+def _matches(pattern: str, path: str) -> bool:
+    """Caddy's path matcher: exact, or a prefix when it ends in ``*``."""
+    concrete = re.sub(r"\{[^}]+\}", "x", path)
+    return fnmatch.fnmatchcase(concrete, pattern)
+
+
+def test_the_proxy_sends_every_phone_route_to_the_replicas_and_nothing_else() -> None:
+    patterns, routes = _phone_patterns(), _route_paths()
+    phone = {p for p, module in routes.items() if module.startswith("chameleons.backend.phone.")}
+    assert {"/p/{token}", "/ws/p/{token}", "/api/phone/{token}/ranking"} <= phone
+    for path in phone:
+        assert any(_matches(pattern, path) for pattern in patterns), f"{path} goes to server"
+    for path, module in routes.items():
+        if path not in phone:
+            assert not any(_matches(p, path) for p in patterns), f"{path} ({module}) to replicas"
+
+
+def test_the_scale_profile_runs_replicas_behind_the_proxy() -> None:
+    replicas, proxy = SERVICES["server-phones"], SERVICES["proxy"]
+    assert replicas["profiles"] == proxy["profiles"] == ["scale"]
+    assert replicas["environment"]["CHAMELEONS_BRIDGE_ENABLED"] == "false"  # one worker link
+    # Replicas cannot share a host port, and they trust X-Forwarded-For: none published.
+    assert "ports" not in replicas
+    count = re.fullmatch(r"\$\{PHONE_SERVER_REPLICAS:-(\d+)\}", replicas["deploy"]["replicas"])
+    assert count, "replicas: ${PHONE_SERVER_REPLICAS:-N}"
+    assert int(count.group(1)) >= 2
+    mount = next(v for v in proxy["volumes"] if v.endswith(":/etc/caddy/Caddyfile:ro"))
+    assert (ROOT / mount.split(":")[0]).resolve() == CADDYFILE
+    caddyfile = CADDYFILE.read_text()
+    # The upstreams are the compose services, on the port their command serves.
+    for name in ("server", "server-phones"):
+        port = SERVICES[name]["command"][SERVICES[name]["command"].index("--port") + 1]
+        assert re.search(rf"\b{name}[: ]{port}\b", caddyfile), f"{name}:{port} not proxied"
+    assert "lb_policy cookie" in caddyfile  # a phone sticks to one replica
+
+
+def test_the_variables_that_are_not_settings_are_read_by_uvicorn(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    for service in APP_SERVICES.values():
+        for key in service.get("environment", {}):
+            assert key.startswith("CHAMELEONS_") or key in DEPENDENCY_VARIABLES, key
+    monkeypatch.setenv("FORWARDED_ALLOW_IPS", "*")
+    config = uvicorn.Config(app=lambda *_args: None)  # how `chameleons serve` runs it
+    assert config.forwarded_allow_ips == "*"

@@ -1,15 +1,25 @@
 """Two server processes on one PostgreSQL database: a phone answering on one updates a
 console watching on the other (events.pg_fanout, LISTEN/NOTIFY).
 
-The two servers are two apps, each with its own uvicorn server, event loop, thread pool and
-live hub, in threads of this process: nothing connects their hubs but PostgreSQL, as with
-two processes (the real processes are in bench/server_bench.py's topology notes)."""
+Most tests here run the two servers as two apps, each with its own uvicorn server, event
+loop, thread pool and live hub, in threads of this process (nothing connects their hubs but
+PostgreSQL, and the apps' state can be looked into); one runs two real ``chameleons serve``
+processes, as a deployment does (the topology: README "More than one server process" and
+docs/performance.md)."""
 
 from __future__ import annotations
 
 import json
+import os
+import secrets
+import socket
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -65,7 +75,9 @@ def _listening(app: FastAPI) -> bool:
     return fanout is not None and fanout.listening.is_set()
 
 
-def _console(server: LiveServer, session_id: int, http: httpx.Client) -> ClientConnection:
+def _console(
+    server: LiveServer | ServeProcess, session_id: int, http: httpx.Client
+) -> ClientConnection:
     cookies = "; ".join(f"{k}={v}" for k, v in http.cookies.items())
     return connect(
         f"ws://127.0.0.1:{server.port}/ws/sessions/{session_id}",
@@ -191,3 +203,94 @@ def test_a_logout_on_one_server_closes_the_staff_sockets_on_the_other(
                 4401,
                 "staff session ended (logout)",
             )
+
+
+@dataclass
+class ServeProcess:
+    """A ``chameleons serve`` OS process on a free loopback port."""
+
+    process: subprocess.Popen[bytes]
+    port: int
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.port}"
+
+    def ready(self) -> bool:
+        if self.process.poll() is not None:
+            raise AssertionError(f"chameleons serve exited with {self.process.returncode}")
+        try:
+            return httpx.get(f"{self.url}/healthz", timeout=5).status_code == 200
+        except httpx.TransportError:
+            return False
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+@contextmanager
+def serve_process(database_url: str, secret: str, data_dir: Path) -> Iterator[ServeProcess]:
+    """Started; stopped (SIGTERM, then SIGKILL) at the end. No worker link: the processes
+    would both bind its ports (in a deployment, one process runs it)."""
+    port = _free_port()
+    env = {**os.environ, "CHAMELEONS_DATABASE_URL": database_url,
+           "CHAMELEONS_SECRET_KEY": secret, "CHAMELEONS_DATA_DIR": str(data_dir),
+           "CHAMELEONS_BRIDGE_ENABLED": "false", "CHAMELEONS_LOG_LEVEL": "warning"}  # fmt: skip
+    command = [sys.executable, "-m", "chameleons", "serve", "--host", "127.0.0.1",
+               "--port", str(port)]  # fmt: skip
+    process = subprocess.Popen(command, env=env, stdin=subprocess.DEVNULL)
+    try:
+        yield ServeProcess(process, port)
+    finally:
+        process.terminate()
+        try:
+            process.wait(30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def _listening_connections(engine: Engine) -> int:
+    """Connections to this database that listen for the fan-out's notifications (each
+    server process keeps one, idle after its LISTEN)."""
+    with engine.connect() as connection:
+        return int(connection.execute(text(
+            "SELECT count(*) FROM pg_stat_activity WHERE datname = current_database() "
+            "AND query ILIKE 'LISTEN %'"
+        )).scalar_one())  # fmt: skip
+
+
+def test_two_serve_processes_carry_a_phone_answer_to_the_other_ones_console(
+    database_url: str, engine: Engine, tmp_path: Path
+) -> None:
+    if engine.dialect.name != "postgresql":
+        pytest.skip("one SQLite server is one process: the fan-out is PostgreSQL's")
+    secret = secrets.token_urlsafe(32)  # shared, as the deployment's .env is
+    with (
+        serve_process(database_url, secret, tmp_path / "a") as phone_server,
+        serve_process(database_url, secret, tmp_path / "b") as console_server,
+    ):
+        wait_until(lambda: phone_server.ready() and console_server.ready(), "both answer")
+        wait_until(lambda: _listening_connections(engine) >= 2, "both processes listen")
+        with (
+            httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
+            httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+        ):
+            pi = staff_api(staff_http, engine, "pi")
+            wizard = WizardBot.create(pi, study_with_plan(pi))
+            with _console(console_server, wizard.session_id, staff_http) as console:
+                _next_matching(console, lambda m: m.get("type") == "snapshot")
+                phone = ParticipantBot(phone_http, wizard.token)
+                phone.consent(True, client_id="between-processes")
+                event = _next_matching(
+                    console,
+                    lambda m: (
+                        m.get("type") == "event"
+                        and m["event"].get("client_id") == "between-processes"
+                    ),
+                )
+                assert event["event"]["session_id"] == wizard.session_id
+                assert event["event"]["kind"] == "consent.given"

@@ -1,0 +1,141 @@
+"""The hold scenario of ``bench.server_bench``: many phones at once for a fixed time.
+
+Every phone opens its session (the phone's socket ``/ws/p/{token}`` and the session's
+console socket open), all wait at one barrier, then for ``seconds`` each walks sessions back
+to back at the human pace (phone 0..T s before each submission, wizard 0..W s before each
+action), opening a new session with its sockets when one ends. Figures: submit -> console
+p50/p99, errors, sockets the server dropped, and the server process's CPU (share of one
+core over the window) and resident memory (now and its peak). The baseline holds the same
+number of sockets on ``bench.baseline_app`` and submits at the same think times.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+from websockets.exceptions import WebSocketException
+
+from bench.server_load import Figures, Server, cpu_seconds, memory_mib, run_threads
+from bench.server_walk import BaselinePhone, Pace, RealServer, walk_session
+from chameleons.backend.sessions.bot import ApiError
+
+SETUP_ERRORS = (ApiError, OSError, TimeoutError, WebSocketException)
+
+
+@dataclass
+class Window:
+    """The measured window: opened by the barrier's action once every phone is set up."""
+
+    seconds: float
+    pid: int
+    deadline: float = math.inf
+    started: float = 0.0
+    cpu_before: float = 0.0
+
+    def open(self) -> None:
+        self.started = time.monotonic()
+        self.deadline = self.started + self.seconds
+        self.cpu_before = cpu_seconds(self.pid)
+
+    def close(self, figures: Figures, phones: int, held: int, sockets: int) -> dict[str, Any]:
+        wall = time.monotonic() - self.started
+        figures.server_cpu_s = cpu_seconds(self.pid) - self.cpu_before
+        figures.seconds = wall
+        return {**figures.summary(), "phones": phones, "held": held, "sockets_opened": sockets,
+                "server_cpu_share": round(figures.server_cpu_s / wall, 3) if wall else 0.0,
+                **memory_mib(self.pid)}  # fmt: skip
+
+
+def _with_barrier(barrier: threading.Barrier, figures: Figures, setup: Callable[[], Any],
+                  walk: Callable[[Any], None]) -> None:  # fmt: skip
+    """Set up, wait for every phone, then walk; a phone whose setup failed (an error of the
+    scenario) still meets the barrier, or the others would wait for it forever."""
+    try:
+        ready = setup()
+    except SETUP_ERRORS as error:
+        figures.count_error(f"opening a session: {error!r}")
+        barrier.wait()
+        return
+    except BaseException:
+        barrier.wait()
+        raise
+    barrier.wait()
+    walk(ready)
+
+
+def hold_real(database_url: str, phones: int, seconds: float, think_max: float, seed: int,
+              wizard_think: float) -> dict[str, Any]:  # fmt: skip
+    rows = phones * max(3, math.ceil(seconds / 4))  # sessions last longer than 4 s
+    with Server.chameleons(database_url, sessions=rows) as (server, setup):
+        real = RealServer.of(server, setup)
+        figures, window = Figures(), Window(seconds, server.process.pid)
+        barrier = threading.Barrier(phones, action=window.open)
+        held: list[int] = []  # phones that were still there at the window's end
+
+        def walk(index: int, first: Any) -> None:
+            pace = Pace(random.Random(seed + index), think_max, wizard_think, window.deadline)
+            phone = first
+            while True:
+                walk_session(phone, figures, pace)
+                real.release(phone, figures)
+                if time.monotonic() >= window.deadline:
+                    held.append(index)
+                    return
+                try:
+                    phone = real.new_phone()
+                except SETUP_ERRORS as error:
+                    figures.count_error(f"new session: {error!r}")
+                    return
+
+        run_threads([partial(_with_barrier, barrier, figures, real.new_phone_alone,
+                             partial(walk, i))
+                     for i in range(phones)])  # fmt: skip
+        return window.close(figures, phones, len(held), real.sockets_opened)
+
+
+def hold_baseline(phones: int, seconds: float, think_max: float, seed: int) -> dict[str, Any]:
+    with Server.baseline() as server:
+        figures, window = Figures(), Window(seconds, server.process.pid)
+        barrier = threading.Barrier(phones, action=window.open)
+        held: list[int] = []
+
+        def walk(index: int, phone: BaselinePhone) -> None:
+            pace = Pace(random.Random(seed + index), think_max, 0.0, window.deadline)
+            phone.submit(figures, math.inf, pace)
+            phone.close(figures)
+            held.append(index)
+
+        run_threads([partial(_with_barrier, barrier, figures,
+                             partial(BaselinePhone, server, f"hold-{i}"), partial(walk, i))
+                     for i in range(phones)])  # fmt: skip
+        return window.close(figures, phones, len(held), 2 * phones)
+
+
+def print_hold(name: str, ours: dict[str, Any], base: dict[str, Any]) -> None:
+    print(
+        f"\n{name}: hold, {ours['phones']} phones for {ours['seconds']:g} s "
+        f"({ours['sockets_opened']} sockets opened; baseline {base['sockets_opened']})"
+    )
+    print(f"{'figure':<30} {'chameleons':>12} {'baseline':>10} {'ratio':>7}")
+    rows = [("submit -> console p50 ms", "update_p50_ms", "{:.1f}"),
+            ("submit -> console p99 ms", "update_p99_ms", "{:.1f}"),
+            ("HTTP p99 ms", "http_p99_ms", "{:.1f}"),
+            ("server CPU ms / submission", "server_cpu_ms_per_submission", "{:.1f}"),
+            ("server CPU, share of a core", "server_cpu_share", "{:.2f}"),
+            ("server RSS MiB (end)", "rss_mib", "{:.0f}"),
+            ("server RSS MiB (peak)", "peak_rss_mib", "{:.0f}")]  # fmt: skip
+    # The baseline has no wizard, so its phones submit more often: no ratio for the count.
+    print(f"{'submissions':<30} {ours['submissions']:>12} {base['submissions']:>10}")
+    for label, key, shape in rows:
+        ratio = f"{ours[key] / base[key]:>6.1f}x" if base[key] else f"{'n/a':>7}"
+        print(f"{label:<30} {shape.format(ours[key]):>12} {shape.format(base[key]):>10} {ratio}")
+    print(f"{'errors':<30} {ours['errors']} (baseline {base['errors']})")
+    print(f"{'dropped sockets':<30} {ours['dropped_sockets']} "
+          f"(baseline {base['dropped_sockets']})")  # fmt: skip
