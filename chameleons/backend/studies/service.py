@@ -11,6 +11,7 @@ import secrets
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from chameleons.backend.db import write_transaction
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Participant, PlanRow
 from chameleons.backend.models import Session as SessionRow
@@ -146,6 +147,7 @@ def rehearsal_row(db: Session, study: StudyRow) -> PlanRow | None:
 
 def register_participant(db: Session, study: StudyRow, rehearsal: bool = False) -> Participant:
     """A new pseudonymous participant (``P001``...; rehearsals ``R001``... and no plan row)."""
+    lock_registrations(db, study)
     row = next_free_row(db, study)
     if row is None and not rehearsal:
         count = len(plan_rows(db, study.id))
@@ -176,6 +178,15 @@ def register_participant(db: Session, study: StudyRow, rehearsal: bool = False) 
         },
     )
     return participant
+
+
+def lock_registrations(db: Session, study: StudyRow) -> None:
+    """Serialise registrations of one study before reading its free rows and codes: two at
+    once took the same plan row (a 500 on ``participant.plan_row_id``'s UniqueConstraint,
+    found by bench/server_hold.py). The study's row lock on PostgreSQL; SQLite's write lock
+    (``write_transaction``; FOR UPDATE is a no-op there)."""
+    write_transaction(db)
+    db.execute(select(StudyRow.id).where(StudyRow.id == study.id).with_for_update())
 
 
 def release_plan_row(db: Session, participant: Participant) -> PlanRow | None:
