@@ -188,10 +188,26 @@ def questionnaire_rows(
 ) -> Iterator[Row]:
     reverse = _reverse_keyed(spec)
     robots = _robot_conditions(db, study, spec)
+    # Columns, not the ORM entity: a study's answers are most of an export's rows, and
+    # building an object for each was most of the analysis page's time (docs/performance.md).
+    answer = QuestionnaireResponse
     query = (
-        select(QuestionnaireResponse, Interaction.condition, Participant.code, Session.language)
-        .join(Session, Session.id == QuestionnaireResponse.session_id)
-        .outerjoin(Interaction, Interaction.id == QuestionnaireResponse.interaction_id)
+        select(
+            answer.session_id,
+            answer.position,
+            answer.questionnaire,
+            answer.version,
+            answer.item,
+            answer.value,
+            answer.text,
+            answer.skipped,
+            answer.created_at,
+            Interaction.condition,
+            Participant.code,
+            Session.language,
+        )
+        .join(Session, Session.id == answer.session_id)
+        .outerjoin(Interaction, Interaction.id == answer.interaction_id)
     )
     query = joined(query, study.id, include_rehearsal).order_by(
         Participant.code,
@@ -200,7 +216,8 @@ def questionnaire_rows(
         QuestionnaireResponse.position,
         QuestionnaireResponse.id,
     )
-    for answer, condition, code, language in _streamed(db, query):
+    for row in _streamed(db, query):
+        answer, condition, code, language = row, row.condition, row.code, row.language
         points = reverse.get((answer.questionnaire, answer.item))
         scored = answer.value
         if scored is not None and points is not None:
