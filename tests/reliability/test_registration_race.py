@@ -32,16 +32,16 @@ def server(app: FastAPI) -> Iterator[LiveServer]:
         yield live
 
 
-def _register_at_once(apis: list[StaffApi], study_id: int, round_: int) -> list[httpx.Response]:
+def _register_at_once(apis: list[StaffApi], study_id: int, round_: int) -> list[tuple[int, str]]:
+    """Each booth's (status, body) of one round."""
     barrier = threading.Barrier(len(apis))
-    responses: list[httpx.Response] = []
+    responses: list[tuple[int, str]] = []
 
     def register(api: StaffApi, booth: str) -> None:
         barrier.wait(timeout=120)
         body = {"study_id": study_id, "booth": booth}
-        responses.append(
-            api.http.post("/api/sessions", json=body, headers={"X-CSRF-Token": api.csrf})
-        )
+        response = api.http.post("/api/sessions", json=body, headers={"X-CSRF-Token": api.csrf})
+        responses.append((response.status_code, response.text[:200]))
 
     threads = [
         threading.Thread(target=register, args=(api, f"booth-{round_}-{i}"))
@@ -64,9 +64,7 @@ def test_registrations_at_once_each_get_their_own_plan_row(
         apis = [staff_api(c, engine, "wizard", f"wizard-{k}") for k, c in enumerate(clients)]
         for round_ in range(ROUNDS):
             responses = _register_at_once(apis, study_id, round_)
-            assert sorted(r.status_code for r in responses) == [201] * BOOTHS, [
-                r.text[:200] for r in responses
-            ]
+            assert sorted(status for status, _ in responses) == [201] * BOOTHS, responses
     finally:
         for client in clients:
             client.close()
