@@ -119,6 +119,18 @@ def test_ids_beyond_64_bits_in_a_query_or_body_are_a_422(
     assert client.get(f"/pi/sessions/{MAX_ROW_ID}").status_code == 404
 
 
+def test_a_device_id_of_decimal_digits_is_text_not_a_number_too_large(
+    client: TestClient, wizard: WizardBot
+) -> None:
+    """The phone's device id is 32 random hex digits; now and then they are all decimal."""
+    device = "9" * 32
+    with client.websocket_connect(f"/ws/p/{wizard.token}?device={device}") as socket:
+        assert socket.receive_json()["type"] == "state"
+    # A number where the app reads one is still range-checked.
+    response = client.get(f"/pi?study={device}")
+    assert (response.status_code, response.json()["detail"]) == (422, TOO_LARGE_IN_ADDRESS)
+
+
 @pytest.mark.parametrize(
     "path",
     [
