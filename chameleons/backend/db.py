@@ -62,6 +62,19 @@ def write_transaction(db: Session) -> None:
         connection.exec_driver_sql("BEGIN IMMEDIATE")
 
 
+_ENDS_WITH_ENDPOINT = "chameleons_ends_with_endpoint"
+
+
+def end_with_endpoint(db: Session) -> None:
+    """Mark ``db`` as a request's write session: it commits (or rolls back) in the endpoint's
+    own thread as soon as the endpoint returns (``routing.in_thread``)."""
+    db.info[_ENDS_WITH_ENDPOINT] = True
+
+
+def ends_with_endpoint(value: object) -> bool:
+    return isinstance(value, Session) and bool(value.info.get(_ENDS_WITH_ENDPOINT))
+
+
 def build_engine(url: str) -> Engine:
     """Create an engine; for SQLite make the directory and set WAL, foreign keys, timeout.
 

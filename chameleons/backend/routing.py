@@ -11,6 +11,12 @@ submissions took 30 s and failed with "database is locked"; the lock's holder wa
 finished request waiting for a thread). Running the endpoint through an ``async`` wrapper
 keeps the work in the thread pool but lets FastAPI validate the response in the event
 loop, so the commit (on its own threads) follows the endpoint at once.
+
+The request's write session (``WriteDb``) commits in the endpoint's own thread, right after
+the endpoint returns (or rolls back when it raises): a SQLite writer holds the database's
+write lock until its commit, and handing the commit to another thread first went through
+the event loop, which under load is busy sending live updates, while every other writer
+waited for the lock (bench/server_bench.py).
 """
 
 from __future__ import annotations
@@ -23,6 +29,8 @@ from typing import Any
 from fastapi import APIRouter
 from fastapi.routing import APIRoute
 from starlette.concurrency import run_in_threadpool
+
+from chameleons.backend.db import ends_with_endpoint
 
 
 def _plain_sync(endpoint: Callable[..., Any]) -> bool:
@@ -43,9 +51,23 @@ def in_thread(endpoint: Callable[..., Any]) -> Callable[..., Any]:
 
     @functools.wraps(endpoint)
     async def run(*args: Any, **kwargs: Any) -> Any:
-        return await run_in_threadpool(endpoint, *args, **kwargs)
+        return await run_in_threadpool(_run_and_end, endpoint, args, kwargs)
 
     return run
+
+
+def _run_and_end(endpoint: Callable[..., Any], args: Any, kwargs: dict[str, Any]) -> Any:
+    """Run ``endpoint``, then commit its write sessions (roll them back when it raised)."""
+    writes = [value for value in kwargs.values() if ends_with_endpoint(value)]
+    try:
+        result = endpoint(*args, **kwargs)
+    except BaseException:
+        for db in writes:
+            db.rollback()
+        raise
+    for db in writes:
+        db.commit()
+    return result
 
 
 class ThreadedRoute(APIRoute):

@@ -26,10 +26,12 @@ def announce_gone(db: Session, session_ids: list[int]) -> None:
     db.info.setdefault(GONE_KEY, []).extend(session_ids)
 
 
-def retain_after_commit(db: Session, channel: str, value: dict[str, Any]) -> None:
+def retain_after_commit(db: Session, channel: str, view: str, value: dict[str, Any]) -> None:
     """After the commit (never on rollback), keep ``value`` as the channel's latest
-    committed state in the live hub (``LiveHub.retain``)."""
-    db.info.setdefault(RETAIN_KEY, {})[channel] = value
+    committed state for ``view`` (the console's, the phone's) in the live hub
+    (``LiveHub.retain``). The views a commit retains replace all the channel kept before:
+    a view this commit did not make is no longer the latest."""
+    db.info.setdefault(RETAIN_KEY, {}).setdefault(channel, {})[view] = value
 
 
 def announce_rewritten(db: Session, session_ids: set[int]) -> None:

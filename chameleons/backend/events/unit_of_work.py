@@ -18,6 +18,7 @@ from fastapi import Depends, Request
 from sqlalchemy import event as sa_event
 from sqlalchemy.orm import Session, sessionmaker
 
+from chameleons.backend.db import end_with_endpoint
 from chameleons.backend.events.hub import RESYNC, LiveHub, session_channel
 from chameleons.backend.events.repository import (
     GONE,
@@ -98,15 +99,21 @@ async def get_write_db(request: Request) -> AsyncIterator[Session]:
     so it happens here in the event loop."""
     db = request.app.state.sessionmaker()
     attach_hub(db, get_hub(request))
+    end_with_endpoint(db)  # committed in the endpoint's thread (routing.in_thread)
     ending = _ending_limiter(request.app.state)
     try:
         yield db
-        await anyio.to_thread.run_sync(db.commit, limiter=ending)
+        if db.in_transaction():  # a sync endpoint's was committed in its thread already
+            await anyio.to_thread.run_sync(db.commit, limiter=ending)
     except BaseException:
-        await anyio.to_thread.run_sync(db.rollback, limiter=ending)
+        if db.in_transaction():
+            await anyio.to_thread.run_sync(db.rollback, limiter=ending)
         raise
     finally:
-        await anyio.to_thread.run_sync(db.close, limiter=ending)
+        if db.in_transaction():
+            await anyio.to_thread.run_sync(db.close, limiter=ending)
+        else:
+            db.close()  # holds no connection: nothing to wait for
 
 
 ENDING_THREADS = 8

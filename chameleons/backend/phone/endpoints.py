@@ -18,6 +18,7 @@ from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import WriteDb, write_session
 from chameleons.backend.phone import devices
 from chameleons.backend.phone.language import language_of, phone_errors
+from chameleons.backend.phone.retained import committed
 from chameleons.backend.phone.schemas import (
     ConsentSubmission,
     LanguageSubmission,
@@ -157,8 +158,14 @@ async def phone_socket(websocket: WebSocket, token: str) -> None:
             if devices.is_sent_away(messages, device["id"]):
                 await _send_away(websocket)  # the wizard disconnected this phone
                 return True
-            # Whatever was published, the phone gets only its own whitelisted view.
-            _id, message = await run_in_threadpool(_read_state, factory, hub, token)
+            # Whatever was published, the phone gets only its own whitelisted view: the one
+            # the change committed when there is one, else read afresh.
+            state = committed(hub, session_id, messages)
+            message: Message
+            if state is not None:
+                message = {"type": "state", "state": state}
+            else:
+                _id, message = await run_in_threadpool(_read_state, factory, hub, token)
             await live.send_json(websocket, message)
             if message["state"]["view"] == "ended":
                 await websocket.close(code=4410)  # the link has stopped working

@@ -17,7 +17,7 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event
-from chameleons.backend.phone.view import phone_state
+from chameleons.backend.phone.retained import retained_state
 from chameleons.backend.sessions.flow import Flow, load_by_token
 
 Receipt = dict[str, Any]
@@ -48,5 +48,5 @@ def _receipt(flow: Flow, event: Event, duplicate: bool) -> Receipt:
         "kind": event.kind,
         "stored": event.payload,
         "saved_at": events.iso(event.server_time),
-        "state": phone_state(flow),
+        "state": retained_state(flow),  # also the phone socket's next view
     }

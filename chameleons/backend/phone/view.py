@@ -33,9 +33,10 @@ def texts(flow: Flow) -> Study:
     return flow.spec.in_language(flow.session.language)
 
 
-def phone_state(flow: Flow) -> PhoneState:
+def phone_state(flow: Flow, version: int | None = None) -> PhoneState:
+    """``version``: the session's newest event id, when the caller has read it already."""
     state = _view(flow)
-    state["version"] = events.last_id(flow.db, flow.session.id)
+    state["version"] = events.last_id(flow.db, flow.session.id) if version is None else version
     state["of"] = len(flow.interactions)
     state["language"] = flow.session.language
     if may_choose_language(flow):  # offered on the first page, before consent

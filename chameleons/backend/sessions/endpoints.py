@@ -45,6 +45,7 @@ from chameleons.backend.events.unit_of_work import Hub, WriteDb
 from chameleons.backend.models import Participant
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.phone import devices
+from chameleons.backend.phone.retained import retained_state
 from chameleons.backend.routing import make_router
 from chameleons.backend.sessions import ending, negotiation, pausing, service
 from chameleons.backend.sessions.flow import Flow, load
@@ -81,6 +82,7 @@ def snapshot_of(flow: Flow, request: Request, hub: LiveHub) -> Snapshot:
     url = base_url(request)
     snapshot = session_snapshot(flow, url, devices.phones(hub, flow.session.id))
     retain(flow.db, snapshot, url)
+    retained_state(flow, snapshot["version"])  # and the phone's view, for the phone's socket
     return snapshot
 
 

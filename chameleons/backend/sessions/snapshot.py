@@ -20,6 +20,8 @@ from chameleons.backend.sessions.states import allowed_sentence
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.model import Condition
 
+CONSOLE_VIEW = "console"
+
 
 def phone_presence_key(session_id: int) -> str:
     return f"phone:{session_id}"
@@ -83,7 +85,7 @@ def retain(db: Session, snapshot: dict[str, Any], base_url: str) -> None:
     session's latest state: a console woken by the same commit's events takes it from
     there (``committed``) instead of loading the session again."""
     value = {"version": snapshot["version"], "base_url": base_url, "snapshot": snapshot}
-    events.retain_after_commit(db, session_channel(snapshot["id"]), value)
+    events.retain_after_commit(db, session_channel(snapshot["id"]), CONSOLE_VIEW, value)
 
 
 def committed(
@@ -92,7 +94,7 @@ def committed(
     """The retained snapshot of ``session_id`` if it is the state as of event ``version``
     (the newest event a live reader was sent) for ``base_url``; with ``phones`` as they are
     now. None otherwise: the caller loads the session."""
-    found = hub.retained(session_channel(session_id))
+    found = (hub.retained(session_channel(session_id)) or {}).get(CONSOLE_VIEW)
     if found is None or found["version"] != version or found["base_url"] != base_url:
         return None
     snapshot: dict[str, Any] = found["snapshot"]
