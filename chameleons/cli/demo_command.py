@@ -25,6 +25,7 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
+from chameleons.cli.heap import settle_startup_heap
 from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
 from chameleons.cli.startup import QuietStartup, StartupError, serve
 from chameleons.settings import Settings
@@ -123,6 +124,7 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     server = QuietStartup(app, started, log_level="warning")
+    settle_startup_heap()  # the start-up's objects out of the collector's full walks
     try:
         serve(server, [ports.web])  # the socket bound above: no second bind to fail
     except KeyboardInterrupt:  # uvicorn re-raises Ctrl-C after its graceful shutdown

@@ -6,6 +6,7 @@ import uvicorn
 from chameleons.backend.app import create_app
 from chameleons.backend.migrate import upgrade
 from chameleons.cli.common import load_settings
+from chameleons.cli.heap import settle_startup_heap
 
 
 @click.command()
@@ -24,5 +25,6 @@ def serve(host: str | None, port: int | None, run_upgrade: bool) -> None:
     if run_upgrade:
         upgrade(settings.effective_database_url)
     app = create_app(settings)
+    settle_startup_heap()  # the start-up's objects out of the collector's full walks
     click.echo(f"serving on {settings.effective_public_url}")
     uvicorn.run(app, host=settings.host, port=settings.port, log_level=settings.log_level)
