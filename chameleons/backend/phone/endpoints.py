@@ -17,7 +17,7 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import WriteDb, write_session
 from chameleons.backend.phone import devices
-from chameleons.backend.phone.language import language_of, phone_errors
+from chameleons.backend.phone.language import phone_errors
 from chameleons.backend.phone.retained import committed
 from chameleons.backend.phone.schemas import (
     ConsentSubmission,
@@ -46,7 +46,7 @@ DECLINED_MESSAGE = N_(
 
 @router.get("/api/phone/{token}/state")
 def get_state(token: str, db: DbSession) -> PhoneState:
-    with phone_errors(language_of(db, token)):
+    with phone_errors(db, token):
         flow = load_by_token(db, token, lock=False)
         if flow.session.state in ("complete", "ended"):
             raise GoneError(ENDED_MESSAGE)
@@ -55,7 +55,7 @@ def get_state(token: str, db: DbSession) -> PhoneState:
 
 @router.post("/api/phone/{token}/ranking")
 def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
-    with phone_errors(language_of(db, token)):
+    with phone_errors(db, token):
         return submit(
             db,
             token,
@@ -66,7 +66,7 @@ def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
 
 @router.post("/api/phone/{token}/consent")
 def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
-    with phone_errors(language_of(db, token)):
+    with phone_errors(db, token):
         return submit(
             db, token, data.client_id, lambda flow: record_consent(flow, data.client_id, data.agree)
         )
@@ -75,7 +75,7 @@ def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
 @router.post("/api/phone/{token}/language")
 def post_language(token: str, data: LanguageSubmission, db: WriteDb) -> Receipt:
     """The participant's language, before consent; the phone reloads its page in it."""
-    with phone_errors(language_of(db, token)):
+    with phone_errors(db, token):
         return submit(
             db,
             token,
@@ -87,7 +87,7 @@ def post_language(token: str, data: LanguageSubmission, db: WriteDb) -> Receipt:
 @router.post("/api/phone/{token}/questionnaire")
 def post_questionnaire(token: str, data: QuestionnaireSubmission, db: WriteDb) -> Receipt:
     answers = {key: value for key, value in data.answers.items() if value is not None}
-    with phone_errors(language_of(db, token)):
+    with phone_errors(db, token):
         return submit(
             db,
             token,

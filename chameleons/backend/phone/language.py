@@ -9,6 +9,7 @@ from typing import Any
 
 from fastapi import HTTPException, Request
 from sqlalchemy import select
+from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from chameleons.backend.models import Session as SessionRow
@@ -33,14 +34,26 @@ def translate(language: str, error: FlowError) -> str:
 
 
 @contextmanager
-def phone_errors(language: str) -> Iterator[None]:
-    """Like ``http_errors``, with the sentence in the participant's language."""
+def phone_errors(db: Session, token: str) -> Iterator[None]:
+    """Like ``http_errors``, with the sentence in the language of the session behind
+    ``token``, looked up only when there is a sentence to translate (a statement less for
+    every phone request that succeeds)."""
     try:
         yield
     except ConfirmationNeededError:  # never raised to the phone; kept as the wizard's
         raise
     except FlowError as exc:
-        raise HTTPException(exc.status_code, translate(language, exc)) from exc
+        raise HTTPException(exc.status_code, translate(_language_now(db, token), exc)) from exc
+
+
+def _language_now(db: Session, token: str) -> str:
+    """The session's language as stored (a change the failed request had not flushed yet,
+    a participant's new choice, does not count), English if it cannot be read."""
+    try:
+        with db.no_autoflush:
+            return language_of(db, token)
+    except SQLAlchemyError:  # a transaction the database has given up on: the sentence only
+        return SOURCE_LANGUAGE
 
 
 def browser_language(request: Request) -> str:
