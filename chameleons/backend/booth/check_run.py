@@ -43,6 +43,7 @@ from chameleons.worker.behaviours.copy import DEFAULT_DELAY
 from chameleons.worker.control import RESET_DELAY_PROBE, SET_BEHAVIOUR
 
 COPY = "copy"
+STILL = "still"  # a worker's start behaviour when its hello does not say
 HEARTBEAT_S = 1.0  # the worker's heartbeat; its probe also measures once a second
 COPY_MARGIN_S = 2.5  # after the copy: the probe's next measurement and the heartbeat after it
 LATE_COPY_S = 4.0  # a measurement late on a busy booth PC is waited for this much longer
@@ -160,12 +161,24 @@ async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, A
 def _running_behaviour(
     bridge: Any | None, booth: str, telemetry: Mapping[str, Any]
 ) -> dict[str, Any] | None:
-    """What the worker runs now (its heartbeat), else what it last acknowledged."""
+    """What the worker runs now (its heartbeat), else what it last acknowledged, else what it
+    started with (its hello). A heartbeat sent before the worker's behaviour stage first
+    reported names none, and with nothing set through the server yet the check restored
+    nothing: the robot went on copying the participant after the check."""
     name, params = telemetry.get("behaviour"), telemetry.get("behaviour_params")
     if isinstance(name, str) and name:
         return {"name": name, **({"params": dict(params)} if isinstance(params, Mapping)
                                  and params else {})}  # fmt: skip
-    return robot.acknowledged(bridge, booth, SET_BEHAVIOUR)
+    acknowledged = robot.acknowledged(bridge, booth, SET_BEHAVIOUR)
+    return acknowledged if acknowledged is not None else {"name": _started_with(bridge, booth)}
+
+
+def _started_with(bridge: Any | None, booth: str) -> str:
+    """The behaviour the booth's worker started in (its hello), ``still`` when unknown."""
+    workers = getattr(bridge, "workers", None)
+    info = workers().get(booth) if callable(workers) else None
+    name = (getattr(info, "hello", None) or {}).get("behaviour")
+    return name if isinstance(name, str) and name else STILL
 
 
 async def _restore(state: Any, booth: str, previous: dict[str, Any] | None) -> None:

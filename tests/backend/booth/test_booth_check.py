@@ -256,3 +256,23 @@ def test_a_check_without_a_session_is_stored_with_the_study_of_the_booth(
     with app.state.sessionmaker() as db:
         row = db.scalars(select(BoothCheck)).one()
     assert (row.session_id, row.study_id) == (None, study_id)
+
+
+def test_the_check_restores_the_start_behaviour_a_heartbeat_did_not_name_yet() -> None:
+    """A worker's first heartbeats come before its behaviour stage reports: with nothing set
+    through the server either, the behaviour to restore after the check's copy is the one
+    the worker said hello with (the robot went on copying after the check before)."""
+    from chameleons.backend.booth.check_run import _running_behaviour
+    from chameleons.backend.bridge.state import WorkerInfo
+    from chameleons.worker.control import SET_BEHAVIOUR
+
+    bridge = Bridge()  # never started: no sockets
+    early = {"behaviour": None, "behaviour_params": None}
+    assert _running_behaviour(bridge, "booth-1", early) == {"name": "still"}  # no hello yet
+    bridge._workers["booth-1"] = WorkerInfo("booth-1", "first", {"behaviour": "natural"})
+    assert _running_behaviour(bridge, "booth-1", early) == {"name": "natural"}
+    bridge.state("booth-1").record(SET_BEHAVIOUR, {"name": "copy", "params": {"delay": 4}})
+    assert _running_behaviour(bridge, "booth-1", early) == {"name": "copy", "params": {"delay": 4}}
+    reported = {"behaviour": "mirror", "behaviour_params": {"gain": 1}}
+    assert _running_behaviour(bridge, "booth-1", reported) == {"name": "mirror",
+                                                              "params": {"gain": 1}}  # fmt: skip
