@@ -14,7 +14,7 @@ import numpy as np
 from chameleons.worker.drivers import Driver, Publish
 from chameleons.worker.drivers.null import NullDriver
 from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES, F32Array
-from chameleons.worker.runtime import Worker
+from chameleons.worker.runtime import Worker, WorkerConfig
 from chameleons.worker.simulate import FaceSample, LiveLinkSender, run_simulation
 
 PERIOD = 8.0  # seconds of one triangle wave
@@ -63,12 +63,13 @@ class ProbeDriver(NullDriver):
 
 
 class ProbeWorker(Worker):
-    """A worker whose renderer drives a :class:`ProbeDriver`."""
+    """A worker whose (in-process) renderer drives a :class:`ProbeDriver`."""
 
-    probe: ProbeDriver
-
-    def _make_driver(self, publish: Publish) -> Driver:
+    def __init__(self, config: WorkerConfig) -> None:
         self.probe = ProbeDriver()
+        super().__init__(config, driver_factory=self._probe_driver)
+
+    def _probe_driver(self, publish: Publish) -> Driver:
         return self.probe
 
 

@@ -39,7 +39,7 @@ from chameleons.worker.render_process import (
     make_driver,
     process_endpoints,
 )
-from chameleons.worker.render_stage import RendererStage
+from chameleons.worker.render_stage import DriverFactory, RendererStage
 from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints, ParticipantBus
 
@@ -111,8 +111,11 @@ class Worker:
     """Builds the sockets and threads of one booth's pipeline; ``start``/``stop``."""
 
     def __init__(
-        self, config: WorkerConfig, *, context: zmq.Context[zmq.Socket[bytes]] | None = None
-    ) -> None:
+        self, config: WorkerConfig, *, context: zmq.Context[zmq.Socket[bytes]] | None = None,
+        driver_factory: DriverFactory | None = None,
+    ) -> None:  # fmt: skip
+        """``driver_factory``: the in-process renderer's driver instead of the configured one
+        (a benchmark's probe); the renderer process always builds the configured driver."""
         self.config = config
         self._own_context = context is None
         self.context: zmq.Context[zmq.Socket[bytes]] = context or zmq.Context()
@@ -146,7 +149,10 @@ class Worker:
             renderer = self.renderer_process = RendererProcess(config, self.endpoints)
         else:
             renderer = self.renderer = RendererStage(
-                self.context, self.endpoints, partial(make_driver, config), config.render
+                self.context,
+                self.endpoints,
+                driver_factory or partial(make_driver, config),
+                config.render,
             )
         self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth)
         self.hub = ControlHub(self.context, self.endpoints, HubConfig(
