@@ -76,7 +76,7 @@ class LiveHub:
         # Other processes' presence maps, each counted until its expiry (monotonic time).
         self._peers: dict[str, tuple[dict[str, int], float]] = {}
         self._peer_details: dict[str, dict[str, list[Message]]] = {}
-        self._retained: OrderedDict[str, Message] = OrderedDict()
+        self._retained: OrderedDict[str, dict[str, Message]] = OrderedDict()
         self._retained_lock = threading.Lock()
 
     def attach_relay(self, relay: Relay | None) -> None:
@@ -122,20 +122,22 @@ class LiveHub:
         if self._relay is not None:
             self._relay.send(channel, message)
 
-    def retain(self, channel: str, value: Message) -> None:
-        """Keep ``value`` as the channel's latest committed state, for readers in this process
-        (as MQTT's retained message; not relayed to other processes). Safe from any thread;
-        the least recently retained channels are forgotten beyond ``RETAINED_CHANNELS``."""
+    def retain(self, channel: str, views: dict[str, Message]) -> None:
+        """Keep ``views`` (one value per reader: the console's, the phone's) as the channel's
+        latest committed state, for readers in this process (as MQTT's retained message; not
+        relayed to other processes). Safe from any thread; the least recently retained
+        channels are forgotten beyond ``RETAINED_CHANNELS``."""
         with self._retained_lock:
-            self._retained[channel] = value
+            self._retained[channel] = views
             self._retained.move_to_end(channel)
             while len(self._retained) > RETAINED_CHANNELS:
                 self._retained.popitem(last=False)
 
-    def retained(self, channel: str) -> Message | None:
-        """The value last retained on ``channel`` (shared: readers must not change it)."""
+    def retained(self, channel: str, view: str) -> Message | None:
+        """The value of ``view`` last retained on ``channel`` (shared: readers must not
+        change it), None when the latest retained state has no such view."""
         with self._retained_lock:
-            return self._retained.get(channel)
+            return self._retained.get(channel, {}).get(view)
 
     def forget(self, channel: str) -> None:
         with self._retained_lock:

@@ -13,8 +13,6 @@ view) is read from the database as before.
 
 from __future__ import annotations
 
-from typing import Any
-
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.phone.view import PhoneState, phone_state
@@ -38,7 +36,7 @@ def committed(hub: LiveHub, session_id: int, messages: list[Message]) -> PhoneSt
     if not messages or any(message.get("type") != "event" for message in messages):
         return None
     newest = max(int(message["event"]["id"]) for message in messages)
-    found: dict[str, Any] | None = (hub.retained(session_channel(session_id)) or {}).get(PHONE_VIEW)
+    found = hub.retained(session_channel(session_id), PHONE_VIEW)
     if found is None or found["version"] != newest:
         return None
     state: PhoneState = found["state"]

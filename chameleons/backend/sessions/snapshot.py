@@ -94,7 +94,7 @@ def committed(
     """The retained snapshot of ``session_id`` if it is the state as of event ``version``
     (the newest event a live reader was sent) for ``base_url``; with ``phones`` as they are
     now. None otherwise: the caller loads the session."""
-    found = (hub.retained(session_channel(session_id)) or {}).get(CONSOLE_VIEW)
+    found = hub.retained(session_channel(session_id), CONSOLE_VIEW)
     if found is None or found["version"] != version or found["base_url"] != base_url:
         return None
     snapshot: dict[str, Any] = found["snapshot"]
