@@ -49,12 +49,18 @@ class Reliability:
         return item, value
 
 
+NO_VARIANCE = 1e-9  # relative to the item variances: below it the sum score is constant
+
+
 def alpha_from_covariance(covariance: np.ndarray) -> float | None:
     """Cronbach's alpha from the items' covariance matrix (None when undefined)."""
     matrix = np.asarray(covariance, dtype=float)
     k = matrix.shape[0]
     total = float(matrix.sum())
-    if k < 2 or total <= 0 or not math.isfinite(total):
+    # A sum score that does not vary comes out of the covariance a few units of rounding
+    # from zero, either side (answers 1,3,3 / 1,5,1 / 1,5,1: 1.1e-16, alpha -1.8e16).
+    zero = NO_VARIANCE * max(float(np.trace(matrix)), 1.0)
+    if k < 2 or not math.isfinite(total) or total <= zero:
         return None
     return float(k / (k - 1) * (1.0 - float(np.trace(matrix)) / total))
 
