@@ -161,6 +161,9 @@ async function apply(next) {
     } catch (error) {
       $("prompt-sections").textContent = `The prompts cannot be shown: ${error.message}`;
     }
+    // The session may have gone while the prompts loaded: rendering now would enable again
+    // the controls showGone disabled.
+    if (gone) return;
   }
   renderBar(state);
   renderPhones(state, (phone) => perform(`disconnect phone ${phone.number}`, () => api.disconnectPhone(phone.id)));
