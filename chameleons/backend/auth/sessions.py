@@ -61,13 +61,22 @@ def _record(db: Session, cookie: Mapping[str, Any]) -> StaffSession | None:
 def signed_in(db: Session, cookie: Mapping[str, Any]) -> tuple[StaffUser, int] | None:
     """The active staff member whose open, unexpired session the cookie names, with that
     session's id (a WebSocket watches it: see :mod:`.socket_revocation`)."""
-    record = _record(db, cookie)
-    if record is None or record.ended_at is not None:
+    key = cookie.get(SESSION_KEY)
+    if not isinstance(key, str) or not key:
         return None
-    if _aware(record.expires_at) <= datetime.now(UTC):
+    # One statement (every staff request and socket asks): the session with its user.
+    query = (
+        select(StaffSession, StaffUser)
+        .join(StaffUser, StaffUser.id == StaffSession.user_id)
+        .where(StaffSession.key_hash == _hash(key))
+    )
+    found = db.execute(query).first()
+    if found is None:
         return None
-    user = db.get(StaffUser, record.user_id)
-    return (user, record.id) if user is not None and user.is_active else None
+    record, user = found._tuple()
+    if record.ended_at is not None or _aware(record.expires_at) <= datetime.now(UTC):
+        return None
+    return (user, record.id) if user.is_active else None
 
 
 def staff_of(db: Session, cookie: Mapping[str, Any]) -> StaffUser | None:

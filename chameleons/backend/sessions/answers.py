@@ -62,16 +62,18 @@ def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
 
 
 def answered(flow: Flow, position: int) -> set[str]:
-    """Ids of the questionnaires of this position already stored."""
-    query = (
-        select(QuestionnaireResponse.questionnaire)
-        .distinct()
-        .where(
-            QuestionnaireResponse.session_id == flow.session.id,
-            QuestionnaireResponse.position == position,
+    """Ids of the questionnaires of this position already stored (a copy)."""
+    if position not in flow.answered_memo:
+        query = (
+            select(QuestionnaireResponse.questionnaire)
+            .distinct()
+            .where(
+                QuestionnaireResponse.session_id == flow.session.id,
+                QuestionnaireResponse.position == position,
+            )
         )
-    )
-    return set(flow.db.scalars(query))
+        flow.answered_memo[position] = set(flow.db.scalars(query))
+    return set(flow.answered_memo[position])
 
 
 def answered_by_position(flow: Flow) -> dict[int, set[str]]:
@@ -81,6 +83,8 @@ def answered_by_position(flow: Flow) -> dict[int, set[str]]:
     found: dict[int, set[str]] = {}
     for position, questionnaire in flow.db.execute(query):
         found.setdefault(position, set()).add(questionnaire)
+    for position in (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION):
+        flow.answered_memo[position] = set(found.get(position, ()))
     return found
 
 
@@ -114,6 +118,7 @@ def submit_questionnaire(
             )
         )
     flow.db.flush()
+    flow.answered_memo[position].add(questionnaire.id)  # read just above, by the check
     event = flow.log(
         "questionnaire.submitted",
         source="participant",

@@ -7,7 +7,7 @@ now": the 409 sentences and the wizard console's buttons both come from it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
 
 from sqlalchemy import ColumnElement, select
@@ -43,6 +43,10 @@ class Flow:
     spec: Study
     participant: Participant
     interactions: list[Interaction]
+    # Questionnaire ids stored per position, read once per flow (a submission asks three
+    # times: may it store, is the interaction done, what does the phone see next); the
+    # answers' one writer keeps it current (sessions.answers).
+    answered_memo: dict[int, set[str]] = field(default_factory=dict)
 
     def interaction(self, position: int) -> Interaction:
         for interaction in self.interactions:
