@@ -55,6 +55,9 @@ class Settings(BaseSettings):
     # (an ended session closes them at once anyway; this catches expiry and
     # `chameleons user deactivate` on SQLite, which has no live channel to the server).
     staff_socket_recheck_s: float = Field(default=30.0, gt=0)
+    # WebSocket compression (permessage-deflate). Off: on a lab's network the console's
+    # updates cost more to compress than to send (docs/performance.md, "Compression").
+    ws_compression: bool = False
     # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
     # incoming messages per second (sustained, and at once), and how long one send may wait
     # for a client that is not reading before it is disconnected.

@@ -123,7 +123,9 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-    server = QuietStartup(app, started, log_level="warning")
+    server = QuietStartup(
+        app, started, log_level="warning", ws_per_message_deflate=settings.ws_compression
+    )
     settle_startup_heap()  # the start-up's objects out of the collector's full walks
     try:
         serve(server, [ports.web])  # the socket bound above: no second bind to fail

@@ -27,4 +27,10 @@ def serve(host: str | None, port: int | None, run_upgrade: bool) -> None:
     app = create_app(settings)
     settle_startup_heap()  # the start-up's objects out of the collector's full walks
     click.echo(f"serving on {settings.effective_public_url}")
-    uvicorn.run(app, host=settings.host, port=settings.port, log_level=settings.log_level)
+    uvicorn.run(
+        app,
+        host=settings.host,
+        port=settings.port,
+        log_level=settings.log_level,
+        ws_per_message_deflate=settings.ws_compression,
+    )

@@ -232,13 +232,16 @@ def _free_port() -> int:
 
 
 @contextmanager
-def serve_process(database_url: str, secret: str, data_dir: Path) -> Iterator[ServeProcess]:
+def serve_process(
+    database_url: str, secret: str, data_dir: Path, extra_env: dict[str, str] | None = None
+) -> Iterator[ServeProcess]:
     """Started; stopped (SIGTERM, then SIGKILL) at the end. No worker link: the processes
     would both bind its ports (in a deployment, one process runs it)."""
     port = _free_port()
     env = {**os.environ, "CHAMELEONS_DATABASE_URL": database_url,
            "CHAMELEONS_SECRET_KEY": secret, "CHAMELEONS_DATA_DIR": str(data_dir),
-           "CHAMELEONS_BRIDGE_ENABLED": "false", "CHAMELEONS_LOG_LEVEL": "warning"}  # fmt: skip
+           "CHAMELEONS_BRIDGE_ENABLED": "false", "CHAMELEONS_LOG_LEVEL": "warning",
+           **(extra_env or {})}  # fmt: skip
     command = [sys.executable, "-m", "chameleons", "serve", "--host", "127.0.0.1",
                "--port", str(port)]  # fmt: skip
     process = subprocess.Popen(command, env=env, stdin=subprocess.DEVNULL)

@@ -63,3 +63,12 @@ class ResultCache:
 
 
 analyses = ResultCache()
+# Whole results of the analysis page (rows included: a large study's are tens of MB, so
+# few), keyed by the data version (:mod:`.repository`).
+page_results = ResultCache(max_entries=4)
+
+
+def clear_all() -> None:
+    """Forget every cached analysis (a withdrawal: its rows must not outlive it here)."""
+    analyses.clear()
+    page_results.clear()

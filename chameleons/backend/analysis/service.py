@@ -7,12 +7,13 @@ database and analysing an exported ``scores.csv`` give the same numbers.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.analysis.cache import analyses, digest
+from chameleons.backend.analysis.cache import analyses, digest, page_results
+from chameleons.backend.analysis.repository import data_version
 from chameleons.backend.export.columns import (
     interactions_table,
     questionnaire_table,
@@ -205,7 +206,31 @@ def study_analysis(
     """Everything the analysis page shows; an unusable data set gives a message, not a 500.
 
     ``extended``: with the effect sizes and the models (cached per input, see
-    :mod:`.cache`); without, only the paper's analysis (the page's first render)."""
+    :mod:`.cache`); without, only the paper's analysis (the page's first render). A visit
+    with the data unchanged since the last is served from :data:`.cache.page_results`
+    without reading the rows (:mod:`.repository`)."""
+    study = resolve_study(db, study_id)
+    options = (include_rehearsal, permutations, view, wilcoxon_rule, extended)
+    where = (str(db.get_bind().engine.url), study.id, study.created_at, study.config_hash)
+    key = ("page", *where, *options, data_version(db))
+    result: StudyAnalysis | None = page_results.get(key)
+    if result is None:
+        result = _computed(db, study.id, include_rehearsal, permutations, view, wilcoxon_rule,
+                           extended)  # fmt: skip
+        page_results.put(key, result)
+    # This request's study row: the cached one belongs to the session that computed it.
+    return replace(result, scores=replace(result.scores, study=study))
+
+
+def _computed(
+    db: DbSession,
+    study_id: int,
+    include_rehearsal: bool,
+    permutations: int | None,
+    view: View,
+    wilcoxon_rule: WilcoxonRule,
+    extended: bool,
+) -> StudyAnalysis:
     scores = database_scores(db, study_id, include_rehearsal)
     if not scores.rows:
         errors = error_scores(db, scores, include_rehearsal)
