@@ -56,7 +56,8 @@ class Settings(BaseSettings):
     # `chameleons user deactivate` on SQLite, which has no live channel to the server).
     staff_socket_recheck_s: float = Field(default=30.0, gt=0)
     # WebSocket compression (permessage-deflate). Off: on a lab's network the console's
-    # updates cost more to compress than to send (docs/performance.md, "Compression").
+    # updates cost more to compress than to send (docs/performance.md, "Fewer statements,
+    # no compression").
     ws_compression: bool = False
     # Every WebSocket (chameleons.backend.events.guard): outgoing messages queued per socket,
     # incoming messages per second (sustained, and at once), and how long one send may wait

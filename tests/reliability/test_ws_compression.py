@@ -1,8 +1,8 @@
 """``chameleons serve`` answers a browser's offer of WebSocket compression (permessage-deflate,
 RFC 7692) only when CHAMELEONS_WS_COMPRESSION says so: off by default, since compressing the
 console's updates cost the server more than sending them on a lab's network
-(docs/performance.md, "Compression"). A real server process and a client that offers the
-extension, as Chromium does."""
+(docs/performance.md, "Fewer statements, no compression"). A real server process and a
+client that offers the extension, as Chromium does."""
 
 from __future__ import annotations
 

@@ -63,9 +63,10 @@ class ResultCache:
 
 
 analyses = ResultCache()
-# Whole results of the analysis page (rows included: a large study's are tens of MB, so
-# few), keyed by the data version (:mod:`.repository`).
-page_results = ResultCache(max_entries=4)
+# Whole results of the analysis page, keyed by the data version (:mod:`.repository`): the
+# first render's and the effect sizes' of the view last asked for. They hold their rows
+# (about 90 MB each for 1,000 participants, 9 MB for 100), so two.
+page_results = ResultCache(max_entries=2)
 
 
 def clear_all() -> None:
