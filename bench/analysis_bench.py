@@ -38,7 +38,7 @@ from typing import Any
 
 from fastapi.testclient import TestClient
 
-from chameleons.backend.analysis.cache import clear_all
+from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.analysis.service import study_analysis
 from chameleons.backend.app import create_app
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
@@ -105,18 +105,20 @@ def run(participants: int, repeat: int) -> dict[str, Any]:
                 get(path)()  # warm-up: imports, templates, first connections
             nothing = lambda: None  # noqa: E731
             figures = {
-                "baseline_paper_analysis_s": _median_seconds(classic, repeat, clear_all),
+                "baseline_paper_analysis_s": _median_seconds(classic, repeat, analyses.clear),
                 "baseline_healthz_s": _median_seconds(get("/healthz"), repeat, nothing),
-                "first_render_s": _median_seconds(get("/pi/analysis"), repeat, clear_all),
+                "first_render_s": _median_seconds(get("/pi/analysis"), repeat, analyses.clear),
                 "first_render_warm_s": _median_seconds(get("/pi/analysis"), repeat, nothing),
-                "extended_cold_s": _median_seconds(get("/pi/analysis/extended"), repeat, clear_all),
+                "extended_cold_s": _median_seconds(
+                    get("/pi/analysis/extended"), repeat, analyses.clear
+                ),
                 "extended_warm_s": _median_seconds(get("/pi/analysis/extended"), repeat, nothing),
-                "json_cold_s": _median_seconds(get("/api/pi/analysis"), repeat, clear_all),
+                "json_cold_s": _median_seconds(get("/api/pi/analysis"), repeat, analyses.clear),
             }
             memory = {
-                "baseline_paper_analysis_peak_mib": _peak_mib(classic, clear_all),
-                "first_render_peak_mib": _peak_mib(get("/pi/analysis"), clear_all),
-                "extended_cold_peak_mib": _peak_mib(get("/pi/analysis/extended"), clear_all),
+                "baseline_paper_analysis_peak_mib": _peak_mib(classic, analyses.clear),
+                "first_render_peak_mib": _peak_mib(get("/pi/analysis"), analyses.clear),
+                "extended_cold_peak_mib": _peak_mib(get("/pi/analysis/extended"), analyses.clear),
             }
         engine.dispose()
     base = figures["baseline_paper_analysis_s"]

@@ -12,7 +12,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.analysis.cache import analyses, digest, page_results
+from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.analysis.repository import data_version
 from chameleons.backend.export.columns import (
     interactions_table,
@@ -205,19 +205,18 @@ def study_analysis(
 ) -> StudyAnalysis:
     """Everything the analysis page shows; an unusable data set gives a message, not a 500.
 
-    ``extended``: with the effect sizes and the models (cached per input, see
-    :mod:`.cache`); without, only the paper's analysis (the page's first render). A visit
-    with the data unchanged since the last is served from :data:`.cache.page_results`
-    without reading the rows (:mod:`.repository`)."""
+    ``extended``: with the effect sizes and the models; without, only the paper's analysis
+    (the page's first render). A visit with the data unchanged since the last is served
+    from :mod:`.cache` without reading the rows (:mod:`.repository`)."""
     study = resolve_study(db, study_id)
     options = (include_rehearsal, permutations, view, wilcoxon_rule, extended)
     where = (str(db.get_bind().engine.url), study.id, study.created_at, study.config_hash)
     key = ("page", *where, *options, data_version(db))
-    result: StudyAnalysis | None = page_results.get(key)
+    result: StudyAnalysis | None = analyses.get(key)
     if result is None:
         result = _computed(db, study.id, include_rehearsal, permutations, view, wilcoxon_rule,
                            extended)  # fmt: skip
-        page_results.put(key, result)
+        analyses.put(key, result)
     # This request's study row: the cached one belongs to the session that computed it.
     return replace(result, scores=replace(result.scores, study=study))
 
@@ -257,19 +256,7 @@ def _extended(
 ) -> Analysis:
     suggestions = model_rows(db, scores, include_rehearsal)
     bootstrap = BootstrapOptions()
-    key = (
-        scores.study.id,
-        scores.study.config_hash,
-        permutations,
-        view,
-        wilcoxon_rule,
-        bootstrap,
-        digest(scores.rows, suggestions, scores.answers),
-    )
-    return analyses.get_or_compute(
-        key,
-        lambda: run_analysis(scores, permutations, 0, view, wilcoxon_rule, suggestions, bootstrap),
-    )
+    return run_analysis(scores, permutations, 0, view, wilcoxon_rule, suggestions, bootstrap)
 
 
 def score_rows_from_database(

@@ -51,24 +51,29 @@ def start(db: Session, user: StaffUser, hours: float) -> str:
     return key
 
 
-def _record(db: Session, cookie: Mapping[str, Any]) -> StaffSession | None:
+def _key_hash(cookie: Mapping[str, Any]) -> str | None:
     key = cookie.get(SESSION_KEY)
-    if not isinstance(key, str) or not key:
+    return _hash(key) if isinstance(key, str) and key else None
+
+
+def _record(db: Session, cookie: Mapping[str, Any]) -> StaffSession | None:
+    key_hash = _key_hash(cookie)
+    if key_hash is None:
         return None
-    return db.scalars(select(StaffSession).where(StaffSession.key_hash == _hash(key))).first()
+    return db.scalars(select(StaffSession).where(StaffSession.key_hash == key_hash)).first()
 
 
 def signed_in(db: Session, cookie: Mapping[str, Any]) -> tuple[StaffUser, int] | None:
     """The active staff member whose open, unexpired session the cookie names, with that
     session's id (a WebSocket watches it: see :mod:`.socket_revocation`)."""
-    key = cookie.get(SESSION_KEY)
-    if not isinstance(key, str) or not key:
+    key_hash = _key_hash(cookie)
+    if key_hash is None:
         return None
     # One statement (every staff request and socket asks): the session with its user.
     query = (
         select(StaffSession, StaffUser)
         .join(StaffUser, StaffUser.id == StaffSession.user_id)
-        .where(StaffSession.key_hash == _hash(key))
+        .where(StaffSession.key_hash == key_hash)
     )
     found = db.execute(query).first()
     if found is None:

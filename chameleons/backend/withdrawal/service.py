@@ -18,7 +18,7 @@ from typing import Any
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.analysis.cache import clear_all
+from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.events.repository import announce_gone
 from chameleons.backend.models import (
     BoothCheck,
@@ -110,7 +110,7 @@ def withdraw_participant(
         row.withdrawals += 1
     deleted = delete_files(files, data_dir)
     replayed = delete_files(replay_files, data_dir)
-    clear_all()  # cached analyses were computed from their rows
+    analyses.clear()  # cached analyses were computed from their rows
     db.add(
         Event(
             study_id=study_id,

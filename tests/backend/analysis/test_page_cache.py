@@ -8,7 +8,7 @@ from __future__ import annotations
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.analysis.cache import page_results
+from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.analysis.repository import data_version
 from chameleons.backend.analysis.service import study_analysis
 from chameleons.backend.db import build_sessionmaker
@@ -28,7 +28,7 @@ def _participants(engine: Engine) -> list[str]:
 def test_a_repeated_visit_reads_no_rows(db_session: DbSession, engine: Engine) -> None:
     populate(db_session, 12, seed=3)
     db_session.commit()
-    page_results.clear()
+    analyses.clear()
     first = _participants(engine)
     with build_sessionmaker(engine)() as db, statements_here() as statements:
         again = study_analysis(db, extended=False)
