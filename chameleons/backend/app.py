@@ -28,7 +28,12 @@ from chameleons.backend.booth import check_endpoints as booth_check
 from chameleons.backend.bridge.wiring import worker_link
 from chameleons.backend.dashboard import monitor as dashboard_monitor
 from chameleons.backend.dashboard import pages as dashboard_pages
-from chameleons.backend.db import build_engine, build_sessionmaker, request_threads
+from chameleons.backend.db import (
+    build_engine,
+    build_read_sessionmaker,
+    build_sessionmaker,
+    request_threads,
+)
 from chameleons.backend.display import endpoints as display_endpoints
 from chameleons.backend.display import media as display_media
 from chameleons.backend.display import pages as display_pages
@@ -107,6 +112,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.engine = engine
     app.state.sessionmaker = build_sessionmaker(engine)
+    app.state.read_sessionmaker = build_read_sessionmaker(engine)
     app.state.templates = build_templates()
     app.state.live_hub = LiveHub()
     app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code

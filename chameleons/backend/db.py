@@ -111,6 +111,35 @@ def build_sessionmaker(engine: Engine) -> sessionmaker[Session]:
     return sessionmaker(bind=engine, expire_on_commit=False)
 
 
+class ReadOnlySessionError(RuntimeError):
+    """A change was made in a session meant only to read."""
+
+
+def build_read_sessionmaker(engine: Engine) -> sessionmaker[Session]:
+    """Sessions that only read (the staff check of every staff request, the console's state
+    after every change). On PostgreSQL they run in autocommit: each statement sees the newest
+    committed data, as it does inside a READ COMMITTED transaction, without the BEGIN and
+    ROLLBACK round trips around them (docs/performance.md). SQLite keeps its transaction
+    (one snapshot for the whole read; it has no round trips to save). A flush or a write
+    statement in them raises: in autocommit it would be kept."""
+    postgres = engine.dialect.name == "postgresql"
+    bind = engine.execution_options(isolation_level="AUTOCOMMIT") if postgres else engine
+    factory = sessionmaker(bind=bind, expire_on_commit=False)
+    event.listen(factory, "before_flush", _refuse_flush)
+    event.listen(factory, "do_orm_execute", _refuse_write)
+    return factory
+
+
+def _refuse_flush(session: Session, _context: Any, _instances: Any) -> None:
+    if session.new or session.dirty or session.deleted:
+        raise ReadOnlySessionError("a read-only session was asked to store a change")
+
+
+def _refuse_write(state: Any) -> None:
+    if not state.is_select:
+        raise ReadOnlySessionError("a read-only session was asked to run a write statement")
+
+
 @contextmanager
 def session_scope(factory: sessionmaker[Session]) -> Iterator[Session]:
     """``with session_scope(factory) as db:`` commits when the block ends normally (also by

@@ -32,7 +32,7 @@ def current_staff(request: Request, db: DbSession) -> StaffUser:
     (one thread-pool call) until the endpoint (another) committed: requests waiting for a
     thread held connections while every thread waited for a connection, until the pool's
     30 s timeout (bench/server_hold.py, 200 phones on SQLite: every phone failed)."""
-    with request.app.state.sessionmaker() as own:
+    with request.app.state.read_sessionmaker() as own:
         user = sessions.staff_of(own, request.session)
     if user is None:
         if _is_api(request):

@@ -38,7 +38,7 @@ def write(state: Any, work: Callable[..., T], *args: Any) -> T:
 
 
 def read(state: Any, work: Callable[..., T], *args: Any) -> T:
-    db: Session = state.sessionmaker()
+    db: Session = state.read_sessionmaker()
     try:
         return work(db, *args)
     finally:
