@@ -73,6 +73,9 @@ ROBOT_KINDS = {"disconnected": "robot.disconnected", "closed": "robot.disconnect
                "connected": "robot.connected", "auth_refused": "robot.auth_refused",
                "auth_timeout": "robot.auth_timeout"}  # fmt: skip
 AUTH_STATES = frozenset({"auth_refused", "auth_timeout"})
+# Robot states the heartbeat repeats into events when the one-off robot_state event was lost
+# (sent before the server's subscription took: ZeroMQ drops a PUB's messages until then).
+HEARTBEAT_STATES = AUTH_STATES | {"connected"}
 RECORDING_FAILED = "recording.failed"
 SESSION_STARTED = "session.started"
 
@@ -199,11 +202,12 @@ class BoothFlow:
             self._enqueue(f"booth:{booth}", partial(self._route_failed, dict(body)))
 
     def _on_telemetry(self, message: Message) -> None:
-        """A refused login is reported once, possibly before the server's subscription took:
-        the 1 Hz heartbeat repeats the robot's state, so it is never lost."""
+        """A refused login or a connection is reported once, possibly before the server's
+        subscription took: the 1 Hz heartbeat repeats the robot's state, so it is never
+        lost (a robot seen connected only here is logged as ``robot.connected``)."""
         booth = message.topic.partition(".")[2]
         state = str(message.body.get("robot_state"))
-        kind = ROBOT_KINDS.get(state) if state in AUTH_STATES else None
+        kind = ROBOT_KINDS.get(state) if state in HEARTBEAT_STATES else None
         if kind is not None and self._robot_kinds.get(booth) != kind:
             self._robot_kinds[booth] = kind
             payload = {"booth": booth, "state": state, "reason": message.body.get("robot_problem")}
