@@ -91,13 +91,15 @@ def burst(real: RealServer, phones: int) -> dict[str, Any]:
 
 
 @contextmanager
-def server_cpu(server: Server, figures: Figures) -> Iterator[None]:
-    """The server process's CPU time over the block, noted in ``figures`` (the wizard's
-    actions of the think scenario are in it too: per submission, it is the server's cost of
-    a whole session divided by the phone's submissions)."""
-    before, started = cpu_seconds(server.process.pid), time.monotonic()
+def server_cpu(server: Server, figures: Figures, *more: Server) -> Iterator[None]:
+    """The server processes' CPU time over the block (``more``: the phone servers beside
+    the main one), noted in ``figures`` (the wizard's actions of the think scenario are in
+    it too: per submission, it is the servers' cost of a whole session divided by the
+    phone's submissions)."""
+    pids = [s.process.pid for s in (server, *more)]
+    before, started = sum(map(cpu_seconds, pids)), time.monotonic()
     yield
-    figures.server_cpu_s = cpu_seconds(server.process.pid) - before
+    figures.server_cpu_s = sum(map(cpu_seconds, pids)) - before
     figures.seconds = time.monotonic() - started
 
 

@@ -13,7 +13,7 @@ import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -262,12 +262,14 @@ class Server:
     @contextmanager
     def chameleons(
         cls, database_url: str, sessions: int, *, role: str = "wizard",
-        env: dict[str, str] | None = None,
+        env: dict[str, str] | None = None, phone_servers: int = 0,
     ) -> Iterator[tuple[Server, dict[str, Any]]]:  # fmt: skip
         """``chameleons serve`` on ``database_url`` (migrated, with studies whose plans have
         room for ``sessions`` and a staff member of ``role``), that staff member's cookie
         and CSRF, and the studies' ids. ``env`` adds settings (the worker link is off
-        unless it says so)."""
+        unless it says so). ``phone_servers``: as many more processes on the same database
+        and secret (PostgreSQL: README "More than one server process"), in the set-up's
+        ``phone_servers``, for the phones."""
         study_ids, username, password = _prepare(database_url, sessions, role)
         port = free_port()
         secret = secrets.token_urlsafe(32)
@@ -279,9 +281,13 @@ class Server:
                           "CHAMELEONS_LOG_LEVEL": "warning", **(env or {})}  # fmt: skip
             command = [sys.executable, "-m", "chameleons", "serve", "--host", "127.0.0.1",
                        "--port", str(port)]  # fmt: skip
-            with cls._running(command, server_env, port) as server:
+            with cls._running(command, server_env, port) as server, ExitStack() as more:
+                others = [more.enter_context(cls._running(
+                    [*command[:-1], str(other)], server_env, other))
+                    for other in (free_port() for _ in range(phone_servers))]  # fmt: skip
                 login = _log_in(server, username, password)
-                yield server, login | {"study_ids": study_ids, "secret_key": secret}
+                yield server, login | {"study_ids": study_ids, "secret_key": secret,
+                                       "phone_servers": others}  # fmt: skip
 
 
 def memory_mib(pid: int) -> dict[str, float]:

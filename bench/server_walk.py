@@ -28,6 +28,7 @@ from chameleons.backend.sessions.bot import (
     WizardBot,
     answers_for,
 )
+from chameleons.backend.sessions.consent import BEFORE_POSITION
 
 UPDATE_TIMEOUT_S = 60.0
 PHONE_ENDED = 4410  # the phone socket's close code once its session is over
@@ -75,13 +76,15 @@ class RealServer:
     staff_cookie: dict[str, str]
     csrf: str
     study_ids: list[int]
+    phone_servers: list[Server] = field(default_factory=list)  # none: the phones use ``server``
     sockets_opened: int = 0
     _opened: Iterator[int] = field(default_factory=itertools.count)
     _one_at_a_time: threading.Lock = field(default_factory=threading.Lock)
 
     @classmethod
     def of(cls, server: Server, setup: dict[str, Any]) -> RealServer:
-        return cls(server, setup["cookies"], setup["csrf"], setup["study_ids"])
+        return cls(server, setup["cookies"], setup["csrf"], setup["study_ids"],
+                   list(setup.get("phone_servers", [])))  # fmt: skip
 
     def new_phone(self) -> Phone:
         """A new session with its console socket and the phone's socket open (as the phone
@@ -91,12 +94,16 @@ class RealServer:
         staff.csrf = self.csrf
         opened = next(self._opened)  # the studies' plans fill evenly
         wizard = WizardBot.create(staff, self.study_ids[opened % len(self.study_ids)])
-        participant = ParticipantBot(self.server.client(), wizard.token)
+        # The phone's link and socket on a phone server when there are any (as a proxy
+        # sends them, docs/performance.md), the wizard and the console on the main one.
+        phones = self.phone_servers or [self.server]
+        phone_server = phones[opened % len(phones)]
+        participant = ParticipantBot(phone_server.client(), wizard.token)
         console = Listener(self.server.ws_url(f"/ws/wizard/sessions/{wizard.session_id}"),
                            self.server.base, self.staff_cookie)  # fmt: skip
         device = secrets.token_hex(8)
-        socket = Listener(self.server.ws_url(f"/ws/p/{wizard.token}?device={device}"),
-                          self.server.base, ended_codes=(PHONE_ENDED,))  # fmt: skip
+        socket = Listener(phone_server.ws_url(f"/ws/p/{wizard.token}?device={device}"),
+                          phone_server.base, ended_codes=(PHONE_ENDED,))  # fmt: skip
         self.sockets_opened += 2
         return Phone(wizard, participant, console, socket)
 
@@ -149,8 +156,9 @@ def walk_session(phone: Phone, figures: Figures, pace: Pace) -> None:
 
 def _walk(phone: Phone, figures: Figures, pace: Pace) -> None:
     wizard, participant, rng = phone.wizard, phone.participant, pace.rng
+    prepare(phone, figures, pace)
     pace.wizard()
-    wizard.start()
+    wizard.start(prepare=False)
 
     def decide(_suggestion: Any) -> bool:
         pace.wizard()
@@ -174,8 +182,29 @@ def _walk(phone: Phone, figures: Figures, pace: Pace) -> None:
     answer_pages(phone, figures, pace, 0)
 
 
-def answer_pages(phone: Phone, figures: Figures, pace: Pace, position: int) -> None:
+def prepare(phone: Phone, figures: Figures, pace: Pace) -> None:
+    """The participant's part before the wizard starts the session, at the phone's pace and
+    measured as every other submission: the consent page, then the questions before the
+    session. (The wizard's ``start`` used to do it at once, unmeasured: every phone's
+    consent and first pages then landed within the scenario's first second, a burst no lab
+    makes that slowed the submissions measured just after it.)"""
     state = phone.participant.state()
+    if state["view"] == "consent":
+        pace.phone()
+        receipt = submit_measured(figures, phone.console, partial(phone.participant.consent, True))
+        if receipt is None:
+            return
+        state = receipt["state"]
+    if state["view"] == "questionnaire" and state.get("before"):
+        answer_pages(phone, figures, pace, BEFORE_POSITION, state)
+
+
+def answer_pages(
+    phone: Phone, figures: Figures, pace: Pace, position: int, state: dict[str, Any] | None = None
+) -> None:
+    """Answer the questionnaire pages of ``position`` the phone shows (``state``: its view
+    now, when the caller has it)."""
+    state = phone.participant.state() if state is None else state
     while state["view"] == "questionnaire" and state["position"] == position:
         questionnaire = state["questionnaire"]
         answers = answers_for(questionnaire, pace.rng)

@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 
 from bench.server_bench import goals
+from chameleons.experiment.study import load_default_study
 
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
@@ -29,9 +30,10 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     report = json.loads(out.read_text())
     real, baseline = report["SQLite"], report["SQLite baseline"]
-    # A session of the default study: 3 rankings and every questionnaire page, per phone.
+    # A whole session of the default study per phone, every submission measured: the
+    # consent and the questions before the session too (the phone's, at its own pace).
     for scenario in ("think_instant", "think_paced"):
-        assert real[scenario]["submissions"] >= 2 * 3 * 2
+        assert real[scenario]["submissions"] == 2 * _submissions_per_session()
     assert real["burst"]["submissions"] == 2
     for scenario in [real[name] for name in SCENARIOS] + [baseline[name] for name in SCENARIOS]:
         assert scenario["errors"] == {}
@@ -52,6 +54,14 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
                  "submit -> console update", "server CPU / submission", "hold, 2 phones",
                  "server RSS MiB (peak)", "goals:"):  # fmt: skip
         assert line in done.stdout
+
+
+def _submissions_per_session() -> int:
+    study = load_default_study()
+    per_interaction = 1 + len(study.questionnaires_for("interaction"))  # ranking, then pages
+    before = int(study.procedure.consent is not None) + len(study.questionnaires_for("before"))
+    after = len(study.questionnaires_for("final"))
+    return before + len(study.conditions) * per_interaction + after
 
 
 def _scenario(p99: float, errors: dict[str, int] | None = None) -> dict[str, Any]:

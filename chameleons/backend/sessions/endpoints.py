@@ -81,7 +81,7 @@ def snapshot_of(flow: Flow, request: Request, hub: LiveHub) -> Snapshot:
     (they are woken by this change's events and would otherwise load it again)."""
     url = base_url(request)
     snapshot = session_snapshot(flow, url, devices.phones(hub, flow.session.id))
-    retain(flow.db, snapshot, url)
+    retain(flow, snapshot)
     retained_state(flow, snapshot["version"])  # and the phone's view, for the phone's socket
     return snapshot
 

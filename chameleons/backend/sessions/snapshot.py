@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy.orm import Session
-
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, session_channel
 from chameleons.backend.models import Interaction, Suggestion
@@ -56,8 +54,7 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
         "paused_seconds": session.paused_seconds,
         "participant": {"id": flow.participant.id, "code": flow.participant.code},
         "phone": {
-            "url": f"{base_url}/p/{session.phone_token}",
-            "join_url": f"{base_url}/join",
+            **_links(base_url, session.phone_token),
             "short_code": session.short_code,
             "qr_svg": f"/api/sessions/{session.id}/phone-qr.svg",
             **_phones(phones),
@@ -76,30 +73,37 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
     }
 
 
+def _links(base_url: str, phone_token: str) -> dict[str, str]:
+    return {"url": f"{base_url}/p/{phone_token}", "join_url": f"{base_url}/join"}
+
+
 def _phones(phones: list[dict[str, Any]]) -> dict[str, Any]:
     return {"connected": bool(phones), "connections": len(phones), "devices": phones}
 
 
-def retain(db: Session, snapshot: dict[str, Any], base_url: str) -> None:
+def retain(flow: Flow, snapshot: dict[str, Any]) -> None:
     """Once the transaction that made ``snapshot`` commits, the live hub keeps it as the
     session's latest state: a console woken by the same commit's events takes it from
     there (``committed``) instead of loading the session again."""
-    value = {"version": snapshot["version"], "base_url": base_url, "snapshot": snapshot}
-    events.retain_after_commit(db, session_channel(snapshot["id"]), CONSOLE_VIEW, value)
+    value = {"version": snapshot["version"], "token": flow.session.phone_token,
+             "snapshot": snapshot}  # fmt: skip
+    events.retain_after_commit(flow.db, session_channel(snapshot["id"]), CONSOLE_VIEW, value)
 
 
 def committed(
     hub: LiveHub, session_id: int, version: int, base_url: str, phones: list[dict[str, Any]]
 ) -> dict[str, Any] | None:
     """The retained snapshot of ``session_id`` if it is the state as of event ``version``
-    (the newest event a live reader was sent) for ``base_url``; with ``phones`` as they are
-    now. None otherwise: the caller loads the session."""
+    (the newest event a live reader was sent); with the phone's links for ``base_url`` (the
+    reader's address, not necessarily that of the request that made it) and ``phones`` as
+    they are now. None otherwise: the caller loads the session."""
     found = hub.retained(session_channel(session_id), CONSOLE_VIEW)
-    if found is None or found["version"] != version or found["base_url"] != base_url:
+    if found is None or found["version"] != version:
         return None
     snapshot: dict[str, Any] = found["snapshot"]
     # A copy where it changes: the retained one is shared between threads.
-    return {**snapshot, "phone": {**snapshot["phone"], **_phones(phones)}}
+    phone = {**snapshot["phone"], **_links(base_url, found["token"]), **_phones(phones)}
+    return {**snapshot, "phone": phone}
 
 
 def _condition(condition: Condition) -> dict[str, Any]:
