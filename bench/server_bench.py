@@ -2,7 +2,8 @@
 same traffic against a bare FastAPI server (``bench.baseline_app``) measured in the same run.
 
 ``python -m bench.server_bench [--quick] [--phones 50] [--think-max 3] [--wizard-think 1]
-[--hold-phones 200] [--hold-seconds 120] [--only sqlite|postgresql] [--report-only]``
+[--hold-phones 200] [--hold-seconds 120] [--phone-servers 1] [--only sqlite|postgresql]
+[--report-only]``
 
 The server under test is ``chameleons serve`` in a process of its own (as in a lab), on a
 fresh SQLite file, or a fresh PostgreSQL database on ``--database-url``'s server (default:
@@ -18,6 +19,10 @@ the phone page does) and its session's console socket (``/ws/wizard/sessions/{id
 - **burst**: N more sessions wait at the ranking; all N phones submit at the same moment.
 - **hold** (``bench.server_hold``): many phones (default 200) walk sessions back to back
   at the human pace for a fixed time, every socket held open.
+- **think, paced, phone processes** (PostgreSQL, ``--phone-servers N``, default 1): the
+  human-paced run again with the phones' links and sockets on N more server processes on
+  the same database, the wizards and consoles on the main one (the deployment of README
+  "More than one server process"): each answer reaches its console through LISTEN/NOTIFY.
 
 Figures per scenario: the phone's HTTP round trip and **submit -> console update** (from
 just before the POST until the console's WebSocket delivers the event with the
@@ -55,6 +60,9 @@ from bench.server_walk import BaselinePhone, Pace, Phone, RealServer, submit_mea
 GOALS = {"think_update_p99_ms": 50.0, "burst_update_p99_ms": 500.0}
 SCENARIOS = {"think_instant": "think, instant wizard (stress)",
              "think_paced": "think, human-paced wizard", "burst": "burst"}  # fmt: skip
+# PostgreSQL only: the human-paced run with the phones on more server processes (README
+# "More than one server process"); its baseline is the human-paced run's.
+SPLIT, SPLIT_LABEL = "think_paced_split", "think, paced, phone processes"
 
 
 def run_real(
@@ -74,6 +82,27 @@ def run_real(
             result[name] = figures.summary()
         result["burst"] = burst(real, phones)
         return result
+
+
+def run_split(
+    database_url: str, phones: int, think_max: float, wizard_think: float, seed: int,
+    phone_servers: int,
+) -> dict[str, Any]:  # fmt: skip
+    """The human-paced run with every phone's link and socket on one of ``phone_servers``
+    more ``chameleons serve`` processes on the same database (the wizards and consoles on
+    the main one): each phone's answer reaches its console through PostgreSQL's
+    LISTEN/NOTIFY, and the servers' CPU is that of all of them."""
+    with Server.chameleons(database_url, sessions=phones,
+                           phone_servers=phone_servers) as (server, setup):  # fmt: skip
+        real = RealServer.of(server, setup)
+        figures, walkers = Figures(), [real.new_phone() for _ in range(phones)]
+        paces = [Pace(random.Random(seed + i), think_max, wizard_think) for i in range(phones)]
+        with server_cpu(server, figures, *real.phone_servers):
+            run_threads([partial(walk_session, phone, figures, pace)
+                         for phone, pace in zip(walkers, paces, strict=True)])  # fmt: skip
+        for phone in walkers:
+            real.release(phone, figures)
+        return {**figures.summary(), "phone_servers": phone_servers}
 
 
 def burst(real: RealServer, phones: int) -> dict[str, Any]:
@@ -148,8 +177,9 @@ def print_table(name: str, result: dict[str, Any], baseline: dict[str, Any]) -> 
     print(f"\n{name}")
     print(f"{'scenario':<32} {'figure':<26} {'p50 ms':>8} {'p99 ms':>8} {'x base p99':>11} "
           "errors, dropped sockets")  # fmt: skip
-    for scenario, label in SCENARIOS.items():
-        ours, base = result[scenario], baseline[scenario]
+    shown = {**SCENARIOS, **({SPLIT: SPLIT_LABEL} if SPLIT in result else {})}
+    for scenario, label in shown.items():
+        ours, base = result[scenario], baseline.get(scenario, baseline["think_paced"])
         for figure in ("http", "update"):
             p50, p99 = ours[f"{figure}_p50_ms"], ours[f"{figure}_p99_ms"]
             ratio = p99 / base[f"{figure}_p99_ms"] if base[f"{figure}_p99_ms"] else float("nan")
@@ -177,10 +207,16 @@ def goals(report: dict[str, Any], hold_phones: int) -> dict[str, dict[str, bool]
             "burst p99 <= 500 ms": ours["burst"]["update_p99_ms"] <= GOALS["burst_update_p99_ms"],
             "no error or dropped socket in any scenario":
                 not any(s["errors"] or s["dropped_sockets"]
-                        for s in (ours[k] for k in (*SCENARIOS, "hold") if k in ours)),
+                        for s in (ours[k] for k in (*SCENARIOS, SPLIT, "hold") if k in ours)),
         }  # fmt: skip
         if "hold" in ours:
             checks[f"{hold_phones} phones held"] = ours["hold"]["held"] >= hold_phones
+        if SPLIT in ours:
+            split = ours[SPLIT]
+            checks[f"think p99 <= 50 ms, phones on {split['phone_servers']} more process(es)"] = (
+                split["update_p99_ms"] <= GOALS["think_update_p99_ms"]
+                and not (split["errors"] or split["dropped_sockets"])
+            )
         found[name] = checks
     return found
 
@@ -199,6 +235,9 @@ def parser() -> argparse.ArgumentParser:
         action="store_true",
         help="6 phones, 0.3 s think, 0.3 s wizard, hold 10 phones for 8 s.",
     )
+    found.add_argument("--phone-servers", type=int, default=1,
+                       help="PostgreSQL: also run the human-paced scenario with the phones "
+                            "on this many more server processes (0: not).")  # fmt: skip
     found.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
     found.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
                        help="Run one database only.")  # fmt: skip
@@ -226,6 +265,9 @@ def main(argv: list[str] | None = None) -> int:
     with databases(args) as targets:
         for name, url in targets:
             ours = run_real(url, args.phones, args.think_max, args.wizard_think, args.seed)
+            if name == "PostgreSQL" and args.phone_servers > 0:
+                ours[SPLIT] = run_split(url, args.phones, args.think_max, args.wizard_think,
+                                        args.seed, args.phone_servers)  # fmt: skip
             submissions = max(1, round(ours["think_paced"]["submissions"] / args.phones))
             baseline = run_baseline(args.phones, submissions, args.think_max, args.seed)
             if args.hold_phones:

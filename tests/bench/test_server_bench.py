@@ -5,6 +5,7 @@ against the real server and the baseline alike; and its goals fail on any error.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from bench.server_bench import goals
+from bench.server_bench import SPLIT, goals
 from chameleons.experiment.study import load_default_study
 
 pytestmark = pytest.mark.slow
@@ -85,3 +86,41 @@ def test_a_goal_fails_on_slow_updates_and_on_an_error_in_any_scenario() -> None:
     assert held["no error or dropped socket in any scenario"] is False
     short = goals({"SQLite": {**fast, "hold": {**hold, "held": 199}}}, 200)["SQLite"]
     assert short["200 phones held"] is False
+
+
+def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
+    tmp_path: Path,
+) -> None:
+    """PostgreSQL's scenario of more server processes (its live fan-out): two phones walk
+    whole sessions on a phone server while their wizards and consoles use the main one."""
+    if not os.environ.get("TEST_DATABASE_URL"):
+        pytest.skip("TEST_DATABASE_URL is not set: the phone processes are PostgreSQL's")
+    out = tmp_path / "figures.json"
+    command = [sys.executable, "-m", "bench.server_bench", "--phones", "2", "--think-max", "0",
+               "--wizard-think", "0.05", "--hold-phones", "0", "--phone-servers", "1",
+               "--only", "postgresql", "--report-only", "--json", str(out)]  # fmt: skip
+    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=900,
+                          check=False)  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    report = json.loads(out.read_text())
+    split = report["PostgreSQL"][SPLIT]
+    assert split["phone_servers"] == 1
+    assert split["submissions"] == 2 * _submissions_per_session()
+    assert split["errors"] == {}
+    assert split["dropped_sockets"] == {}
+    assert split["update_p99_ms"] > 0
+    assert split["server_cpu_ms_per_submission"] > 0
+    assert "think, paced, phone processes" in done.stdout
+    assert "think p99 <= 50 ms, phones on 1 more process(es)" in report["goals"]["PostgreSQL"]
+
+
+def test_the_phone_processes_goal_is_checked_when_they_ran() -> None:
+    fast = {name: _scenario(10.0) for name in SCENARIOS}
+    split = {**_scenario(80.0), "phone_servers": 2}
+    checked = goals({"PostgreSQL": {**fast, SPLIT: split}}, 200)["PostgreSQL"]
+    assert checked["think p99 <= 50 ms, phones on 2 more process(es)"] is False
+    assert checked["think p99 <= 50 ms (human-paced wizard)"] is True
+    broken = {**_scenario(10.0, {"HTTP 500": 1}), "phone_servers": 1}
+    failed = goals({"PostgreSQL": {**fast, SPLIT: broken}}, 200)["PostgreSQL"]
+    assert failed["think p99 <= 50 ms, phones on 1 more process(es)"] is False
+    assert failed["no error or dropped socket in any scenario"] is False
