@@ -26,6 +26,13 @@ from websockets.sync.client import connect
 
 ROOT = Path(__file__).resolve().parents[1]
 START_SECONDS = 120.0
+# uvicorn closes a connection after 5 s idle (``timeout_keep_alive``) and httpx keeps one
+# for 5 s too: a request sent on it in the instant the server closes it is reset
+# (ECONNRESET; one phone's walk in a 200-phone hold on PostgreSQL). A browser sends such a
+# request again (Chromium's ``HttpNetworkTransaction::ShouldResendRequest``: a reused
+# connection, no response headers yet); httpx does not, so the bench's phones let an idle
+# connection go well before the server would.
+CLIENT_KEEPALIVE_S = 2.0
 
 
 def free_port() -> int:
@@ -211,7 +218,8 @@ class Server:
     base: str
 
     def client(self, cookies: dict[str, str] | None = None) -> httpx.Client:
-        return httpx.Client(base_url=self.base, cookies=cookies, timeout=120.0)
+        return httpx.Client(base_url=self.base, cookies=cookies, timeout=120.0,
+                            limits=httpx.Limits(keepalive_expiry=CLIENT_KEEPALIVE_S))  # fmt: skip
 
     def ws_url(self, path: str) -> str:
         return "ws" + self.base.removeprefix("http") + path

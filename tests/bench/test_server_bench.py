@@ -12,8 +12,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import uvicorn
 
 from bench.server_bench import SPLIT, goals
+from bench.server_load import CLIENT_KEEPALIVE_S
 from chameleons.experiment.study import load_default_study
 
 pytestmark = pytest.mark.slow
@@ -124,3 +126,11 @@ def test_the_phone_processes_goal_is_checked_when_they_ran() -> None:
     failed = goals({"PostgreSQL": {**fast, SPLIT: broken}}, 200)["PostgreSQL"]
     assert failed["think p99 <= 50 ms, phones on 1 more process(es)"] is False
     assert failed["no error or dropped socket in any scenario"] is False
+
+
+def test_the_bench_phones_let_an_idle_connection_go_before_the_server_does() -> None:
+    """A request sent on a keep-alive connection in the instant the server closes it is
+    reset; a browser sends it again, httpx does not (bench/server_load.py): the bench's
+    clients must give idle connections up first (``chameleons serve`` keeps uvicorn's)."""
+    served = uvicorn.Config(app=lambda: None).timeout_keep_alive
+    assert served > CLIENT_KEEPALIVE_S
