@@ -23,15 +23,22 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ("think_instant", "think_paced", "burst")
 
 
-def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
+def _smoke_run(tmp_path: Path, *options: str) -> tuple[str, dict[str, Any]]:
+    """``bench.server_bench`` with two phones and no think time: its output and report."""
     out = tmp_path / "figures.json"
     command = [sys.executable, "-m", "bench.server_bench", "--phones", "2", "--think-max", "0",
-               "--wizard-think", "0.05", "--hold-phones", "2", "--hold-seconds", "2",
-               "--only", "sqlite", "--report-only", "--json", str(out)]  # fmt: skip
+               "--wizard-think", "0.05", *options, "--report-only", "--json", str(out)]  # fmt: skip
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=900,
                           check=False)  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr
-    report = json.loads(out.read_text())
+    report: dict[str, Any] = json.loads(out.read_text())
+    return done.stdout, report
+
+
+def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
+    stdout, report = _smoke_run(
+        tmp_path, "--hold-phones", "2", "--hold-seconds", "2", "--only", "sqlite"
+    )
     real, baseline = report["SQLite"], report["SQLite baseline"]
     # A whole session of the default study per phone, every submission measured: the
     # consent and the questions before the session too (the phone's, at its own pace).
@@ -56,7 +63,7 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     for line in ("think, instant wizard (stress)", "think, human-paced wizard",
                  "submit -> console update", "server CPU / submission", "hold, 2 phones",
                  "server RSS MiB (peak)", "goals:"):  # fmt: skip
-        assert line in done.stdout
+        assert line in stdout
 
 
 def _submissions_per_session() -> int:
@@ -97,14 +104,9 @@ def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
     whole sessions on a phone server while their wizards and consoles use the main one."""
     if not os.environ.get("TEST_DATABASE_URL"):
         pytest.skip("TEST_DATABASE_URL is not set: the phone processes are PostgreSQL's")
-    out = tmp_path / "figures.json"
-    command = [sys.executable, "-m", "bench.server_bench", "--phones", "2", "--think-max", "0",
-               "--wizard-think", "0.05", "--hold-phones", "0", "--phone-servers", "1",
-               "--only", "postgresql", "--report-only", "--json", str(out)]  # fmt: skip
-    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=900,
-                          check=False)  # fmt: skip
-    assert done.returncode == 0, done.stdout + done.stderr
-    report = json.loads(out.read_text())
+    stdout, report = _smoke_run(
+        tmp_path, "--hold-phones", "0", "--phone-servers", "1", "--only", "postgresql"
+    )
     split = report["PostgreSQL"][SPLIT]
     assert split["phone_servers"] == 1
     assert split["submissions"] == 2 * _submissions_per_session()
@@ -112,7 +114,7 @@ def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
     assert split["dropped_sockets"] == {}
     assert split["update_p99_ms"] > 0
     assert split["server_cpu_ms_per_submission"] > 0
-    assert "think, paced, phone processes" in done.stdout
+    assert "think, paced, phone processes" in stdout
     assert "think p99 <= 50 ms, phones on 1 more process(es)" in report["goals"]["PostgreSQL"]
 
 

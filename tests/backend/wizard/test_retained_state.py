@@ -67,6 +67,24 @@ def test_the_console_takes_the_state_a_wizard_action_committed(
     assert retained["events_delta"] is True
 
 
+def test_a_phones_answer_is_read_from_the_database(
+    app: FastAPI, client: TestClient, wizard: WizardBot, phone: ParticipantBot
+) -> None:
+    wizard.start()
+    wizard.advance(1, "discussion")
+    before = wizard.advance(1, "ranking")
+    ranking = list(wizard.interaction(1)["presented_order"])
+    phone.submit_ranking(1, list(reversed(ranking)))  # the phone's change retains nothing
+    submitted = newest_event(app, wizard.session_id)
+    assert submitted["id"] > before["version"]
+    with statements_here() as statements:
+        state = read_console(app, wizard.session_id, [submitted])
+    assert statements  # the session was loaded: the retained snapshot is older
+    interaction = state["session"]["interactions"][0]
+    assert interaction["initial_ranking"] == list(reversed(ranking))
+    assert state["session"]["version"] == submitted["id"]
+
+
 def test_a_change_the_retained_state_does_not_hold_is_read_from_the_database(
     app: FastAPI, client: TestClient, wizard: WizardBot, phone: ParticipantBot
 ) -> None:
