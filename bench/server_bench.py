@@ -70,16 +70,9 @@ def run_real(
 ) -> dict[str, Any]:
     with Server.chameleons(database_url, sessions=3 * phones) as (server, setup):
         real = RealServer.of(server, setup)
-        result = {}
-        for name, wizard_max in (("think_instant", 0.0), ("think_paced", wizard_think)):
-            figures, walkers = Figures(), [real.new_phone() for _ in range(phones)]
-            paces = [Pace(random.Random(seed + i), think_max, wizard_max) for i in range(phones)]
-            with server_cpu(server, figures):
-                run_threads([partial(walk_session, phone, figures, pace)
-                             for phone, pace in zip(walkers, paces, strict=True)])  # fmt: skip
-            for phone in walkers:
-                real.release(phone, figures)
-            result[name] = figures.summary()
+        result = {name: walk_phones(real, phones, think_max, wizard_max, seed)
+                  for name, wizard_max in (("think_instant", 0.0),
+                                           ("think_paced", wizard_think))}  # fmt: skip
         result["burst"] = burst(real, phones)
         return result
 
@@ -95,14 +88,23 @@ def run_split(
     with Server.chameleons(database_url, sessions=phones,
                            phone_servers=phone_servers) as (server, setup):  # fmt: skip
         real = RealServer.of(server, setup)
-        figures, walkers = Figures(), [real.new_phone() for _ in range(phones)]
-        paces = [Pace(random.Random(seed + i), think_max, wizard_think) for i in range(phones)]
-        with server_cpu(server, figures, *real.phone_servers):
-            run_threads([partial(walk_session, phone, figures, pace)
-                         for phone, pace in zip(walkers, paces, strict=True)])  # fmt: skip
-        for phone in walkers:
-            real.release(phone, figures)
-        return {**figures.summary(), "phone_servers": phone_servers}
+        walked = walk_phones(real, phones, think_max, wizard_think, seed)
+        return {**walked, "phone_servers": phone_servers}
+
+
+def walk_phones(
+    real: RealServer, phones: int, think_max: float, wizard_max: float, seed: int
+) -> dict[str, Any]:
+    """``phones`` new sessions walked at once, each at its own seeded pace; the figures,
+    with the CPU of every server process the phones used."""
+    figures, walkers = Figures(), [real.new_phone() for _ in range(phones)]
+    paces = [Pace(random.Random(seed + i), think_max, wizard_max) for i in range(phones)]
+    with server_cpu(real.server, figures, *real.phone_servers):
+        run_threads([partial(walk_session, phone, figures, pace)
+                     for phone, pace in zip(walkers, paces, strict=True)])  # fmt: skip
+    for phone in walkers:
+        real.release(phone, figures)
+    return figures.summary()
 
 
 def burst(real: RealServer, phones: int) -> dict[str, Any]:
