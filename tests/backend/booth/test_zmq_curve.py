@@ -53,6 +53,9 @@ def bridge(app: FastAPI, client: TestClient, keys: Path) -> Iterator[Bridge]:
     client.portal.call(bridge.stop)
 
 
+INJECTED = Path("/etc/passwd")  # the control's path: a file outside any data directory
+
+
 def injected(interaction_id: int, outside: Path) -> list[bytes]:
     body = {"interaction_id": interaction_id, "files": {"participant": str(outside)},
             "frames": {"participant": 100}}  # fmt: skip
@@ -80,8 +83,14 @@ def inject(endpoint: str, frames: list[bytes], until_seen: Any, *, keys: curve.C
         context.term()
 
 
-def delivered(seen: list[Message]) -> bool:
-    return any(m.type == "recording_stopped" for m in seen)
+def delivered(seen: list[Message], path: Path) -> bool:
+    """The injected ``recording_stopped`` (naming ``path``) arrived. The real worker sends
+    its own ``recording_stopped`` when it stops (its files are in the data directory): that
+    one got through CURVE legitimately and is not the injection."""
+    return any(
+        m.type == "recording_stopped" and str(path) in m.body.get("files", {}).values()
+        for m in seen
+    )
 
 
 def outside_file(tmp_path: Path) -> Path:
@@ -115,11 +124,11 @@ def test_a_client_without_the_key_cannot_inject_a_recording(
         wizard.advance(1, "discussion")
         started = wait_for_event(wizard, "recording.started")
         frames = injected(started["interaction_id"], outside)
-        inject(bridge.telemetry_endpoint, frames, lambda: delivered(seen))  # no key at all
-        inject(bridge.telemetry_endpoint, frames, lambda: delivered(seen), keys=stranger)
+        inject(bridge.telemetry_endpoint, frames, lambda: delivered(seen, outside))  # no key at all
+        inject(bridge.telemetry_endpoint, frames, lambda: delivered(seen, outside), keys=stranger)
         beats = until(lambda: bridge.latest_telemetry(BOOTH)[0], what="the worker's heartbeat")
     assert beats["booth"] == BOOTH  # CURVE let the real worker in
-    assert not delivered(seen)
+    assert not delivered(seen, outside)
     assert str(outside) not in indexed(app)
     assert not any("elsewhere" in path for path in indexed(app))
 
@@ -134,14 +143,14 @@ def test_the_same_injection_gets_through_a_plain_link() -> None:
         bridge.add_listener("event.", seen.append)
         await bridge.start()
         try:
-            frames = injected(1, Path("/etc/passwd"))
+            frames = injected(1, INJECTED)
             await asyncio.to_thread(inject, bridge.telemetry_endpoint, frames,
-                                    lambda: delivered(seen), seconds=20.0)  # fmt: skip
+                                    lambda: delivered(seen, INJECTED), seconds=20.0)  # fmt: skip
         finally:
             await bridge.stop()
 
     asyncio.run(main())
-    assert delivered(seen)
+    assert delivered(seen, INJECTED)
 
 
 def test_without_keys_only_loopback_endpoints_are_allowed() -> None:
