@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -28,7 +27,7 @@ from chameleons.backend.display.protocol import (
     pong_message,
 )
 from chameleons.backend.display.tokens import is_valid_booth
-from chameleons.backend.events import guard
+from chameleons.backend.events import guard, jsontext
 from chameleons.backend.routing import make_router
 
 router = make_router(tags=["display"])
@@ -53,7 +52,7 @@ async def _serve(websocket: WebSocket, booth: str, token: str | None) -> None:
     channel = get_display_channel(websocket.app)
     async with guard.guarded(websocket):
         with channel.subscribe(booth, by_link=token is not None) as subscription:
-            await guard.send_text(websocket, json.dumps(hello_message(booth)))
+            await guard.send_text(websocket, jsontext.dumps(hello_message(booth)))
             sender = asyncio.create_task(_send_loop(websocket, subscription))
             receiver = asyncio.create_task(_receive_loop(websocket, channel, subscription))
             tasks = {sender, receiver}
@@ -101,7 +100,7 @@ async def _send_loop(websocket: WebSocket, subscription: Subscription) -> None:
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             message = await subscription.get()
-            await guard.send_text(websocket, json.dumps(message, separators=(",", ":")))
+            await guard.send_text(websocket, jsontext.dumps(message))
 
 
 async def _receive_loop(

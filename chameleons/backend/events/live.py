@@ -14,7 +14,7 @@ from collections.abc import Awaitable, Callable
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from chameleons.backend.events import guard
+from chameleons.backend.events import guard, jsontext
 from chameleons.backend.events.hub import Message, Subscription
 
 OnChange = Callable[[list[Message]], Awaitable[bool]]  # True: stop serving
@@ -22,7 +22,7 @@ OnChange = Callable[[list[Message]], Awaitable[bool]]  # True: stop serving
 
 async def send_json(websocket: WebSocket, message: Message) -> None:
     """Send one message; a client that does not read it in time is disconnected (guard)."""
-    await guard.send_text(websocket, json.dumps(message, separators=(",", ":")))
+    await guard.send_text(websocket, jsontext.dumps(message))
 
 
 async def _answer_incoming(websocket: WebSocket) -> None:

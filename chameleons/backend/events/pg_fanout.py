@@ -35,6 +35,7 @@ from sqlalchemy import text
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session
 
+from chameleons.backend.events import jsontext
 from chameleons.backend.events.hub import RESYNC, LiveHub, Message
 from chameleons.backend.events.repository import pending_notices
 
@@ -56,10 +57,10 @@ def libpq_url(database_url: str) -> str | None:
 
 
 def encode(origin: str, channel: str, message: Message) -> str:
-    payload = json.dumps({"o": origin, "c": channel, "m": message}, separators=(",", ":"))
-    if len(payload.encode()) <= MAX_PAYLOAD:
-        return payload
-    return json.dumps({"o": origin, "c": channel, "m": RESYNC}, separators=(",", ":"))
+    payload = jsontext.dump_bytes({"o": origin, "c": channel, "m": message})
+    if len(payload) <= MAX_PAYLOAD:
+        return payload.decode()
+    return jsontext.dumps({"o": origin, "c": channel, "m": RESYNC})
 
 
 def notify_on_commit(db: Session) -> int:

@@ -8,6 +8,7 @@ the response. After the commit, the events recorded in the transaction go to the
 
 from __future__ import annotations
 
+import threading
 from collections.abc import AsyncIterator, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from typing import Annotated, Any
@@ -37,37 +38,61 @@ def get_hub(request: Request) -> LiveHub:
     return hub
 
 
+HUB_KEY = "live_hub"  # in ``Session.info``: the hub a session publishes to after commits
+_listening = threading.Lock()
+_listens = False
+
+
 def attach_hub(db: Session, hub: LiveHub) -> None:
-    """Publish the events recorded in ``db`` after each commit; forget them on rollback."""
+    """Publish the events recorded in ``db`` after each commit; forget them on rollback.
 
-    def after_commit(session: Session) -> None:
-        # Retained first: a reader woken by the events below finds the state they made.
-        for channel, value in session.info.pop(RETAIN_KEY, {}).items():
-            hub.retain(channel, value)
-        published: list[Event] = session.info.pop(OUTBOX_KEY, [])
-        for event in published:
-            if event.session_id is not None:
-                hub.publish(
-                    session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
-                )
-        for session_id in session.info.pop(RESYNC_KEY, []):
-            hub.forget(session_channel(session_id))
-            hub.publish(session_channel(session_id), RESYNC)
-        for session_id in session.info.pop(GONE_KEY, []):
-            hub.forget(session_channel(session_id))
-            hub.publish(session_channel(session_id), GONE)
-        for channel, message in session.info.pop(NOTICES_KEY, []):
-            hub.publish(channel, message)
+    The listeners are the ``Session`` class's, installed once per process: a listener
+    added to each session cost a request more than its whole unit of work's bookkeeping
+    (SQLAlchemy builds a dispatcher per instance; 1-2 % of the server's CPU in
+    bench/server_bench.py, docs/performance.md). Sessions without a hub are left alone."""
+    _listen_once()
+    db.info[HUB_KEY] = hub
 
-    def after_rollback(session: Session) -> None:
-        session.info.pop(OUTBOX_KEY, None)
-        session.info.pop(GONE_KEY, None)
-        session.info.pop(RESYNC_KEY, None)
-        session.info.pop(RETAIN_KEY, None)
-        session.info.pop(NOTICES_KEY, None)
 
-    sa_event.listen(db, "after_commit", after_commit)
-    sa_event.listen(db, "after_rollback", after_rollback)
+def _listen_once() -> None:
+    global _listens
+    if _listens:
+        return
+    with _listening:
+        if not _listens:
+            sa_event.listen(Session, "after_commit", _after_commit)
+            sa_event.listen(Session, "after_rollback", _after_rollback)
+            _listens = True
+
+
+def _after_commit(session: Session) -> None:
+    hub: LiveHub | None = session.info.get(HUB_KEY)
+    if hub is None:
+        return
+    # Retained first: a reader woken by the events below finds the state they made.
+    for channel, value in session.info.pop(RETAIN_KEY, {}).items():
+        hub.retain(channel, value)
+    published: list[Event] = session.info.pop(OUTBOX_KEY, [])
+    for event in published:
+        if event.session_id is not None:
+            hub.publish(
+                session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
+            )
+    for session_id in session.info.pop(RESYNC_KEY, []):
+        hub.forget(session_channel(session_id))
+        hub.publish(session_channel(session_id), RESYNC)
+    for session_id in session.info.pop(GONE_KEY, []):
+        hub.forget(session_channel(session_id))
+        hub.publish(session_channel(session_id), GONE)
+    for channel, message in session.info.pop(NOTICES_KEY, []):
+        hub.publish(channel, message)
+
+
+def _after_rollback(session: Session) -> None:
+    if HUB_KEY not in session.info:
+        return
+    for key in (OUTBOX_KEY, GONE_KEY, RESYNC_KEY, RETAIN_KEY, NOTICES_KEY):
+        session.info.pop(key, None)
 
 
 def write_scope(factory: sessionmaker[Session], hub: LiveHub) -> Iterator[Session]:

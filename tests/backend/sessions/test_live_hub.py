@@ -82,3 +82,37 @@ def test_only_committed_events_are_published(engine: Engine) -> None:
 
     received = asyncio.run(scenario())
     assert [m["event"]["kind"] for m in received] == ["kept"]  # type: ignore[index]
+
+
+def test_each_commit_publishes_once_whatever_the_sessions_and_threads(engine: Engine) -> None:
+    """The commit listeners are the ``Session`` class's (``unit_of_work``), so every session
+    hears every commit: sessions attached at once on many threads, each attached twice,
+    publish each of their events exactly once, and a session never attached publishes
+    nothing."""
+    hub = LiveHub()
+    factory = build_sessionmaker(engine)
+    with factory.begin() as db:
+        session_id = populate(db, participants=1).session_ids[0]
+
+    def commit(kind: str) -> None:
+        with write_session(factory, hub) as db:
+            attach_hub(db, hub)  # a second time: still one publication
+            events.record(db, kind, source="test", session_id=session_id)
+
+    def unattached() -> None:
+        with factory.begin() as db:
+            events.record(db, "silent", source="test", session_id=session_id)
+
+    kinds = [f"kept-{i}" for i in range(8)]
+
+    async def scenario() -> list[str]:
+        async with hub.subscribe(session_channel(session_id)) as listener:
+            await asyncio.gather(*(asyncio.to_thread(commit, k) for k in kinds))
+            await asyncio.to_thread(unattached)
+            await asyncio.to_thread(commit, "last")
+            published: list[str] = []
+            while "last" not in published:  # "last" is committed after all the others
+                published.append((await asyncio.wait_for(listener.get(), 5))["event"]["kind"])
+            return [*published, *(m["event"]["kind"] for m in listener.drain())]
+
+    assert sorted(asyncio.run(scenario())) == sorted([*kinds, "last"])
