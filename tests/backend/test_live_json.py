@@ -7,7 +7,7 @@ import json
 import math
 
 from chameleons.backend.events import jsontext, pg_fanout
-from chameleons.backend.events.hub import RESYNC
+from chameleons.backend.events.hub import RESYNC, LiveHub
 
 CONSOLE_LIKE = {
     "type": "console",
@@ -58,3 +58,20 @@ def test_a_notify_payload_is_measured_in_utf8_bytes() -> None:
     too_big = pg_fanout.encode("o", "session:1", {"note": "Ü" * 4000})
     assert len(("Ü" * 4000).encode()) > pg_fanout.MAX_PAYLOAD
     assert json.loads(too_big)["m"] == RESYNC
+
+
+def test_a_process_skips_its_own_notifications_and_reads_the_others() -> None:
+    """PostgreSQL delivers a process's NOTIFYs to its own LISTEN too: those are recognised by
+    their first bytes, so only another process's message reaches the hub."""
+    delivered: list[tuple[str, dict[str, object]]] = []
+
+    class Hub(LiveHub):
+        def deliver(self, channel: str, message: dict[str, object]) -> None:
+            delivered.append((channel, message))
+
+    ours = pg_fanout.PgFanout(Hub(), "postgresql://unused")
+    other = pg_fanout.PgFanout(LiveHub(), "postgresql://unused")
+    ours._receive(pg_fanout.encode(ours.origin, "session:1", {"type": "event", "n": 1}))
+    ours._receive(pg_fanout.encode(other.origin, "session:1", {"type": "event", "n": 2}))
+    ours._receive("{not json")  # logged as unreadable and dropped, not raised
+    assert delivered == [("session:1", {"type": "event", "n": 2})]

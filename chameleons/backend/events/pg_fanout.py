@@ -85,6 +85,8 @@ class PgFanout:
         self.hub = hub
         self.conninfo = conninfo
         self.origin = uuid.uuid4().hex
+        # How every payload this process sends begins (``encode``: the origin comes first).
+        self._own_prefix = jsontext.dumps({"o": self.origin})[:-1] + ","
         self._outbox: asyncio.Queue[str] = asyncio.Queue(maxsize=10_000)
         self.listening = asyncio.Event()
         self.dropped = 0  # messages not sent because the outbox was full
@@ -97,11 +99,11 @@ class PgFanout:
     def send_presence(self) -> None:
         body: dict[str, Any] = {"o": self.origin, "p": self.hub.local_presence()}
         # Which phones (for the console's list of two phones on one link), when it fits.
-        detailed = json.dumps({**body, "d": self.hub.local_details()}, separators=(",", ":"))
-        if len(detailed.encode()) <= MAX_PAYLOAD:
-            self._queue(detailed)
+        detailed = jsontext.dump_bytes({**body, "d": self.hub.local_details()})
+        if len(detailed) <= MAX_PAYLOAD:
+            self._queue(detailed.decode())
             return
-        self._queue(json.dumps(body, separators=(",", ":")))
+        self._queue(jsontext.dumps(body))
 
     def _queue(self, payload: str) -> None:
         try:
@@ -159,6 +161,8 @@ class PgFanout:
             self.send_presence()
 
     def _receive(self, payload: str) -> None:
+        if payload.startswith(self._own_prefix):
+            return  # PostgreSQL sends this process's NOTIFYs back to it: nothing to read
         try:
             body = json.loads(payload)
             origin = body["o"]
