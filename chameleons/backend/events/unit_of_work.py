@@ -46,10 +46,10 @@ _listens = False
 def attach_hub(db: Session, hub: LiveHub) -> None:
     """Publish the events recorded in ``db`` after each commit; forget them on rollback.
 
-    The listeners are the ``Session`` class's, installed once per process: a listener
-    added to each session cost a request more than its whole unit of work's bookkeeping
-    (SQLAlchemy builds a dispatcher per instance; 1-2 % of the server's CPU in
-    bench/server_bench.py, docs/performance.md). Sessions without a hub are left alone."""
+    The listeners are the ``Session`` class's, installed once per process: listeners of a
+    session's own make SQLAlchemy build a dispatcher for that session, which took 1.5-2.5 %
+    of the server's CPU samples in bench/server_bench.py (docs/performance.md). Sessions
+    without a hub are left alone."""
     _listen_once()
     db.info[HUB_KEY] = hub
 
