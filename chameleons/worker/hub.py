@@ -52,6 +52,7 @@ from chameleons.worker.envelope import EnvelopeError, Message, deserialize
 from chameleons.worker.stage import (
     DISPLAY_PREFIX,
     EVENT_PREFIX,
+    FINAL_LINGER_MS,
     POLL_MS,
     STATS_PREFIX,
     Endpoints,
@@ -70,6 +71,8 @@ StatsSource = Callable[[], Mapping[str, Any]]
 LocalHandler = Callable[[Mapping[str, Any]], Mapping[str, Any]]  # body -> result
 STAGE_WAIT = 2.0  # seconds a command waits for its stage to connect
 RETRY_INTERVAL = 0.01
+FINAL_DRAIN_MS = 100  # the hub's last reads: until the stages' sockets are quiet this long
+FINAL_DRAIN_LIMIT = 2.0  # ... or this many seconds (a stage that did not stop keeps talking)
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,8 +135,15 @@ class ControlHub:
                 if sub in events:
                     for message in receive_messages(sub, self.errors):
                         self._on_stage_message(message, uplink)
+            # The other stages have stopped (the worker stops the hub last): what they said
+            # on the way out (the robot closed, a recording stopped) still goes to the server.
+            deadline = time.monotonic() + FINAL_DRAIN_LIMIT
+            while sub.poll(FINAL_DRAIN_MS) and time.monotonic() < deadline:
+                for message in receive_messages(sub, self.errors):
+                    self._on_stage_message(message, uplink)
         finally:
-            for socket in sockets:
+            uplink.close(linger=FINAL_LINGER_MS)
+            for socket in (server, stages, sub):
                 socket.close(linger=0)
 
     def _open(self) -> tuple[zmq.Socket[bytes], ...]:

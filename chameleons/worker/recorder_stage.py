@@ -47,6 +47,7 @@ from chameleons.worker.recording import (
     write_problem,
 )
 from chameleons.worker.stage import (
+    FINAL_LINGER_MS,
     PARTICIPANT_TOPIC,
     POLL_MS,
     SENT_TOPIC,
@@ -131,7 +132,7 @@ class RecorderStage:
         finally:
             self._close_all()  # a clean stop keeps the files readable
             sub.close(linger=0)
-            self._pub.close(linger=0)
+            self._pub.close(linger=FINAL_LINGER_MS)
             port.close()
 
     def _send(self, message: Message) -> None:

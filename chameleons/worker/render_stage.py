@@ -36,6 +36,7 @@ from chameleons.worker.playback import lipsync_from_message
 from chameleons.worker.renderer import RenderConfig, RenderCore, RenderLoop
 from chameleons.worker.stage import (
     AGENT_TOPIC,
+    FINAL_LINGER_MS,
     PLAYBACK_PREFIX,
     POLL_MS,
     SENT_TOPIC,
@@ -98,7 +99,7 @@ class RendererStage:
             receiver.join(timeout=5)
             self.driver.close()
             self._handle_driver_events()
-            self._pub.close(linger=0)
+            self._pub.close(linger=FINAL_LINGER_MS)
 
     def _publish(self, message: Message) -> None:
         if self._pub is not None and not send_message(self._pub, message):

@@ -38,6 +38,8 @@ STATS_PREFIX = "stats."
 EVENT_PREFIX = "event."
 DISPLAY_PREFIX = "display."
 POLL_MS = 100  # how often a blocked stage looks at its stop flag
+# A stage's last words on stopping (robot closed, recording stopped) get this long to leave.
+FINAL_LINGER_MS = 1000
 
 
 @dataclass(frozen=True, slots=True)

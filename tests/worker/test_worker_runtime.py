@@ -157,3 +157,19 @@ def test_the_same_stages_run_over_ipc_sockets(
             assert sorted(p.name for p in directory.iterdir())[0].endswith(".sock")
     finally:
         shutil.rmtree(directory, ignore_errors=True)
+
+
+@pytest.mark.parametrize("attempt", range(3))
+def test_what_the_stages_say_on_stopping_reaches_the_server(
+    context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer, attempt: int
+) -> None:
+    """The hub stops after the other stages, so their last words (the robot closed, a
+    recording stopped) are carried out; before, the hub could leave first and drop them."""
+    worker = Worker(_config(peer), context=context).start()
+    try:
+        peer.wait(lambda: peer.of_type("heartbeat"), timeout=10)  # the hub is up
+    finally:
+        worker.stop()
+    closed = peer.wait(lambda: [m for m in peer.of_type("robot_state")
+                                if m.body.get("state") == "closed"], timeout=10)  # fmt: skip
+    assert closed[0].topic == f"event.{BOOTH}"

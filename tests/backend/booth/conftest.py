@@ -90,14 +90,13 @@ def worker(bridge: Bridge, tmp_path: Path) -> Iterator[Worker]:
 
 @contextlib.contextmanager
 def running_worker(bridge: Bridge, config: WorkerConfig) -> Iterator[Worker]:
-    """A started worker, known to the bridge; stopped at the end unless stopped already."""
+    """A started worker, known to the bridge; stopped at the end."""
     running = Worker(config).start()
     try:
         until(lambda: running.hub.instance in _instances(bridge), what="the worker's hello")
         yield running
     finally:
-        if not running.stop_event.is_set():
-            running.stop()
+        running.stop()
 
 
 def _instances(bridge: Bridge) -> set[str]:
