@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
-from sqlalchemy import func, select, update
+from sqlalchemy import bindparam, func, select, update
 from sqlalchemy.orm import Session
 
 from chameleons.backend.auth.socket_revocation import announce_ended
@@ -51,6 +51,14 @@ def start(db: Session, user: StaffUser, hours: float) -> str:
     return key
 
 
+# One statement, built once (every staff request and socket asks): the session with its user.
+SIGNED_IN = (
+    select(StaffSession, StaffUser)
+    .join(StaffUser, StaffUser.id == StaffSession.user_id)
+    .where(StaffSession.key_hash == bindparam("key_hash"))
+)
+
+
 def _key_hash(cookie: Mapping[str, Any]) -> str | None:
     key = cookie.get(SESSION_KEY)
     return _hash(key) if isinstance(key, str) and key else None
@@ -69,13 +77,7 @@ def signed_in(db: Session, cookie: Mapping[str, Any]) -> tuple[StaffUser, int] |
     key_hash = _key_hash(cookie)
     if key_hash is None:
         return None
-    # One statement (every staff request and socket asks): the session with its user.
-    query = (
-        select(StaffSession, StaffUser)
-        .join(StaffUser, StaffUser.id == StaffSession.user_id)
-        .where(StaffSession.key_hash == key_hash)
-    )
-    found = db.execute(query).first()
+    found = db.execute(SIGNED_IN, {"key_hash": key_hash}).first()
     if found is None:
         return None
     record, user = found._tuple()

@@ -6,7 +6,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from typing import Any
 
-from sqlalchemy import func, select
+from sqlalchemy import bindparam, func, select
 from sqlalchemy.orm import Session
 
 from chameleons.backend.models import Event
@@ -82,10 +82,16 @@ def record(
     return event
 
 
+# Built once (see sessions.flow.SUGGESTIONS_OF_INTERACTIONS): every submission asks both.
+BY_CLIENT_ID = select(Event).where(
+    Event.session_id == bindparam("session_id"), Event.client_id == bindparam("client_id")
+)
+NEWEST_ID = select(func.max(Event.id)).where(Event.session_id == bindparam("session_id"))
+
+
 def find_by_client_id(db: Session, session_id: int, client_id: str) -> Event | None:
-    return db.scalars(
-        select(Event).where(Event.session_id == session_id, Event.client_id == client_id)
-    ).first()
+    found = db.scalars(BY_CLIENT_ID, {"session_id": session_id, "client_id": client_id})
+    return found.first()
 
 
 def for_session(db: Session, session_id: int, after_id: int = 0, limit: int = 1000) -> list[Event]:
@@ -100,7 +106,7 @@ def for_session(db: Session, session_id: int, after_id: int = 0, limit: int = 10
 
 def last_id(db: Session, session_id: int) -> int:
     """The newest event's id: a version number of the session that only grows."""
-    value = db.scalar(select(func.max(Event.id)).where(Event.session_id == session_id))
+    value = db.scalar(NEWEST_ID, {"session_id": session_id})
     return int(value or 0)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import bindparam, select
 
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse
 from chameleons.backend.sessions.consent import BEFORE_POSITION, waiting_before_start
@@ -61,27 +61,35 @@ def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
     return flow.spec.questionnaires_for("final" if position == FINAL_POSITION else "interaction")
 
 
+# Built once (see sessions.flow.SUGGESTIONS_OF_INTERACTIONS): every page and snapshot asks.
+ANSWERED = (
+    select(QuestionnaireResponse.questionnaire)
+    .distinct()
+    .where(
+        QuestionnaireResponse.session_id == bindparam("session_id"),
+        QuestionnaireResponse.position == bindparam("position"),
+    )
+)
+ANSWERED_BY_POSITION = (
+    select(QuestionnaireResponse.position, QuestionnaireResponse.questionnaire)
+    .distinct()
+    .where(QuestionnaireResponse.session_id == bindparam("session_id"))
+)
+
+
 def answered(flow: Flow, position: int) -> set[str]:
     """Ids of the questionnaires of this position already stored (a copy)."""
     if position not in flow.answered_memo:
-        query = (
-            select(QuestionnaireResponse.questionnaire)
-            .distinct()
-            .where(
-                QuestionnaireResponse.session_id == flow.session.id,
-                QuestionnaireResponse.position == position,
-            )
-        )
-        flow.answered_memo[position] = set(flow.db.scalars(query))
+        found = flow.db.scalars(ANSWERED, {"session_id": flow.session.id, "position": position})
+        flow.answered_memo[position] = set(found)
     return set(flow.answered_memo[position])
 
 
 def answered_by_position(flow: Flow) -> dict[int, set[str]]:
     """``answered`` for every position of the session, in one query (the snapshot's)."""
-    query = select(QuestionnaireResponse.position, QuestionnaireResponse.questionnaire).distinct()
-    query = query.where(QuestionnaireResponse.session_id == flow.session.id)
     found: dict[int, set[str]] = {}
-    for position, questionnaire in flow.db.execute(query):
+    rows = flow.db.execute(ANSWERED_BY_POSITION, {"session_id": flow.session.id})
+    for position, questionnaire in rows:
         found.setdefault(position, set()).add(questionnaire)
     for position in (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION):
         flow.answered_memo[position] = set(found.get(position, ()))

@@ -7,10 +7,12 @@ now": the 409 sentences and the wizard console's buttons both come from it.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
+from typing import Literal
 
-from sqlalchemy import ColumnElement, select
+from sqlalchemy import Select, bindparam, select
 from sqlalchemy.orm import Session
 
 from chameleons.backend.db import write_transaction
@@ -28,6 +30,23 @@ from chameleons.backend.studies.errors import ConflictError, InvalidInputError, 
 from chameleons.backend.studies.specs import spec_of
 from chameleons.experiment.model import Study
 from chameleons.i18n import N_
+
+# Statements that every request and live update runs, built once with bound parameters:
+# building one and its cache key took about 90 microseconds a call, a few per cent of the
+# server's CPU (docs/performance.md, "Statements built once"). Statements are immutable,
+# so threads share them.
+SUGGESTIONS_OF_INTERACTIONS = (
+    select(Suggestion)
+    .where(Suggestion.interaction_id.in_(bindparam("ids", expanding=True)))
+    .order_by(Suggestion.interaction_id, Suggestion.index)
+)
+KeyColumn = Literal["id", "phone_token"]  # how a flow is found: the session's id or link
+FlowRow = tuple[SessionRow, StudyRow, Participant]
+INTERACTIONS_QUERY = (
+    select(Interaction)
+    .where(Interaction.session_id == bindparam("session_id"))
+    .order_by(Interaction.position)
+)
 
 
 def as_utc(moment: datetime) -> datetime:
@@ -65,23 +84,13 @@ class Flow:
         return self.session.current_position >= len(self.interactions)
 
     def suggestions(self, interaction: Interaction) -> list[Suggestion]:
-        query = (
-            select(Suggestion)
-            .where(Suggestion.interaction_id == interaction.id)
-            .order_by(Suggestion.index)
-        )
-        return list(self.db.scalars(query))
+        return list(self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": [interaction.id]}))
 
     def suggestions_by_interaction(self) -> dict[int, list[Suggestion]]:
         """``suggestions`` of every interaction, in one query (the snapshot's)."""
         ids = [interaction.id for interaction in self.interactions]
-        query = (
-            select(Suggestion)
-            .where(Suggestion.interaction_id.in_(ids))
-            .order_by(Suggestion.interaction_id, Suggestion.index)
-        )
         found: dict[int, list[Suggestion]] = {i: [] for i in ids}
-        for suggestion in self.db.scalars(query):
+        for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
             found[suggestion.interaction_id].append(suggestion)
         return found
 
@@ -117,46 +126,42 @@ class Flow:
 
 
 def load(db: Session, session_id: int, *, lock: bool = True) -> Flow:
-    return _load(db, SessionRow.id == session_id, lock, f"There is no session {session_id}.")
+    return _load(db, "id", session_id, lock, f"There is no session {session_id}.")
 
 
 def load_by_token(db: Session, token: str, *, lock: bool = True) -> Flow:
     return _load(
-        db,
-        SessionRow.phone_token == token,
-        lock,
+        db, "phone_token", token, lock,
         N_("This link is not valid. Please ask the experimenter for help."),
-    )
+    )  # fmt: skip
 
 
-def _load(db: Session, which: ColumnElement[bool], lock: bool, missing: str) -> Flow:
-    """The session with its study and participant in one statement (every request and
-    every live update loads a flow: statements are most of a request's cost,
-    docs/performance.md), then its interactions."""
+@functools.cache
+def _session_query(column: KeyColumn, lock: bool) -> Select[FlowRow]:
+    """The session with its study and participant, by ``column`` (bound as ``key``), built
+    once per variant (see ``SUGGESTIONS_OF_INTERACTIONS``)."""
     query = (
         select(SessionRow, StudyRow, Participant)
         .join(StudyRow, StudyRow.id == SessionRow.study_id)
         .join(Participant, Participant.id == SessionRow.participant_id)
-        .where(which)
+        .where(getattr(SessionRow, column) == bindparam("key"))
     )
+    # Serialises changes of one session (two wizards, wizard and phone at once): the
+    # session's row lock on PostgreSQL (its row only: the study's and participant's are
+    # shared); on SQLite FOR UPDATE is a no-op (see db.write_transaction).
+    return query.with_for_update(of=SessionRow) if lock else query
+
+
+def _load(db: Session, column: KeyColumn, key: object, lock: bool, missing: str) -> Flow:
+    """The session with its study and participant in one statement (statements are most
+    of a request's cost, docs/performance.md), then its interactions."""
     if lock:
-        # Serialises changes of one session (two wizards, wizard and phone at once): the
-        # session's row lock on PostgreSQL (its row only: the study's and participant's are
-        # shared), the write lock taken first on SQLite (FOR UPDATE is a no-op there; see
-        # db.write_transaction).
-        write_transaction(db)
-        query = query.with_for_update(of=SessionRow)
-    found = db.execute(query).first()
+        write_transaction(db)  # SQLite: the write lock first
+    found = db.execute(_session_query(column, lock), {"key": key}).first()
     if found is None:
         raise NotFoundError(missing)
     session, study, participant = found._tuple()
-    interactions = list(
-        db.scalars(
-            select(Interaction)
-            .where(Interaction.session_id == session.id)
-            .order_by(Interaction.position)
-        )
-    )
+    interactions = list(db.scalars(INTERACTIONS_QUERY, {"session_id": session.id}))
     return Flow(db, session, study, spec_of(study), participant, interactions)
 
 
