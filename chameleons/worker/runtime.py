@@ -46,7 +46,6 @@ from chameleons.worker.stage import Endpoints, ParticipantBus
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
 GIL_SWITCH_INTERVAL = 0.0005  # seconds
-HUB_THREAD = f"worker-{ControlHub.name}"
 
 
 class Stage(Protocol):
@@ -131,8 +130,8 @@ class Worker:
         # The hub stops last, once the other stages have: it carries their last words out
         # (the robot's "closed", a recording's "stopped") to the server.
         self._hub_stop = threading.Event()
-        self._stages_running = 0
-        self._stages_lock = threading.Lock()
+        self._hub_thread: threading.Thread | None = None
+        self._stop_lock = threading.Lock()
         self._stopped = False
         self.failed = threading.Event()
         self.receivers: dict[str, Receiver] = {}
@@ -175,12 +174,13 @@ class Worker:
     def start(self) -> Worker:
         if self._threads:
             raise RuntimeError("this worker has been started already")
-        self._stages_running = len(self.stages) - 1  # all but the hub
         for stage in self.stages:
             thread = threading.Thread(target=self._guard, args=(stage,),
                                       name=f"worker-{stage.name}", daemon=True)  # fmt: skip
             thread.start()
             self._threads.append(thread)
+            if stage is self.hub:
+                self._hub_thread = thread
         try:
             self._start_capture()
         except OSError:
@@ -193,25 +193,12 @@ class Worker:
         return self
 
     def _guard(self, stage: Stage) -> None:
-        is_hub = stage is self.hub
         try:
-            stage.run(self._hub_stop if is_hub else self.stop_event)
+            stage.run(self._hub_stop if stage is self.hub else self.stop_event)
         except Exception:
             log.exception("worker stage %s crashed: stopping the worker", stage.name)
             self.failed.set()
             self.stop_event.set()
-        finally:
-            if is_hub:
-                self.stop_event.set()
-            else:
-                self._stage_done()
-
-    def _stage_done(self) -> None:
-        with self._stages_lock:
-            self._stages_running -= 1
-            last = self._stages_running == 0
-        if last:
-            self._hub_stop.set()
 
     def _start_capture(self) -> None:
         from chameleons.worker.ingest.receivers import FaceCaptureXReceiver, LiveLinkReceiver
@@ -250,7 +237,7 @@ class Worker:
 
     def stop(self, timeout: float = 5.0) -> None:
         """Stop every stage (the hub last) and free the sockets; a second call does nothing."""
-        with self._stages_lock:
+        with self._stop_lock:
             if self._stopped:
                 return
             self._stopped = True
@@ -260,13 +247,12 @@ class Worker:
                 receiver.stop(timeout)
             except RuntimeError:
                 log.exception("capture receiver did not stop")
-        hub = [t for t in self._threads if t.name == HUB_THREAD]
         for thread in self._threads:
-            if thread.name != HUB_THREAD:
+            if thread is not self._hub_thread:
                 thread.join(timeout)
-        self._hub_stop.set()  # in case a stage did not stop in time
-        for thread in hub:
-            thread.join(timeout)
+        self._hub_stop.set()
+        if self._hub_thread is not None:
+            self._hub_thread.join(timeout)
         if self._own_context:
             self.context.term()
         if self._own_endpoints:
