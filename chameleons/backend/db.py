@@ -107,6 +107,14 @@ def request_threads(engine: Engine) -> int:
     return POOL_SIZE + POOL_OVERFLOW
 
 
+_READ_ONLY = "chameleons_read_only"
+
+
+def is_read_only(db: Session) -> bool:
+    """``db`` came from ``build_read_sessionmaker``: nothing in it can change."""
+    return bool(db.info.get(_READ_ONLY))
+
+
 def build_sessionmaker(engine: Engine) -> sessionmaker[Session]:
     return sessionmaker(bind=engine, expire_on_commit=False)
 
@@ -124,7 +132,7 @@ def build_read_sessionmaker(engine: Engine) -> sessionmaker[Session]:
     statement in them raises: in autocommit it would be kept."""
     postgres = engine.dialect.name == "postgresql"
     bind = engine.execution_options(isolation_level="AUTOCOMMIT") if postgres else engine
-    factory = sessionmaker(bind=bind, expire_on_commit=False)
+    factory = sessionmaker(bind=bind, expire_on_commit=False, info={_READ_ONLY: True})
     event.listen(factory, "before_flush", _refuse_flush)
     event.listen(factory, "do_orm_execute", _refuse_write)
     return factory

@@ -36,7 +36,9 @@ def texts(flow: Flow) -> Study:
 def phone_state(flow: Flow, version: int | None = None) -> PhoneState:
     """``version``: the session's newest event id, when the caller has read it already."""
     state = _view(flow)
-    state["version"] = events.last_id(flow.db, flow.session.id) if version is None else version
+    if version is None:  # a read-only flow read its version with the session
+        version = events.last_id(flow.db, flow.session.id) if flow.version is None else flow.version
+    state["version"] = version
     state["of"] = len(flow.interactions)
     state["language"] = flow.session.language
     if may_choose_language(flow):  # offered on the first page, before consent

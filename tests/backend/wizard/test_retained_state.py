@@ -115,3 +115,23 @@ def test_a_console_on_another_address_gets_its_own_links(
     assert phone["url"] == f"http://lab.example/p/{wizard.token}"
     assert phone["join_url"] == "http://lab.example/join"
     assert started["phone"]["url"] == f"{BASE_URL}/p/{wizard.token}"  # the wizard's own
+
+
+def test_a_read_only_console_read_takes_the_version_with_the_session(
+    app: FastAPI, client: TestClient, wizard: WizardBot, phone: ParticipantBot
+) -> None:
+    """The console's refresh (a read-only session) reads the session's newest event id in
+    the session's own statement, not in one of its own; the version is the same."""
+    wizard.start()
+    wizard.advance(1, "discussion")
+    wizard.advance(1, "ranking")
+    phone.submit_ranking(1, list(wizard.interaction(1)["presented_order"]))
+    submitted = newest_event(app, wizard.session_id)
+    with app.state.read_sessionmaker() as db, statements_here() as statements:
+        state = console_state(db, app.state, wizard.session_id, BASE_URL, [submitted])
+    assert state["session"]["version"] == submitted["id"]
+    assert not any(s.lstrip().startswith("SELECT max(event.id)") for s in statements)
+    assert any("max(event.id)" in s and "FROM session" in s for s in statements)
+    with statements_here() as written:  # a session that may write asks on its own, as before
+        assert read_console(app, wizard.session_id, [submitted])["session"] == state["session"]
+    assert any(s.lstrip().startswith("SELECT max(event.id)") for s in written)
