@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from chameleons.backend.events import repository as events
 from chameleons.backend.models import Interaction
 from chameleons.backend.sessions.answers import (
     DONT_KNOW,
@@ -36,9 +35,7 @@ def texts(flow: Flow) -> Study:
 def phone_state(flow: Flow, version: int | None = None) -> PhoneState:
     """``version``: the session's newest event id, when the caller has read it already."""
     state = _view(flow)
-    if version is None:  # a read-only flow read its version with the session
-        version = events.last_id(flow.db, flow.session.id) if flow.version is None else flow.version
-    state["version"] = version
+    state["version"] = flow.newest_event_id() if version is None else version
     state["of"] = len(flow.interactions)
     state["language"] = flow.session.language
     if may_choose_language(flow):  # offered on the first page, before consent

@@ -70,6 +70,11 @@ class Flow:
     # read only (``_load``): nothing can change it then. None: ask ``events.last_id``.
     version: int | None = None
 
+    def newest_event_id(self) -> int:
+        """The session's version: read with the session when it was loaded read-only, else
+        asked now (after this flow's own changes, if any)."""
+        return events.last_id(self.db, self.session.id) if self.version is None else self.version
+
     def interaction(self, position: int) -> Interaction:
         for interaction in self.interactions:
             if interaction.position == position:
@@ -156,7 +161,7 @@ def _session_query(column: KeyColumn, lock: bool) -> Select[FlowRow]:
 
 
 # A read-only load takes the session's newest event id (its version) in the same statement:
-# one round trip less for every console refresh and phone read (docs/performance.md).
+# one round trip less for every console refresh (docs/performance.md).
 _NEWEST_EVENT_OF_SESSION = (
     select(func.max(Event.id)).where(Event.session_id == SessionRow.id).scalar_subquery()
 )

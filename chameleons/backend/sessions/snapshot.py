@@ -69,7 +69,7 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
         "final_questionnaire": _progress(flow, FINAL_POSITION, done.get(FINAL_POSITION, set())),
         "allowed": actions,
         "allowed_sentence": allowed_sentence(actions),
-        "version": events.last_id(flow.db, session.id) if flow.version is None else flow.version,
+        "version": flow.newest_event_id(),
     }
 
 
