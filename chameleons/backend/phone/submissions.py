@@ -19,6 +19,7 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event
 from chameleons.backend.phone.retained import retained_state
 from chameleons.backend.sessions.flow import Flow, load_by_token
+from chameleons.backend.sessions.snapshot import retain, session_snapshot
 
 Receipt = dict[str, Any]
 
@@ -41,6 +42,10 @@ def submit(db: Session, token: str, client_id: str, store: Callable[[Flow], Even
 
 
 def _receipt(flow: Flow, event: Event, duplicate: bool) -> Receipt:
+    # The console's state as this change leaves it, kept for the console woken by the
+    # change (its links and phones are the reader's own: sessions.snapshot.committed).
+    snapshot = session_snapshot(flow, "", [])
+    retain(flow, snapshot)
     return {
         "saved": True,
         "duplicate": duplicate,
@@ -48,5 +53,5 @@ def _receipt(flow: Flow, event: Event, duplicate: bool) -> Receipt:
         "kind": event.kind,
         "stored": event.payload,
         "saved_at": events.iso(event.server_time),
-        "state": retained_state(flow),  # also the phone socket's next view
+        "state": retained_state(flow, snapshot["version"]),  # the phone socket's next view
     }

@@ -62,14 +62,6 @@ def questionnaires_for(flow: Flow, position: int) -> tuple[Questionnaire, ...]:
 
 
 # Built once (see sessions.flow.SUGGESTIONS_OF_INTERACTIONS): every page and snapshot asks.
-ANSWERED = (
-    select(QuestionnaireResponse.questionnaire)
-    .distinct()
-    .where(
-        QuestionnaireResponse.session_id == bindparam("session_id"),
-        QuestionnaireResponse.position == bindparam("position"),
-    )
-)
 ANSWERED_BY_POSITION = (
     select(QuestionnaireResponse.position, QuestionnaireResponse.questionnaire)
     .distinct()
@@ -79,21 +71,22 @@ ANSWERED_BY_POSITION = (
 
 def answered(flow: Flow, position: int) -> set[str]:
     """Ids of the questionnaires of this position already stored (a copy)."""
-    if position not in flow.answered_memo:
-        found = flow.db.scalars(ANSWERED, {"session_id": flow.session.id, "position": position})
-        flow.answered_memo[position] = set(found)
-    return set(flow.answered_memo[position])
+    return set(answered_by_position(flow).get(position, ()))
 
 
 def answered_by_position(flow: Flow) -> dict[int, set[str]]:
-    """``answered`` for every position of the session, in one query (the snapshot's)."""
-    found: dict[int, set[str]] = {}
-    rows = flow.db.execute(ANSWERED_BY_POSITION, {"session_id": flow.session.id})
-    for position, questionnaire in rows:
-        found.setdefault(position, set()).add(questionnaire)
-    for position in (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION):
-        flow.answered_memo[position] = set(found.get(position, ()))
-    return found
+    """``answered`` for every position of the session that has answers. One query per flow:
+    a page's submission asks several times (may it store, is the part done, what does the
+    phone see next, the console's state it leaves), and its one writer keeps the memo
+    current (``submit_questionnaire``)."""
+    positions = (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION)
+    if any(position not in flow.answered_memo for position in positions):
+        found: dict[int, set[str]] = {position: set() for position in positions}
+        rows = flow.db.execute(ANSWERED_BY_POSITION, {"session_id": flow.session.id})
+        for position, questionnaire in rows:
+            found.setdefault(position, set()).add(questionnaire)
+        flow.answered_memo.update(found)
+    return {position: set(ids) for position, ids in flow.answered_memo.items() if ids}
 
 
 def submit_questionnaire(
