@@ -71,14 +71,19 @@ ANSWERED_BY_POSITION = (
 
 def answered(flow: Flow, position: int) -> set[str]:
     """Ids of the questionnaires of this position already stored (a copy)."""
-    return set(answered_by_position(flow).get(position, ()))
+    return set(_answered_memo(flow).get(position, ()))
 
 
 def answered_by_position(flow: Flow) -> dict[int, set[str]]:
-    """``answered`` for every position of the session that has answers. One query per flow:
-    a page's submission asks several times (may it store, is the part done, what does the
-    phone see next, the console's state it leaves), and its one writer keeps the memo
-    current (``submit_questionnaire``)."""
+    """``answered`` for every position of the session that has answers (copies)."""
+    return {position: set(ids) for position, ids in _answered_memo(flow).items() if ids}
+
+
+def _answered_memo(flow: Flow) -> dict[int, set[str]]:
+    """Every position's stored questionnaire ids, read in one query once per flow: a page's
+    submission asks several times (may it store, is the part done, what does the phone see
+    next, the console's state it leaves), and its one writer keeps the memo current
+    (``submit_questionnaire``)."""
     positions = (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION)
     if any(position not in flow.answered_memo for position in positions):
         found: dict[int, set[str]] = {position: set() for position in positions}
@@ -86,7 +91,7 @@ def answered_by_position(flow: Flow) -> dict[int, set[str]]:
         for position, questionnaire in rows:
             found.setdefault(position, set()).add(questionnaire)
         flow.answered_memo.update(found)
-    return {position: set(ids) for position, ids in flow.answered_memo.items() if ids}
+    return flow.answered_memo
 
 
 def submit_questionnaire(
