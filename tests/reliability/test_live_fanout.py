@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import secrets
 import socket
 import subprocess
@@ -31,12 +32,24 @@ from websockets.sync.client import ClientConnection, connect
 from websockets.sync.connection import Connection
 
 from chameleons.backend.app import create_app
-from chameleons.backend.events.hub import RESYNC
+from chameleons.backend.events import jsontext
+from chameleons.backend.events.hub import RESYNC, session_channel
 from chameleons.backend.events.pg_fanout import MAX_PAYLOAD, encode
 from chameleons.backend.phone import devices
-from chameleons.backend.sessions.snapshot import phone_presence_key
+from chameleons.backend.phone.retained import PHONE_VIEW, committed
+from chameleons.backend.phone.view import phone_state
+from chameleons.backend.sessions.flow import load_by_token
+from chameleons.backend.sessions.snapshot import CONSOLE_VIEW, phone_presence_key
 from chameleons.settings import Settings
-from tests.support.bots import ParticipantBot, WizardBot, staff_api, study_with_plan
+from tests.backend.wizard.test_retained_state import newest_event, read_console, statements_here
+from tests.support.bots import (
+    HttpClient,
+    ParticipantBot,
+    WizardBot,
+    drive_session,
+    staff_api,
+    study_with_plan,
+)
 from tests.support.live_server import LiveServer
 
 WAIT_S = 120.0
@@ -136,6 +149,77 @@ def test_a_phone_on_one_server_updates_a_console_on_the_other(
             lambda: console_app.state.live_hub.present(key) == 0,
             "the other server sees the phone leave",
         )
+
+
+def _kept_version(app: FastAPI, session_id: int, view: str) -> int | None:
+    found = app.state.live_hub.retained(session_channel(session_id), view)
+    return None if found is None else int(found["version"])
+
+
+@dataclass
+class PhoneOnOtherServer(ParticipantBot):
+    """A phone on one server, its wizard and console on the other. Before each submission
+    the phone's server keeps the phone view the wizard's last action committed; after it,
+    the console's server keeps the state the answer committed (both came through NOTIFY).
+    Each is taken without a statement and equals a fresh read."""
+
+    apps: tuple[FastAPI, FastAPI] | None = None  # (the phone's, the console's)
+    session_id: int = 0
+    checked: int = 0
+
+    def _send(self, kind: str, body: dict[str, Any]) -> dict[str, Any]:
+        self._check_phone_view()
+        receipt = super()._send(kind, body)
+        self._check_console_state()
+        self.checked += 1
+        return receipt
+
+    def _apps(self) -> tuple[FastAPI, FastAPI]:
+        assert self.apps is not None
+        return self.apps
+
+    def _check_phone_view(self) -> None:
+        phone_app, console_app = self._apps()
+        newest = newest_event(console_app, self.session_id)["id"]
+        wait_until(lambda: _kept_version(phone_app, self.session_id, PHONE_VIEW) == newest,
+                   "the phone's server keeps the view the wizard's action made")  # fmt: skip
+        batch = [{"type": "event", "event": {"id": newest}}]
+        with statements_here() as statements:
+            kept = committed(phone_app.state.live_hub, self.session_id, batch)
+        assert statements == []
+        with phone_app.state.sessionmaker() as db:
+            fresh = phone_state(load_by_token(db, self.token, lock=False))
+        assert json.loads(jsontext.dumps(kept)) == json.loads(jsontext.dumps(fresh))
+
+    def _check_console_state(self) -> None:
+        _, console_app = self._apps()
+        newest = newest_event(console_app, self.session_id)
+        wait_until(lambda: _kept_version(console_app, self.session_id, CONSOLE_VIEW)
+                   == newest["id"], "the console's server keeps the answer's state")  # fmt: skip
+        with statements_here() as statements:
+            kept = read_console(console_app, self.session_id, [newest])
+        assert statements == []
+        assert kept["session"] == read_console(console_app, self.session_id, None)["session"]
+
+
+def test_the_views_a_change_made_reach_the_other_server_with_its_events(
+    two_servers: tuple[Served, Served], engine: Engine
+) -> None:
+    """A whole session, the phone on one server and the wizard on the other: neither server
+    loads the session again for the other's changes (docs/performance.md)."""
+    (phone_server, phone_app), (console_server, console_app) = two_servers
+    with (
+        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
+        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+    ):
+        pi = staff_api(staff_http, engine, "pi")
+        wizard = WizardBot.create(pi, study_with_plan(pi))
+        http: HttpClient = phone_http
+        phone = PhoneOnOtherServer(http, wizard.token, apps=(phone_app, console_app),
+                                   session_id=wizard.session_id)  # fmt: skip
+        result = drive_session(wizard, phone, random.Random(5))
+    assert result.snapshot["state"] == "complete"
+    assert phone.checked == len(phone.sent) >= 2 * len(result.snapshot["interactions"])
 
 
 def test_a_message_too_large_for_notify_becomes_a_resync() -> None:

@@ -25,6 +25,17 @@ RESYNC: Message = {"type": "resync"}
 RETAINED_CHANNELS = 1024
 
 
+# Message types from another process after which the views kept for the channel are stale
+# (events.repository's resync after a rewrite, and gone after a withdrawal).
+PEER_FORGETS = frozenset({"resync", "gone"})
+
+
+def _version(views: dict[str, Message]) -> int:
+    """The newest version among a commit's views (each view's ``version``: the session's
+    newest event id when it was made)."""
+    return max((int(view.get("version") or 0) for view in views.values()), default=0)
+
+
 def session_channel(session_id: int) -> str:
     return f"session:{session_id}"
 
@@ -60,6 +71,8 @@ class Relay(Protocol):
     """Carries this process's messages to other server processes (events.pg_fanout)."""
 
     def send(self, channel: str, message: Message) -> None: ...
+
+    def send_retained(self, channel: str, views: dict[str, Message]) -> None: ...
 
     def send_presence(self) -> None: ...
 
@@ -100,6 +113,11 @@ class LiveHub:
 
     def publish(self, channel: str, message: Message) -> None:
         """Deliver ``message`` to the channel's subscribers; safe from any thread."""
+        self._on_loop(self._publish_here, channel, message)
+
+    def _on_loop(self, call: Callable[[str, Message], None], channel: str, value: Any) -> None:
+        """``call(channel, value)`` on the hub's loop: at once when called there, else in
+        the order of calls from any thread (a commit's retained views before its events)."""
         loop = self._loop
         if loop is None or loop.is_closed():
             return  # nobody has ever subscribed in a running loop
@@ -108,13 +126,17 @@ class LiveHub:
         except RuntimeError:
             running = None
         if running is loop:
-            self._publish_here(channel, message)
+            call(channel, value)
             return
         with contextlib.suppress(RuntimeError):  # the loop closed meanwhile: nobody listens
-            loop.call_soon_threadsafe(self._publish_here, channel, message)
+            loop.call_soon_threadsafe(call, channel, value)
 
     def deliver(self, channel: str, message: Message) -> None:
-        """A message another process published (on the loop): to subscribers and listeners."""
+        """A message another process published (on the loop): to subscribers and listeners.
+        A resync or gone also drops the views kept from that process: what they showed has
+        been rewritten or deleted."""
+        if message.get("type") in PEER_FORGETS:
+            self.forget(channel)
         self._deliver(channel, message)
 
     def _publish_here(self, channel: str, message: Message) -> None:
@@ -124,14 +146,33 @@ class LiveHub:
 
     def retain(self, channel: str, views: dict[str, Message]) -> None:
         """Keep ``views`` (one value per reader: the console's, the phone's) as the channel's
-        latest committed state, for readers in this process (as MQTT's retained message; not
-        relayed to other processes). Safe from any thread; the least recently retained
-        channels are forgotten beyond ``RETAINED_CHANNELS``."""
+        latest committed state (as MQTT's retained message), and send them to the other
+        server processes through the relay, before the events of the same commit. Safe from
+        any thread; the least recently retained channels are forgotten beyond
+        ``RETAINED_CHANNELS``."""
+        self._keep(channel, views)
+        if self._relay is not None:
+            self._on_loop(self._relay_retained, channel, views)
+
+    def retain_from_peer(self, channel: str, views: dict[str, Message]) -> None:
+        """Views another process retained (on the loop): kept unless this process keeps
+        views of a newer version already (a change here committed after that one)."""
+        with self._retained_lock:
+            kept = self._retained.get(channel)
+            if kept is not None and _version(kept) > _version(views):
+                return
+        self._keep(channel, views)
+
+    def _keep(self, channel: str, views: dict[str, Message]) -> None:
         with self._retained_lock:
             self._retained[channel] = views
             self._retained.move_to_end(channel)
             while len(self._retained) > RETAINED_CHANNELS:
                 self._retained.popitem(last=False)
+
+    def _relay_retained(self, channel: str, views: dict[str, Message]) -> None:
+        if self._relay is not None:
+            self._relay.send_retained(channel, views)
 
     def retained(self, channel: str, view: str) -> Message | None:
         """The value of ``view`` last retained on ``channel`` (shared: readers must not

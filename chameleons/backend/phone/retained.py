@@ -7,8 +7,9 @@ action answers with the session's snapshot, beside which the view costs no state
 Once that transaction commits, the live hub keeps the view (as the console's,
 ``sessions.snapshot.retain``), and a socket woken by that commit's events sends it when
 its version (the session's newest event id when it was made) is the newest event the
-socket was just sent. Anything else (another process's change, a change that made no
-view) is read from the database as before.
+socket was just sent. Another server process's views come through the fan-out
+(``events.pg_fanout``) before their events and are taken the same way. Anything else (a
+change that made no view, views too large for a NOTIFY) is read from the database as before.
 """
 
 from __future__ import annotations

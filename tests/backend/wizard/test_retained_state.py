@@ -1,7 +1,8 @@
 """A wizard action's committed snapshot is kept by the live hub, so the console woken by that
 action's events takes it instead of loading the session again, whatever address the console
 uses (docs/performance.md); any other change (one the retained state does not include: a
-wizard's note, another process's change) is read from the database."""
+wizard's note) is read from the database. Views made on another server process:
+tests/reliability/test_live_fanout.py."""
 
 from __future__ import annotations
 
