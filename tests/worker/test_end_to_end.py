@@ -24,6 +24,7 @@ DELAY = 0.5
 TICK = 1 / 125
 POSES = [Pose(0.0, 0.0, 0.0), Pose(20.0, 5.0, 0.8), Pose(-15.0, 0.0, 0.1)]
 STEPS = [0.0, 0.6, 1.6]
+LOAD_SLACK = 0.25  # seconds a loaded machine may add to the delay, not take from it
 
 
 @pytest.fixture
@@ -72,19 +73,23 @@ def test_the_robot_copies_the_face_delay_seconds_later(
     heads, faces = robot.of_type("request.face.headpose"), robot.of_type("request.face.params")
     step1, step2 = phone.sent_at[1], phone.sent_at[2]
 
-    # Head: the filtered yaw crosses half the step DELAY after the participant moved.
+    # Head: the filtered yaw crosses half the step DELAY after the participant moved. Never
+    # earlier; later only by what a busy machine adds between the phone, the worker and the
+    # peer (77 ms was seen with the browser tests running on 2 cores): the bound still tells
+    # DELAY from no delay or twice it. The realised delay on a quiet machine (within 1 ms at
+    # p99) is bench/worker_bench.py's figure.
     crossing = _first_after(heads, step1, lambda m: m["yaw"] > 10.0)
-    assert crossing.time - step1 == pytest.approx(DELAY, abs=0.06)
-    settled = _first_after(heads, step1 + DELAY + 0.2, lambda m: True).message
+    assert DELAY - 0.06 <= crossing.time - step1 <= DELAY + LOAD_SLACK
+    settled = _first_after(heads, step1 + DELAY + 0.2 + LOAD_SLACK, lambda m: True).message
     assert settled["yaw"] == pytest.approx(20.0, abs=0.1)  # degrees, same side
     assert settled["pitch"] == pytest.approx(5.0, abs=0.1)
     assert settled["relative"] is False
     back = _first_after(heads, step2, lambda m: m["yaw"] < 2.5)  # half way back to -15
-    assert back.time - step2 == pytest.approx(DELAY, abs=0.06)  # garbage came in between
+    assert DELAY - 0.06 <= back.time - step2 <= DELAY + LOAD_SLACK  # garbage came in between
 
     # Face: JAW_OPEN steps too (face parameters every 40 ms, unfiltered).
     opened = _first_after(faces, step1, lambda m: m["params"]["JAW_OPEN"] > 0.4)
-    assert -0.02 < opened.time - step1 - DELAY < 0.1
+    assert -0.02 < opened.time - step1 - DELAY < LOAD_SLACK
     assert set(opened.message["params"]) == {upper_snake(n) for n in BLENDSHAPE_NAMES[:-1]}
     # The first face message past the step may fall between two captured frames (the copy
     # interpolates); the next one, a phone frame later and more, holds the new value.
