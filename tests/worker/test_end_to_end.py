@@ -28,7 +28,7 @@ LOAD_SLACK = 0.25  # seconds a loaded machine may add to the delay, not take fro
 
 
 @pytest.fixture
-def context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
+def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     yield ctx
     ctx.term()
@@ -47,16 +47,16 @@ def _send_garbage(port: int) -> None:
 
 @pytest.mark.slow
 def test_the_robot_copies_the_face_delay_seconds_later(
-    context: zmq.Context[zmq.Socket[bytes]],
+    zmq_context: zmq.Context[zmq.Socket[bytes]],
 ) -> None:
-    control = ControlPeer(context)
+    control = ControlPeer(zmq_context)
     config = WorkerConfig(
         booth="e2e", driver="furhat", behaviour="copy", copy_delay=DELAY, mirror=False,
         livelink_port=0, facecapturex_port=None, capture_host="127.0.0.1",
         command_endpoint=control.command_endpoint, telemetry_endpoint=control.telemetry_endpoint,
     )  # fmt: skip
     with FurhatPeer() as robot:
-        worker = Worker(replace(config, robot_url=robot.url), context=context).start()
+        worker = Worker(replace(config, robot_url=robot.url), context=zmq_context).start()
         try:
             port = worker.receivers["livelink"].port
             with SteppingPhone(port, POSES, STEPS) as phone:

@@ -20,15 +20,15 @@ SENTENCE = "The road is about seventy miles away."
 
 
 @pytest.fixture
-def context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
+def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     yield ctx
     ctx.term()
 
 
 @pytest.fixture
-def server(context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    peer = ControlPeer(context)
+def server(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
+    peer = ControlPeer(zmq_context)
     yield peer
     peer.close()
 
@@ -62,10 +62,10 @@ def _say(server: ControlPeer, prompt: str, voice: str | None) -> dict[str, objec
 
 
 def test_a_typed_sentence_is_said_by_the_furhats_own_tts_in_the_actors_voice(
-    context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
+    zmq_context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
 ) -> None:
     robot = FurhatPeer(speech_seconds=0.4)
-    with robot, Worker(_config(server, "furhat", robot.url), context=context):
+    with robot, Worker(_config(server, "furhat", robot.url), context=zmq_context):
         _connected(server)
         result = _say(server, "typed-1", "Joanna-Neural")
         start = _speech(server, "speech_start", "typed-1")
@@ -89,12 +89,12 @@ def test_a_typed_sentence_is_said_by_the_furhats_own_tts_in_the_actors_voice(
 
 
 def test_without_a_study_voice_the_robot_keeps_its_own_and_a_prompt_under_way_is_stopped(
-    context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
+    zmq_context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
 ) -> None:
     # The prompt speaks for a minute (still speaking however busy the machine when the text
     # comes: 1.5 s ran out at load 12); the text is short.
     robot = FurhatPeer(speech_seconds=60.0)
-    with robot, Worker(_config(server, "furhat", robot.url), context=context):
+    with robot, Worker(_config(server, "furhat", robot.url), context=zmq_context):
         _connected(server)
         audio = {"prompt_id": "p1", "audio_url": "http://s/p1.wav"}
         played = server.command(BOOTH, "play_prompt", audio)
@@ -118,9 +118,9 @@ def test_without_a_study_voice_the_robot_keeps_its_own_and_a_prompt_under_way_is
 
 
 def test_a_robot_without_tts_refuses_the_text(
-    context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
+    zmq_context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
 ) -> None:
-    with Worker(_config(server, "null"), context=context):
+    with Worker(_config(server, "null"), context=zmq_context):
         ack = server.command(BOOTH, "play_prompt", {"prompt_id": "typed-1", "audio_url": "",
                                                     "text": SENTENCE})  # fmt: skip
     assert (ack.ok, ack.error) == (False, "no_tts")

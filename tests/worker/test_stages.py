@@ -23,7 +23,7 @@ Context = zmq.Context[zmq.Socket[bytes]]
 
 
 @pytest.fixture
-def context() -> Iterator[Context]:
+def zmq_context() -> Iterator[Context]:
     ctx: Context = zmq.Context()
     yield ctx
     ctx.term()
@@ -39,15 +39,15 @@ def _receive(socket: zmq.Socket[bytes], count: int, timeout: float = 5.0) -> lis
     return messages
 
 
-def test_behaviour_stage_publishes_keyframes_ahead_on_the_tick_grid(context: Context) -> None:
+def test_behaviour_stage_publishes_keyframes_ahead_on_the_tick_grid(zmq_context: Context) -> None:
     endpoints = Endpoints.inproc("stage-test")
-    participant = context.socket(zmq.PUB)
+    participant = zmq_context.socket(zmq.PUB)
     participant.bind(endpoints.participant)  # stands in for the participant bus
-    hub = context.socket(zmq.ROUTER)
+    hub = zmq_context.socket(zmq.ROUTER)
     hub.bind(endpoints.stage_control)
-    agent = context.socket(zmq.SUB)
+    agent = zmq_context.socket(zmq.SUB)
     agent.setsockopt(zmq.SUBSCRIBE, b"face.agent")
-    stage = BehaviourStage(context, endpoints, BehaviourStageConfig(
+    stage = BehaviourStage(zmq_context, endpoints, BehaviourStageConfig(
         initial="copy", initial_params={"delay": 0.2}, lookahead_ticks=3))  # fmt: skip
     stop = threading.Event()
     thread = threading.Thread(target=stage.run, args=(stop,))
@@ -85,16 +85,16 @@ def test_behaviour_stage_publishes_keyframes_ahead_on_the_tick_grid(context: Con
 
 
 def test_virtual_driver_relays_frames_and_takes_speech_from_the_server(
-    context: Context, tmp_path: Path
+    zmq_context: Context, tmp_path: Path
 ) -> None:
-    peer = ControlPeer(context)
+    peer = ControlPeer(zmq_context)
     config = WorkerConfig(booth="v", driver="virtual", livelink_port=None, facecapturex_port=None,
                           command_endpoint=peer.command_endpoint,
                           telemetry_endpoint=peer.telemetry_endpoint)  # fmt: skip
     curve = tmp_path / "p.csv"
     curve.write_text("time,jawOpen\n0,0\n1,1\n")
     try:
-        with Worker(config, context=context):
+        with Worker(config, context=zmq_context):
             assert peer.command("v", "set_face", {"face_id": "kid"}).ok
             assert peer.command("v", "play_prompt", {"prompt_id": "p", "audio_url": "/a.wav",
                                                      "lipsync_path": str(curve)}).ok  # fmt: skip

@@ -21,15 +21,15 @@ BOOTH = "booth-t"
 
 
 @pytest.fixture
-def context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
+def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     yield ctx
     ctx.term()
 
 
 @pytest.fixture
-def peer(context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    server = ControlPeer(context)
+def peer(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
+    server = ControlPeer(zmq_context)
     yield server
     server.close()
 
@@ -45,8 +45,8 @@ def _config(peer: ControlPeer, **overrides: object) -> WorkerConfig:
 
 
 @pytest.fixture
-def worker(context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer) -> Iterator[Worker]:
-    with Worker(_config(peer), context=context) as running:
+def worker(zmq_context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer) -> Iterator[Worker]:
+    with Worker(_config(peer), context=zmq_context) as running:
         yield running
 
 
@@ -130,24 +130,24 @@ def test_recording_writes_participant_and_agent_streams(
     assert again.result["files"]["agent"].endswith("interaction-7-part2-agent.parquet")
 
 
-def test_default_copy_delay_is_4_000_seconds(context: zmq.Context[zmq.Socket[bytes]],
+def test_default_copy_delay_is_4_000_seconds(zmq_context: zmq.Context[zmq.Socket[bytes]],
                                               peer: ControlPeer) -> None:  # fmt: skip
     config = _config(peer, behaviour="copy")
     assert config.initial_params() == {"delay": 4.0}
-    with Worker(config, context=context) as running:
+    with Worker(config, context=zmq_context) as running:
         status = peer.command(BOOTH, "status").result
         assert running.behaviour.router.current_name == "copy"
     assert status["booth"] == BOOTH
 
 
 def test_the_same_stages_run_over_ipc_sockets(
-    context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer
+    zmq_context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer
 ) -> None:
     """Only the endpoints change between threads (inproc) and processes (ipc/tcp)."""
     directory = Path(tempfile.mkdtemp(prefix="chm-", dir="/tmp"))  # ipc paths must be short
     try:
         config = _config(peer, endpoints=Endpoints.ipc(BOOTH, directory))
-        with Worker(config, context=context) as running:
+        with Worker(config, context=zmq_context) as running:
             assert peer.command(
                 BOOTH, "set_behaviour", {"name": "natural", "params": {"seed": 1}}
             ).ok
@@ -161,11 +161,11 @@ def test_the_same_stages_run_over_ipc_sockets(
 
 @pytest.mark.parametrize("attempt", range(3))
 def test_what_the_stages_say_on_stopping_reaches_the_server(
-    context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer, attempt: int
+    zmq_context: zmq.Context[zmq.Socket[bytes]], peer: ControlPeer, attempt: int
 ) -> None:
     """The hub stops after the other stages, so their last words (the robot closed, a
     recording stopped) are carried out; before, the hub could leave first and drop them."""
-    worker = Worker(_config(peer), context=context).start()
+    worker = Worker(_config(peer), context=zmq_context).start()
     try:
         peer.wait(lambda: peer.of_type("heartbeat"), timeout=10)  # the hub is up
     finally:
