@@ -99,6 +99,20 @@ def _console(
     )
 
 
+@contextmanager
+def _wizard_and_phone(
+    console_url: str, phone_url: str, engine: Engine
+) -> Iterator[tuple[httpx.Client, httpx.Client, WizardBot]]:
+    """Staff HTTP on the console's server, the phone's on the other, and a new session's
+    wizard (a PI's study with a plan)."""
+    with (
+        httpx.Client(base_url=console_url, timeout=WAIT_S) as staff_http,
+        httpx.Client(base_url=phone_url, timeout=WAIT_S) as phone_http,
+    ):
+        pi = staff_api(staff_http, engine, "pi")
+        yield staff_http, phone_http, WizardBot.create(pi, study_with_plan(pi))
+
+
 def _next_matching(socket: Connection, match: Callable[[Any], bool]) -> Any:
     deadline = time.monotonic() + WAIT_S
     while time.monotonic() < deadline:
@@ -112,12 +126,11 @@ def test_a_phone_on_one_server_updates_a_console_on_the_other(
     two_servers: tuple[Served, Served], engine: Engine
 ) -> None:
     (phone_server, phone_app), (console_server, console_app) = two_servers
-    with (
-        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
-        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+    with _wizard_and_phone(console_server.url, phone_server.url, engine) as (
+        staff_http,
+        phone_http,
+        wizard,
     ):
-        pi = staff_api(staff_http, engine, "pi")
-        wizard = WizardBot.create(pi, study_with_plan(pi))
         with _console(console_server, wizard.session_id, staff_http) as console:
             _next_matching(console, lambda m: m.get("type") == "snapshot")
             ParticipantBot(phone_http, wizard.token).consent(True, client_id="fanout-consent")
@@ -208,12 +221,11 @@ def test_the_views_a_change_made_reach_the_other_server_with_its_events(
     """A whole session, the phone on one server and the wizard on the other: neither server
     loads the session again for the other's changes (docs/performance.md)."""
     (phone_server, phone_app), (console_server, console_app) = two_servers
-    with (
-        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
-        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+    with _wizard_and_phone(console_server.url, phone_server.url, engine) as (
+        _staff_http,
+        phone_http,
+        wizard,
     ):
-        pi = staff_api(staff_http, engine, "pi")
-        wizard = WizardBot.create(pi, study_with_plan(pi))
         http: HttpClient = phone_http
         phone = PhoneOnOtherServer(http, wizard.token, apps=(phone_app, console_app),
                                    session_id=wizard.session_id)  # fmt: skip
@@ -249,20 +261,19 @@ def test_a_server_whose_database_connections_drop_reconnects_and_carries_on(
     )
     assert fanout.backend_pids[1] not in before
     with (
-        httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
-        httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+        _wizard_and_phone(console_server.url, phone_server.url, engine) as (
+            staff_http,
+            phone_http,
+            wizard,
+        ),
+        _console(console_server, wizard.session_id, staff_http) as console,
     ):
-        pi = staff_api(staff_http, engine, "pi")
-        wizard = WizardBot.create(pi, study_with_plan(pi))
-        with _console(console_server, wizard.session_id, staff_http) as console:
-            _next_matching(console, lambda m: m.get("type") == "snapshot")
-            ParticipantBot(phone_http, wizard.token).consent(True, client_id="after-reconnect")
-            _next_matching(
-                console,
-                lambda m: (
-                    m.get("type") == "event" and m["event"].get("client_id") == "after-reconnect"
-                ),
-            )
+        _next_matching(console, lambda m: m.get("type") == "snapshot")
+        ParticipantBot(phone_http, wizard.token).consent(True, client_id="after-reconnect")
+        _next_matching(
+            console,
+            lambda m: m.get("type") == "event" and m["event"].get("client_id") == "after-reconnect",
+        )
 
 
 def test_a_logout_on_one_server_closes_the_staff_sockets_on_the_other(
@@ -363,21 +374,21 @@ def test_two_serve_processes_carry_a_phone_answer_to_the_other_ones_console(
         wait_until(lambda: phone_server.ready() and console_server.ready(), "both answer")
         wait_until(lambda: _listening_connections(engine) >= 2, "both processes listen")
         with (
-            httpx.Client(base_url=console_server.url, timeout=WAIT_S) as staff_http,
-            httpx.Client(base_url=phone_server.url, timeout=WAIT_S) as phone_http,
+            _wizard_and_phone(console_server.url, phone_server.url, engine) as (
+                staff_http,
+                phone_http,
+                wizard,
+            ),
+            _console(console_server, wizard.session_id, staff_http) as console,
         ):
-            pi = staff_api(staff_http, engine, "pi")
-            wizard = WizardBot.create(pi, study_with_plan(pi))
-            with _console(console_server, wizard.session_id, staff_http) as console:
-                _next_matching(console, lambda m: m.get("type") == "snapshot")
-                phone = ParticipantBot(phone_http, wizard.token)
-                phone.consent(True, client_id="between-processes")
-                event = _next_matching(
-                    console,
-                    lambda m: (
-                        m.get("type") == "event"
-                        and m["event"].get("client_id") == "between-processes"
-                    ),
-                )
-                assert event["event"]["session_id"] == wizard.session_id
-                assert event["event"]["kind"] == "consent.given"
+            _next_matching(console, lambda m: m.get("type") == "snapshot")
+            phone = ParticipantBot(phone_http, wizard.token)
+            phone.consent(True, client_id="between-processes")
+            event = _next_matching(
+                console,
+                lambda m: (
+                    m.get("type") == "event" and m["event"].get("client_id") == "between-processes"
+                ),
+            )
+            assert event["event"]["session_id"] == wizard.session_id
+            assert event["event"]["kind"] == "consent.given"
