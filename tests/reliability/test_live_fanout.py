@@ -122,6 +122,19 @@ def _next_matching(socket: Connection, match: Callable[[Any], bool]) -> Any:
     raise AssertionError("no matching message")
 
 
+def _consent_seen_by(
+    console: Connection, phone_http: httpx.Client, token: str, client_id: str
+) -> Any:
+    """The phone agrees (on its server) once the console has its first state; the event the
+    console then receives for that answer."""
+    _next_matching(console, lambda m: m.get("type") == "snapshot")
+    ParticipantBot(phone_http, token).consent(True, client_id=client_id)
+    return _next_matching(
+        console,
+        lambda m: m.get("type") == "event" and m["event"].get("client_id") == client_id,
+    )
+
+
 def test_a_phone_on_one_server_updates_a_console_on_the_other(
     two_servers: tuple[Served, Served], engine: Engine
 ) -> None:
@@ -132,14 +145,7 @@ def test_a_phone_on_one_server_updates_a_console_on_the_other(
         wizard,
     ):
         with _console(console_server, wizard.session_id, staff_http) as console:
-            _next_matching(console, lambda m: m.get("type") == "snapshot")
-            ParticipantBot(phone_http, wizard.token).consent(True, client_id="fanout-consent")
-            event = _next_matching(
-                console,
-                lambda m: (
-                    m.get("type") == "event" and m["event"].get("client_id") == "fanout-consent"
-                ),
-            )
+            event = _consent_seen_by(console, phone_http, wizard.token, "fanout-consent")
             assert event["event"]["session_id"] == wizard.session_id
             snapshot = _next_matching(console, lambda m: m.get("type") == "snapshot")
             assert snapshot["session"]["id"] == wizard.session_id
@@ -268,12 +274,7 @@ def test_a_server_whose_database_connections_drop_reconnects_and_carries_on(
         ),
         _console(console_server, wizard.session_id, staff_http) as console,
     ):
-        _next_matching(console, lambda m: m.get("type") == "snapshot")
-        ParticipantBot(phone_http, wizard.token).consent(True, client_id="after-reconnect")
-        _next_matching(
-            console,
-            lambda m: m.get("type") == "event" and m["event"].get("client_id") == "after-reconnect",
-        )
+        _consent_seen_by(console, phone_http, wizard.token, "after-reconnect")
 
 
 def test_a_logout_on_one_server_closes_the_staff_sockets_on_the_other(
@@ -381,14 +382,6 @@ def test_two_serve_processes_carry_a_phone_answer_to_the_other_ones_console(
             ),
             _console(console_server, wizard.session_id, staff_http) as console,
         ):
-            _next_matching(console, lambda m: m.get("type") == "snapshot")
-            phone = ParticipantBot(phone_http, wizard.token)
-            phone.consent(True, client_id="between-processes")
-            event = _next_matching(
-                console,
-                lambda m: (
-                    m.get("type") == "event" and m["event"].get("client_id") == "between-processes"
-                ),
-            )
+            event = _consent_seen_by(console, phone_http, wizard.token, "between-processes")
             assert event["event"]["session_id"] == wizard.session_id
             assert event["event"]["kind"] == "consent.given"
