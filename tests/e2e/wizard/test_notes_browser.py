@@ -48,7 +48,9 @@ def test_timelines_filter_and_the_pi_reads_the_same_sentences(
     ranking = phone.sent[-1]["ranking"]
     wizard.staff.post(f"/api/sessions/{wizard.session_id}/notes", {"text": "hesitated long"})
     expect(page.locator("#timeline li[data-kind='wizard.note']")).to_be_visible()
-    page.locator("#timeline-filter").get_by_role("button", name="Notes").click()
+    notes = page.locator("#timeline-filter").get_by_role("button", name="Notes")
+    notes.click()
+    expect(notes).to_have_attribute("aria-pressed", "true")
     expect(page.locator("#timeline li:visible")).to_have_count(1)
     expect(page.locator("#timeline li:visible")).to_contain_text("Note: hesitated long")
     page.locator("#timeline-filter").get_by_role("button", name="Phone").click()

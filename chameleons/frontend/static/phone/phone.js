@@ -98,6 +98,9 @@
   }
 
   function render(next) {
+    // An older view than the one shown (a submission's reply that a busy phone received
+    // after the socket's newer view) would take the participant back a step.
+    if (isOlder(next, state)) { return; }
     var wasPaused = state && state.view === "paused";
     state = next;
     if (wasPaused && next.view !== "paused") { setTimeout(flush, 0); } // answers held meanwhile
@@ -120,6 +123,13 @@
     if (heading) { heading.setAttribute("tabindex", "-1"); heading.focus({ preventScroll: true }); }
     window.scrollTo(0, 0);
     if (next.view === "ended") { forgetAll(); setConnection("ended"); setSave(""); }
+  }
+
+  /* Views carry their version, the session's newest event id when they were read; the
+   * ended and sent-away views carry none and always count. */
+  function isOlder(next, shown) {
+    return Boolean(shown) && next.version != null && shown.version != null &&
+      next.version < shown.version;
   }
 
   function panel() {

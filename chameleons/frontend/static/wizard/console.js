@@ -36,6 +36,7 @@ let gone = false; // the session was deleted (its participant withdrawn): nothin
 let promptsPosition = null;
 let sendingGroup = null;
 let flashTimer = null;
+let liveStates = 0; // console states the WebSocket has delivered
 
 const board = new PromptBoard($("prompt-sections"), $("prompt-search"), $("search-count"), play);
 const timeline = new Timeline($("timeline"), $("timeline-count"));
@@ -131,8 +132,12 @@ function expectedBehaviour() {
 }
 
 async function refresh() {
+  const before = liveStates;
   try {
-    apply(await api.console());
+    const next = await api.console();
+    // A state the WebSocket delivered meanwhile is as new as this answer or newer, and the
+    // socket sends every change after it: this answer, read earlier, would undo changes.
+    if (liveStates === before) apply(next);
   } catch (error) {
     if (error.status === 404) showGone();
     else flash(`Could not load the session: ${error.message}`);
@@ -418,7 +423,10 @@ const feed = connectLive(sessionId, {
   },
   onMessage(message) {
     if (message.type === "gone") showGone();
-    else if (message.type === "console") apply(message);
+    else if (message.type === "console") {
+      liveStates += 1;
+      apply(message);
+    }
     else if (message.type === "health") health.update(message, expectedBehaviour());
   },
 });
