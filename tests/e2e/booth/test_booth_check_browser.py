@@ -4,9 +4,11 @@ session (``booth.checked`` on its timeline)."""
 
 from __future__ import annotations
 
+import time
+
 import httpx
 import pytest
-from playwright.sync_api import Page, expect
+from playwright.sync_api import Page, Route, expect
 from sqlalchemy import Engine
 
 from tests.backend.test_auth import add_user
@@ -96,3 +98,27 @@ def test_the_page_refuses_the_check_while_an_interaction_runs_on_the_booth(
         expect(page.get_by_role("button", name="Run the check")).to_be_enabled()
         events = pi.get(f"/api/sessions/{wizard.session_id}/events")
         assert not [e for e in events if e["kind"] == "booth.checked"]
+
+
+def test_the_run_button_waits_for_the_pages_script(
+    live_server: LiveServer, page: Page, engine: Engine
+) -> None:
+    """A click before the script listens would do nothing on a slow laptop: the button comes
+    disabled and the script enables it."""
+    add_user(engine, "tech", "correct horse battery", "wizard")
+    held: list[Route] = []
+    page.route("**/booth/check.js", lambda route: held.append(route))
+    page.goto(f"{live_server.url}/login?next=/booths/booth-6/check")
+    page.get_by_label("Username").fill("tech")
+    page.get_by_label("Password").fill("correct horse battery")
+    page.get_by_role("button", name="Log in").click()
+    expect(page.get_by_role("heading", name="Booth check: booth-6")).to_be_visible()
+    button = page.get_by_role("button", name="Run the check")
+    expect(button).to_be_disabled()
+    deadline = time.monotonic() + 60
+    while not held:  # the handler runs while Playwright is being called
+        assert time.monotonic() < deadline, "the page never asked for its script"
+        page.wait_for_timeout(50)
+    expect(button).to_be_disabled()  # the script is held: the button still waits
+    held[0].continue_()
+    expect(button).to_be_enabled()

@@ -75,3 +75,4 @@ async function run() {
 }
 
 button.addEventListener("click", run);
+button.disabled = false; // the page comes with it disabled: a click before now did nothing
