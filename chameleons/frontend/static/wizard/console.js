@@ -2,6 +2,7 @@
 // rendered by the panels; every action goes to the server and comes back as events.
 
 import { createApi } from "./api.js";
+import { confirmDialog, reasonDialog } from "./dialogs.js";
 import { HealthStrip } from "./health.js";
 import { bindKeys } from "./keys.js";
 import { connectLive } from "./live.js";
@@ -257,17 +258,6 @@ function allowedNow(state, undo) {
   return sentence.replace(`; or ${clause}`, "").replace(`${clause}; or `, "");
 }
 
-function confirmDialog(text, then) {
-  const dialog = $("confirm-dialog");
-  $("confirm-text").textContent = text;
-  dialog.returnValue = "";
-  dialog.onclose = () => {
-    if (dialog.returnValue === "ok") then();
-  };
-  dialog.showModal();
-  $("confirm-ok").focus();
-}
-
 function requestSwitch(interaction, condition) {
   if (condition === interaction.condition) return;
   const position = interaction.position;
@@ -302,32 +292,12 @@ function promptsOff() {
 
 function openPauseDialog() {
   if (!state || state.session.paused) return;
-  const dialog = $("pause-dialog");
-  $("pause-note").value = "";
-  dialog.returnValue = "";
-  dialog.onclose = () => {
-    if (dialog.returnValue !== "pause") return;
-    const reason = $("pause-reason").value;
-    const note = $("pause-note").value.trim();
-    perform("pause the session", () => api.pause(reason, note));
-  };
-  dialog.showModal();
-  $("pause-reason").focus();
+  reasonDialog("pause", (reason, note) => perform("pause the session", () => api.pause(reason, note)));
 }
 
 function openEndDialog() {
   if (!state || ["complete", "ended"].includes(state.session.state)) return;
-  const dialog = $("end-dialog");
-  $("end-note").value = "";
-  dialog.returnValue = "";
-  dialog.onclose = () => {
-    if (dialog.returnValue !== "end") return;
-    const reason = $("end-reason").value;
-    const note = $("end-note").value.trim();
-    perform("end the session", () => api.end(reason, note));
-  };
-  dialog.showModal();
-  $("end-reason").focus();
+  reasonDialog("end", (reason, note) => perform("end the session", () => api.end(reason, note)));
 }
 
 async function addNote(event) {
