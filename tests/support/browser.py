@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import shutil
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sized
 from pathlib import Path
 
 import pytest
@@ -104,4 +104,14 @@ def wait_for_js(page: Page, expression: str, timeout: float = 30_000) -> None:
     while not page.evaluate(expression):
         if time.monotonic() > deadline:
             raise TimeoutError(f"{expression!r} still false after {timeout / 1000:.0f} s")
+        page.wait_for_timeout(20)
+
+
+def wait_until_routed(page: Page, taken: Sized, timeout: float = 60_000) -> None:
+    """Wait until a route handler has put a request into ``taken``: handlers run only while
+    Playwright is being called, so this polls through Playwright with a deadline."""
+    deadline = time.monotonic() + timeout / 1000
+    while not taken:
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"no request routed after {timeout / 1000:.0f} s")
         page.wait_for_timeout(20)

@@ -4,8 +4,6 @@ session (``booth.checked`` on its timeline)."""
 
 from __future__ import annotations
 
-import time
-
 import httpx
 import pytest
 from playwright.sync_api import Page, Route, expect
@@ -13,6 +11,7 @@ from sqlalchemy import Engine
 
 from tests.backend.test_auth import add_user
 from tests.support.bots import WizardBot, staff_api, study_with_plan
+from tests.support.browser import wait_until_routed
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
@@ -115,10 +114,7 @@ def test_the_run_button_waits_for_the_pages_script(
     expect(page.get_by_role("heading", name="Booth check: booth-6")).to_be_visible()
     button = page.get_by_role("button", name="Run the check")
     expect(button).to_be_disabled()
-    deadline = time.monotonic() + 60
-    while not held:  # the handler runs while Playwright is being called
-        assert time.monotonic() < deadline, "the page never asked for its script"
-        page.wait_for_timeout(50)
+    wait_until_routed(page, held)
     expect(button).to_be_disabled()  # the script is held: the button still waits
     held[0].continue_()
     expect(button).to_be_enabled()

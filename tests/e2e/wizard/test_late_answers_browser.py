@@ -8,16 +8,15 @@ only after newer changes have reached it, which is the order a loaded machine ca
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import pytest
 from playwright.sync_api import Page, Route, expect
 
 from tests.e2e.wizard.conftest import Console
+from tests.support.browser import wait_until_routed
 
 pytestmark = pytest.mark.browser
-HOLD_DEADLINE_S = 60
 
 
 class Held:
@@ -30,11 +29,7 @@ class Held:
         self.answers.append((route, route.fetch()))
 
     def wait(self, page: Page) -> None:
-        """Until the page has asked (the handler runs while Playwright is being called)."""
-        deadline = time.monotonic() + HOLD_DEADLINE_S
-        while not self.answers:
-            assert time.monotonic() < deadline, "the page never asked"
-            page.wait_for_timeout(50)
+        wait_until_routed(page, self.answers)
 
     def hand_over(self, page: Page) -> None:
         route, answer = self.answers.pop(0)
