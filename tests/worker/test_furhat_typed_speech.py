@@ -109,9 +109,9 @@ def test_without_a_study_voice_the_robot_keeps_its_own_and_a_prompt_under_way_is
     assert not robot.of_type("request.voice.config")
     assert robot.said == [(SENTENCE, robot.voices[0])]  # the robot's current voice
     # The prompt under way is stopped before the text (the robot would queue it otherwise).
-    assert requests[0] == "request.speak.audio"
-    assert requests[-1] == "request.speak.text"
-    assert set(requests[1:-1]) == {"request.speak.stop"}
+    # The render stage stops it (one stop), and the text aborts whatever is left, whether
+    # or not the robot's end of the prompt has come back by then (a busy machine: both).
+    assert requests == ["request.speak.audio", "request.speak.stop", "request.speak.text"]
     assert typed["abort"] is True
     assert first.body["outcome"] == "interrupted"
     assert end.body["outcome"] == "played"

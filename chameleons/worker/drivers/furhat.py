@@ -152,10 +152,13 @@ class FurhatDriver(Driver):
             self.emit(SPEECH_END, prompt_id=prompt_id, play_id=play_id, outcome="skipped",
                       error=self.problem or "robot not connected")  # fmt: skip
             return
-        abort = self.speech.busy
+        busy, stopped = self.speech.busy, self.speech.stopped
         play, skipped = self.speech.begin(prompt_id, play_id)
-        if abort:  # the robot would queue it behind the one that plays: stop that first
+        if busy and not stopped:  # the robot would queue it behind the one that plays
             self._queue_control({"type": "request.speak.stop"})
+        # A play the wizard has just stopped (the stop went out) counts as under way whether
+        # or not the robot's end has come back yet: the flag must not depend on that race.
+        abort = busy or stopped
         self._queue_control({**request, "abort": abort, "request_id": play.request_id})
         self._credit(skipped)
 

@@ -8,7 +8,8 @@ speech". A robot queues a ``request.speak.audio`` that arrives while it speaks, 
 tracker works the same way:
 
 - every play gets a ``request_id``; a play sent while another is still under way is
-  preceded by ``request.speak.stop`` and sent with ``abort: true``;
+  preceded by ``request.speak.stop`` and sent with ``abort: true`` (also right after the
+  wizard stopped one, which sent its own stop, whether or not the robot's end is back);
 - ``response.speak.start``/``end`` carrying a ``request_id`` are credited to that play
   only. One without an id (a robot that does not echo it) can only be placed by order:
   everything before the current play was aborted, so a start goes to the current play
@@ -58,6 +59,11 @@ class SpeechTracker:
     def busy(self) -> bool:
         """A play is under way: a new one must stop/abort it first."""
         return self.current is not None and self.current.outcome is None
+
+    @property
+    def stopped(self) -> bool:
+        """The current play was stopped by the wizard (its stop request went out)."""
+        return self.current is not None and self.current.stopping
 
     def begin(self, prompt_id: str, play_id: str | None = None) -> tuple[Play, Credit | None]:
         """A new play; the replaced play's credit when it never started (``skipped``: the
