@@ -9,6 +9,7 @@ stops the whole worker with a non-zero exit, so a supervisor restarts it cleanly
 
 from __future__ import annotations
 
+import faulthandler
 import logging
 import signal
 import sys
@@ -278,6 +279,11 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[int(signum)] = signal.signal(signum, request_stop)
+    # `kill -USR1 <worker>` prints every thread's stack to stderr: where a worker that does
+    # not stop, or stalls, is waiting (README, "A worker that hangs").
+    dump_signal = getattr(signal, "SIGUSR1", None)  # not on Windows
+    if dump_signal is not None:
+        faulthandler.register(dump_signal, all_threads=True)
     try:
         worker.start()
         ports = ", ".join(f"{n} port {r.port}" for n, r in worker.receivers.items())
@@ -290,6 +296,8 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
         worker.stop()
         for number, handler in previous.items():
             signal.signal(number, handler)
+        if dump_signal is not None:
+            faulthandler.unregister(dump_signal)
     if worker.failed.is_set():
         echo("worker stopped after a stage failure (see the log)")
         return 1

@@ -173,7 +173,10 @@ def test_a_server_killed_hard_leaves_no_worker_behind(tmp_path: Path) -> None:
         # once here (a hang would outlast any deadline and still fail).
         deadline = time.monotonic() + 30
         while _alive(worker):
-            assert time.monotonic() < deadline, f"worker {worker} outlived its killed server"
+            if time.monotonic() >= deadline:
+                _dump_stacks(worker)
+                raise AssertionError(f"worker {worker} outlived its killed server (its "
+                                     "threads' stacks are in the captured stderr)")  # fmt: skip
             time.sleep(0.02)  # polling the process table, bounded by the deadline
     finally:
         server.kill()
@@ -182,3 +185,12 @@ def test_a_server_killed_hard_leaves_no_worker_behind(tmp_path: Path) -> None:
             os.kill(worker, signal.SIGKILL)
         if server.stdout is not None:
             server.stdout.close()
+
+
+def _dump_stacks(pid: int) -> None:
+    """The worker prints its threads' stacks on SIGUSR1 (to the stderr it shares with the
+    test); faulthandler writes them from the signal handler, at once."""
+    os.kill(pid, signal.SIGUSR1)
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and _alive(pid):
+        time.sleep(0.1)  # a failing test's pause for the dump, not a condition
