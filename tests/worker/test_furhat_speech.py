@@ -101,13 +101,18 @@ def test_rapid_presses_are_skipped_never_played() -> None:
     assert spoken == ["http://s/p4.wav"]
 
 
+def _stop_while_speaking(driver: FurhatDriver, events: queue.SimpleQueue[DriverEvent]) -> None:
+    """Prompt p1 starts on the robot, then the wizard stops it."""
+    driver.play_audio("p1", "http://s/p1.wav")
+    _wait_started(events, "p1")
+    driver.stop_audio()
+
+
 def test_a_stopped_prompt_ends_as_stopped_not_played() -> None:
     with FurhatPeer(speech_seconds=5.0) as peer:
         driver, events = _connected(peer.url)
         try:
-            driver.play_audio("p1", "http://s/p1.wav")
-            _wait_started(events, "p1")
-            driver.stop_audio()
+            _stop_while_speaking(driver, events)
             seen = _speech_until(events, "p1")
         finally:
             driver.close()
@@ -121,9 +126,7 @@ def test_a_prompt_right_after_a_stop_aborts_and_sends_no_second_stop(end_back: b
     with FurhatPeer(speech_seconds=5.0) as peer:
         driver, events = _connected(peer.url)
         try:
-            driver.play_audio("p1", "http://s/p1.wav")
-            _wait_started(events, "p1")
-            driver.stop_audio()
+            _stop_while_speaking(driver, events)
             if end_back:
                 assert _speech_until(events, "p1") == [("end", "p1", "stopped")]
             peer.speech_seconds = 0.2
