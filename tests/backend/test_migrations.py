@@ -113,7 +113,7 @@ def test_upgraded_sqlite_never_reuses_ids(tmp_path: Path) -> None:
         for statement in ROWS_AT_0001:
             connection.exec_driver_sql(statement)
     engine.dispose()
-    upgrade(url, "0004_i13_consent")
+    upgrade(url, "0004_i13_consent")  # the revision id of 0007_consent.py
     with engine.begin() as connection:
         connection.exec_driver_sql(SESSION_2)
     upgrade(url)
@@ -164,7 +164,7 @@ ROWS_AT_0002 = [
 def test_upgraded_postgres_continues_after_the_old_sequence(postgres_server: str) -> None:
     """SERIAL becomes an identity column that starts where the sequence was, not at
     MAX(id)+1 (which would reuse an id deleted from the top before the upgrade)."""
-    upgrade(postgres_server, "0004_i13_consent")
+    upgrade(postgres_server, "0004_i13_consent")  # the revision id of 0007_consent.py
     engine = build_engine(postgres_server)
     with engine.begin() as connection:
         for statement in ROWS_AT_0002:
@@ -180,3 +180,19 @@ def test_upgraded_postgres_continues_after_the_old_sequence(postgres_server: str
     assert deleted == 1
     assert new == 3, "an id used before the upgrade was handed out again"
     engine.dispose()
+
+
+def test_migration_files_are_named_in_the_order_they_apply() -> None:
+    """A maintainer reads ``versions/`` top to bottom as the order the schema grew: each
+    file's number is its place in the chain from the first revision to head, and no file
+    name carries the number of an internal work item (``_i13_``). The revision ids inside
+    stay as they were, so databases created before the renaming still upgrade."""
+    from alembic.script import ScriptDirectory
+
+    scripts = ScriptDirectory.from_config(alembic_config("sqlite://"))
+    chain = list(reversed(list(scripts.walk_revisions("base", "heads"))))
+    names = [Path(str(script.path)).name for script in chain]
+    assert len(scripts.get_heads()) == 1, "one head: chain a new migration after the last"
+    assert [int(name[:4]) for name in names] == list(range(1, len(names) + 1)), names
+    assert not [name for name in names if any(part[:1] == "i" and part[1:].isdigit()
+                                              for part in name[:-3].split("_"))], names
