@@ -19,7 +19,7 @@ the iris's offset from the eye's centre in eye widths times :data:`GAZE_DEGREES_
 geometry: radius ~12 mm, eye width ~30 mm).
 
 The neutral face: by default :data:`DEFAULT_NEUTRAL`, the features this tracker measures on
-a public-domain portrait at rest (Grace Hopper, US Navy photograph, shipped as
+a public-domain portrait at rest at webcam scale (Grace Hopper, US Navy photograph, shipped as
 matplotlib's sample ``grace_hopper.jpg``; tests/data/faces). The canonical mesh is no
 neutral face: its mouth stands open and its brows high. :func:`neutral_from` makes the
 participant's own from a few seconds of frames at rest (the capture page's calibration
@@ -46,15 +46,17 @@ NEVER_DERIVED: Final = ("cheekPuff", "jawForward", "tongueOut")
 GAZE_CHANNELS: Final = tuple(n for n in BLENDSHAPE_NAMES if n.startswith("eyeLook"))
 GAZE_DEGREES_PER_WIDTH: Final = 120.0
 
-# Measured with chameleons.facemesh (the Python tracker, pose fit and features) on
-# tests/data/faces/grace_hopper.jpg, both sides averaged.
+# Measured with chameleons.facemesh (the Python tracker, tracking, pose fit and features) on
+# tests/data/faces/grace_hopper.jpg as a webcam sees a face at arm's length (640x480, the
+# face about 130 px wide: tests/support/faces.py's scene), mean of 5 frames, both sides
+# averaged, jaw and mouth centred by symmetry.
 DEFAULT_NEUTRAL: Final[dict[str, float]] = {
-    "eye_open": 0.103, "lower_lid": -0.042, "brow_inner": 0.275, "brow_mid": 0.308,
-    "brow_outer": 0.211, "corner_y": -0.284, "corner_out": 0.416, "upper_side_y": -0.176,
-    "lower_side_y": -0.401, "cheek_y": -0.270, "nose_wing_y": -0.528, "lip_gap": 0.011,
-    "jaw_drop": 0.949, "jaw_x": 0.0, "mouth_width": 0.830, "mouth_x": 0.0,
-    "upper_lip_y": -0.192, "lower_lip_y": -0.409, "upper_lip_thickness": 0.083,
-    "lower_lip_thickness": 0.122, "lip_forward": -0.008,
+    "eye_open": 0.107, "lower_lid": -0.033, "brow_inner": 0.308, "brow_mid": 0.325,
+    "brow_outer": 0.201, "corner_y": -0.326, "corner_out": 0.400, "upper_side_y": -0.173,
+    "lower_side_y": -0.431, "cheek_y": -0.266, "nose_wing_y": -0.510, "lip_gap": 0.021,
+    "jaw_drop": 1.013, "jaw_x": 0.0, "mouth_width": 0.799, "mouth_x": 0.0,
+    "upper_lip_y": -0.189, "lower_lip_y": -0.439, "upper_lip_thickness": 0.097,
+    "lower_lip_thickness": 0.133, "lip_forward": -0.020,
     "gaze_x": 0.0, "gaze_y": 0.0,
 }  # fmt: skip
 
@@ -139,10 +141,11 @@ def neutral_from(features: npt.ArrayLike) -> F64Array:
     rows = np.asarray(features, dtype=np.float64).reshape(-1, N_FEATURES)
     if not len(rows):
         raise ValueError("no frames to calibrate the neutral face from")
-    with np.errstate(all="ignore"):
-        neutral = np.nanmedian(rows, axis=0) if np.isfinite(rows).any() else default_neutral()
-    fallback = default_neutral()
-    neutral = np.where(np.isfinite(neutral), neutral, fallback)
+    neutral = default_neutral()
+    for column in range(N_FEATURES):
+        values = rows[:, column][np.isfinite(rows[:, column])]
+        if values.size:
+            neutral[column] = float(np.median(values))
     for name in GAZE:
         neutral[FEATURE_INDEX[name]] = 0.0
     return neutral

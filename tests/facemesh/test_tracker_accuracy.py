@@ -8,46 +8,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from chameleons.facemesh.mapping import read_face
 from chameleons.facemesh.tracker import FaceTracker
-from tests.support.faces import Motion, scene
+from tests.support.faces import Motion, Video, scene
 
 PHOTOS = ("astronaut", "grace_hopper")
 ROLL_TOLERANCE = 3.0  # degrees, against the rotation applied
 STEADY_TOLERANCE = 6.0  # degrees of yaw/pitch change while the face only moves in the image
-GLIDE, HOLD = 10, 3  # frames moving to a position (a third of a second at 30 fps), held
 
 
 @pytest.fixture(scope="module")
 def tracker() -> FaceTracker:
     return FaceTracker()
-
-
-class Video:
-    """Frames of one photo moving from position to position: ``GLIDE`` frames on the way
-    (the tracker's ROI follows the face from frame to frame, as in a real video), then
-    ``HOLD`` frames still."""
-
-    def __init__(self, tracker: FaceTracker, name: str) -> None:
-        self.tracker, self.name, self.at = tracker, name, Motion()
-        tracker.reset()
-
-    def go(self, motion: Motion) -> np.ndarray | None:
-        """Yaw, pitch, roll on the last frame at ``motion`` (None: no face)."""
-        start, head = self.at, None
-        for k in range(1, GLIDE + HOLD + 1):
-            f = min(1.0, k / GLIDE)
-            frame = Motion(
-                angle=start.angle + f * (motion.angle - start.angle),
-                scale=start.scale + f * (motion.scale - start.scale),
-                dx=round(start.dx + f * (motion.dx - start.dx)),
-                dy=round(start.dy + f * (motion.dy - start.dy)),
-                occlude=motion.occlude, face=motion.face,
-            )  # fmt: skip
-            face = self.tracker.process(scene(self.name, frame))
-            head = None if face is None else np.array(read_face(face.landmarks, 640, 480).head)
-        self.at = motion
-        return head
 
 
 @pytest.mark.slow

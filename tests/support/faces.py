@@ -21,10 +21,14 @@ import numpy as np
 import numpy.typing as npt
 from PIL import Image, ImageDraw
 
+from chameleons.facemesh.mapping import read_face
+from chameleons.facemesh.tracker import FaceTracker
+
 FACES = Path(__file__).resolve().parents[1] / "data" / "faces"
 BACKGROUND = (118, 120, 116)
 SIZE = (640, 480)
 # The face's square in each photo (left, top, right, bottom), about 1.3 face heights.
+GLIDE, HOLD = 10, 3  # frames moving to a position (a third of a second at 30 fps), held
 CROPS = {"astronaut": (110, 20, 350, 260), "grace_hopper": (80, 20, 460, 400)}
 
 
@@ -61,3 +65,30 @@ def scene(name: str, motion: Motion, size: tuple[int, int] = SIZE,
         top = (size[1] - side) // 2 + motion.dy
         canvas.paste(turned, (left, top))
     return np.asarray(canvas, dtype=np.uint8).copy()
+
+
+class Video:
+    """Frames of one photo moving from position to position: ``GLIDE`` frames on the way
+    (the tracker's ROI follows the face from frame to frame, as in a real video), then
+    ``HOLD`` frames still."""
+
+    def __init__(self, tracker: FaceTracker, name: str) -> None:
+        self.tracker, self.name, self.at = tracker, name, Motion()
+        tracker.reset()
+
+    def go(self, motion: Motion) -> np.ndarray | None:
+        """Yaw, pitch, roll on the last frame at ``motion`` (None: no face)."""
+        start, head = self.at, None
+        for k in range(1, GLIDE + HOLD + 1):
+            f = min(1.0, k / GLIDE)
+            frame = Motion(
+                angle=start.angle + f * (motion.angle - start.angle),
+                scale=start.scale + f * (motion.scale - start.scale),
+                dx=round(start.dx + f * (motion.dx - start.dx)),
+                dy=round(start.dy + f * (motion.dy - start.dy)),
+                occlude=motion.occlude, face=motion.face,
+            )  # fmt: skip
+            face = self.tracker.process(scene(self.name, frame))
+            head = None if face is None else np.array(read_face(face.landmarks, 640, 480).head)
+        self.at = motion
+        return head
