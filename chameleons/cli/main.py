@@ -27,6 +27,11 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "export": ("export_command", "export",
                "Export participants, interactions, suggestions, questionnaire, scores and "
                "events."),
+    "face-track": ("face_track_command", "face_track",
+                   "Track the face in a video (MP4, WebM, MOV, MJPEG AVI) and write it as a "
+                   "Live Link Face take: ARKit's 52 values and head and eye rotations in "
+                   "radians, the video's time as the timecode, frames without a face left "
+                   "out."),
     "keys": ("keys_command", "keys",
              "CURVE keys that authenticate and encrypt the link between server and workers."),
     "plan": ("plan_command", "plan_command",
