@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from chameleons.worker.frames import F32Array, FaceFrame
+from chameleons.worker.frames import N_BLENDSHAPES, F32Array, FaceFrame
 
 _F32 = np.dtype("<f4")
 _HEADER_KEYS = frozenset({"type", "seq", "source", "time", "body"})
@@ -97,8 +97,12 @@ def frame_message(
     frame: FaceFrame, topic: str, *, seq: int, source: str, time: float, type: str = "face"
 ) -> Message:
     """A face frame as an envelope: times in the header, the 61 values as raw float32."""
-    body = {"capture_time": frame.capture_time, "receive_time": frame.receive_time,
-            "frame_source": frame.source}  # fmt: skip
+    body: dict[str, Any] = {"capture_time": frame.capture_time,
+                            "receive_time": frame.receive_time, "frame_source": frame.source}
+    if frame.missing:
+        body["missing"] = list(frame.missing)
+    if frame.calibration:
+        body["calibration"] = frame.calibration
     return Message(topic, type, seq, source, time, body, frame.to_vector().astype(_F32).tobytes())
 
 
@@ -108,8 +112,12 @@ def message_frame(message: Message) -> FaceFrame:
     try:
         capture, receive = float(body["capture_time"]), float(body["receive_time"])
         source = str(body.get("frame_source", ""))
+        missing = tuple(int(i) for i in body.get("missing", ()))
+        calibration = str(body.get("calibration", ""))
     except (KeyError, TypeError, ValueError) as exc:
         raise EnvelopeError("bad_face", "missing frame times") from exc
+    if any(not 0 <= i < N_BLENDSHAPES for i in missing):
+        raise EnvelopeError("bad_face", "missing channel out of range")
     vector = message.array()
     if vector.shape != (FaceFrame.VECTOR_SIZE,):
         raise EnvelopeError("bad_face", f"face payload has {vector.size} values")
@@ -117,4 +125,6 @@ def message_frame(message: Message) -> FaceFrame:
         raise EnvelopeError("bad_face", "non-finite frame times")
     if not np.all(np.isfinite(vector)):
         raise EnvelopeError("bad_face", "non-finite values")
-    return FaceFrame.from_vector(vector, capture, receive, source)
+    frame = FaceFrame.from_vector(vector, capture, receive, source)
+    frame.missing, frame.calibration = missing, calibration
+    return frame

@@ -107,6 +107,11 @@ class FaceFrame:
     published frame has ``capture_time <= receive_time`` on one clock. Blendshapes are
     clamped to 0..1; head (yaw, pitch, roll) and eyes (left yaw/pitch/roll, right
     yaw/pitch/roll) in degrees.
+
+    ``missing``: blendshape indices the source cannot measure (a webcam's cheekPuff,
+    jawForward, tongueOut...): 0 (at rest) in ``blendshapes``, so the robot gets a finite
+    face, and NaN in recordings. ``calibration``: how a webcam source was calibrated
+    (``geometric``, ``neutral``, ``iphone:<hash>``...; empty for an iPhone).
     """
 
     capture_time: float
@@ -115,6 +120,8 @@ class FaceFrame:
     head: F32Array = field(default_factory=lambda: zeros(3))
     eyes: F32Array = field(default_factory=lambda: zeros(6))
     source: str = ""
+    missing: tuple[int, ...] = ()
+    calibration: str = ""
 
     VECTOR_SIZE = N_BLENDSHAPES + 3 + 6
 
@@ -137,10 +144,18 @@ class FaceFrame:
         """The mirror image: Left/Right channels swapped, yaw and roll negated."""
         head = self.head * np.array([-1, 1, -1], dtype=np.float32)
         eyes = self.eyes[[3, 4, 5, 0, 1, 2]] * np.array([-1, 1, -1, -1, 1, -1], dtype=np.float32)
+        missing = tuple(sorted(int(MIRROR_PERMUTATION[i]) for i in self.missing))
         return FaceFrame(
             self.capture_time, self.receive_time, self.blendshapes[MIRROR_PERMUTATION], head,
-            eyes, self.source,
+            eyes, self.source, missing, self.calibration,
         )  # fmt: skip
+
+    def recorded_vector(self) -> F32Array:
+        """:meth:`to_vector` with the missing channels NaN: what recordings keep."""
+        vector = self.to_vector()
+        if self.missing:
+            vector[list(self.missing)] = np.nan
+        return vector
 
 
 def neutral_frame(now: float = 0.0, source: str = "neutral") -> FaceFrame:

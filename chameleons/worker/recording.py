@@ -11,8 +11,12 @@ is written at close, so the journal is what makes a crash lose at most the last 
 
 Columns: ``capture_time``, ``receive_time`` (float64 seconds, this host's monotonic clock),
 the 52 blendshapes by canonical name, ``head_yaw/pitch/roll`` and ``left_eye_yaw`` ..
-``right_eye_roll`` (float32, degrees). The schema metadata ``chameleons`` holds a JSON object
-with the format version and the caller's metadata (interaction, stream, ...).
+``right_eye_roll`` (float32, degrees; a channel the source cannot measure is NaN, e.g. a
+webcam's ``cheekPuff``), then ``source`` (which capture source sent the frame:
+``livelink``, ``facecapturex``, ``webcam-browser``, ``webcam-python``, ``agent``) and
+``calibration`` (a webcam's: ``geometric``, ``neutral``, ``iphone:<hash>``, ...; empty
+otherwise). Files of format 1 lack the last two. The schema metadata ``chameleons`` holds a
+JSON object with the format version and the caller's metadata (interaction, stream, ...).
 """
 
 from __future__ import annotations
@@ -35,12 +39,13 @@ import pyarrow.parquet as pq
 from chameleons.worker.frames import BLENDSHAPE_NAMES, EYE_NAMES, N_BLENDSHAPES, FaceFrame
 from chameleons.worker.takes import Take
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 METADATA_KEY = b"chameleons"
 JOURNAL_SUFFIX = ".journal"
 HEAD_COLUMNS = ("head_yaw", "head_pitch", "head_roll")
 EYE_COLUMNS = tuple(re.sub(r"(?<!^)(?=[A-Z])", "_", n).lower() for n in EYE_NAMES)
 VALUE_COLUMNS = (*BLENDSHAPE_NAMES, *HEAD_COLUMNS, *EYE_COLUMNS)  # FaceFrame.to_vector order
+TEXT_COLUMNS = ("source", "calibration")
 _ROW_GROUP_ROWS = 65_536  # the final file needs no small row groups any more
 
 
@@ -66,6 +71,7 @@ def write_problem(exc: OSError, where: str | Path) -> str:
 def recording_schema(metadata: dict[str, Any] | None = None) -> pa.Schema:
     fields = [pa.field("capture_time", pa.float64()), pa.field("receive_time", pa.float64())]
     fields += [pa.field(name, pa.float32()) for name in VALUE_COLUMNS]
+    fields += [pa.field(name, pa.string()) for name in TEXT_COLUMNS]
     info = {"version": FORMAT_VERSION, **(metadata or {})}
     return pa.schema(fields, metadata={METADATA_KEY: json.dumps(info).encode()})
 
@@ -98,6 +104,7 @@ class FrameRecorder:
         self._clock = clock
         self._times: list[tuple[float, float]] = []
         self._values: list[np.ndarray] = []
+        self._texts: list[tuple[str, str]] = []
         self._last_flush = clock()
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._file: BinaryIO | None = self.journal.open("xb")
@@ -108,7 +115,8 @@ class FrameRecorder:
         if self._file is None:
             raise RuntimeError(f"recording {self.path} is closed")
         self._times.append((frame.capture_time, frame.receive_time))
-        self._values.append(frame.to_vector())
+        self._values.append(frame.recorded_vector())
+        self._texts.append((frame.source, frame.calibration))
         due = self._clock() - self._last_flush >= self.chunk_seconds
         if len(self._times) >= self.chunk_frames or due:
             self.flush()
@@ -122,15 +130,16 @@ class FrameRecorder:
         values = np.stack(self._values).astype(np.float32)
         columns = [pa.array(times[:, 0]), pa.array(times[:, 1])]
         columns += [pa.array(values[:, i]) for i in range(values.shape[1])]
+        columns += [pa.array([t[k] for t in self._texts], pa.string()) for k in range(2)]
         self._writer.write_batch(pa.record_batch(columns, schema=self.schema))
         self._sync()
         self.frames_written += len(self._times)
-        self._times, self._values = [], []
+        self._times, self._values, self._texts = [], [], []
 
     def abandon(self) -> None:
         """Stop after a write error: drop what is buffered and close the journal quietly
         (the chunks written before the error stay recoverable)."""
-        self._times, self._values = [], []
+        self._times, self._values, self._texts = [], [], []
         if self._file is None:
             return
         for close in (self._writer.close, self._file.close):
@@ -222,7 +231,8 @@ def recording_metadata(table: pa.Table) -> dict[str, Any]:
 
 
 def read_recording(path: str | Path) -> Take:
-    """A recording as a :class:`Take` (e.g. a participant's stream replayed as ``natural``).
+    """A recording as a :class:`Take` (e.g. a participant's stream replayed as ``natural``);
+    missing channels (NaN) replay at rest (0).
 
     Times come from ``capture_time`` relative to the first frame; if those do not increase
     strictly (the sender's clock restarted), from ``receive_time`` instead."""
@@ -235,6 +245,7 @@ def read_recording(path: str | Path) -> Take:
     if table.num_rows == 0:
         raise RecordingError(f"{path}: no frames")
     values = np.column_stack([table.column(c).to_numpy() for c in VALUE_COLUMNS]).astype(np.float32)
+    values = np.nan_to_num(values, nan=0.0)  # a replayed face rests where a channel is missing
     times = table.column("capture_time").to_numpy().astype(np.float64)
     if np.any(np.diff(times) <= 0):
         times = table.column("receive_time").to_numpy().astype(np.float64)
@@ -243,3 +254,19 @@ def read_recording(path: str | Path) -> Take:
         times - times[0], values[:, :n].copy(), values[:, n : n + 3].copy(),
         values[:, n + 3 :].copy(), str(path),
     )  # fmt: skip
+
+
+def recorded_sources(path: str | Path) -> dict[tuple[str, str], int]:
+    """(source, calibration) -> frames, from a recording's ``source`` and ``calibration``
+    columns (a format-1 file: empty)."""
+    table = read_recording_table(path)
+    if "source" not in table.column_names:
+        return {}
+    sources = table.column("source").to_pylist()
+    calibrations = (table.column("calibration").to_pylist()
+                    if "calibration" in table.column_names else [""] * len(sources))  # fmt: skip
+    counts: dict[tuple[str, str], int] = {}
+    for pair in zip(sources, calibrations, strict=True):
+        key = (pair[0] or "", pair[1] or "")
+        counts[key] = counts.get(key, 0) + 1
+    return counts

@@ -18,6 +18,7 @@ from chameleons.worker.recording import (
     journal_path,
     read_recording,
     read_recording_table,
+    recorded_sources,
     recording_metadata,
     recover_recording,
 )
@@ -47,7 +48,7 @@ def test_round_trip(tmp_path: Path) -> None:
     assert {"head_yaw", "head_pitch", "head_roll", "left_eye_yaw", "right_eye_roll"} <= set(
         table.column_names
     )
-    assert recording_metadata(table) == {"version": 1, "interaction": 7, "stream": "participant"}
+    assert recording_metadata(table) == {"version": 2, "interaction": 7, "stream": "participant"}
     np.testing.assert_array_equal(
         table.column("receive_time").to_numpy(), [f.receive_time for f in recorded]
     )
@@ -152,3 +153,22 @@ def test_empty_recording(tmp_path: Path) -> None:
     assert read_recording_table(path).num_rows == 0
     with pytest.raises(RecordingError, match="no frames"):
         read_recording(path)
+
+
+def test_missing_channels_are_nan_and_each_frame_says_its_source(tmp_path: Path) -> None:
+    """A webcam cannot measure cheekPuff: the robot got 0, the recording keeps NaN; the
+    frame's source and calibration are kept per frame; a replay rests (0) there."""
+    path = tmp_path / "webcam.parquet"
+    cheek = BLENDSHAPE_NAMES.index("cheekPuff")
+    recorded = frames(4)
+    for frame in recorded[:3]:
+        frame.source, frame.calibration, frame.missing = "webcam-python", "neutral", (cheek,)
+    with FrameRecorder(path) as recorder:
+        for frame in recorded:
+            recorder.write(frame)
+    table = read_recording_table(path)
+    column = table.column("cheekPuff").to_numpy()
+    assert np.isnan(column[:3]).all()
+    assert np.isfinite(column[3])
+    assert recorded_sources(path) == {("webcam-python", "neutral"): 3, ("test", ""): 1}
+    assert np.isfinite(read_recording(path).blendshapes).all()

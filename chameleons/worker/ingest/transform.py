@@ -12,6 +12,7 @@ yaw and roll negated, :meth:`FaceFrame.mirrored`) instead of the same side.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -31,10 +32,7 @@ def apply_mounting_rotation(frame: FaceFrame, degrees: float) -> FaceFrame:
     if degrees % 360 == 0:
         return frame
     head = yaw_pitch_roll(z_rotation(degrees) @ rotation_matrix(*(float(a) for a in frame.head)))
-    return FaceFrame(
-        frame.capture_time, frame.receive_time, frame.blendshapes,
-        np.array(head, dtype=np.float32), frame.eyes, frame.source,
-    )  # fmt: skip
+    return dataclasses.replace(frame, head=np.array(head, dtype=np.float32))
 
 
 @dataclass(frozen=True, slots=True)
