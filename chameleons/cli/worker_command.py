@@ -37,6 +37,10 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
                    "e.g. face-1=Isabel; over CHAMELEONS_WORKER_FURHAT_FACES.")  # fmt: skip
 @click.option("--livelink-port", type=int, default=None, help="Live Link Face UDP port (0: any).")
 @click.option("--facecapturex-port", type=int, default=None, help="FaceCaptureX TCP port (0: any).")
+@click.option("--camera", default=None, metavar="DEVICE",
+              help="Track the participant's face with a local camera instead of (or beside) "
+                   "an iPhone: /dev/video0 (Linux), 0 (macOS), video=<name> (Windows), or a "
+                   "video file standing in for a camera.")  # fmt: skip
 @click.option("--capture-sender", default=None, metavar="ADDRESS",
               help="Accept face capture only from this phone (IP address or host name); "
                    "default: the first phone that sends after each session start.")  # fmt: skip
@@ -68,7 +72,7 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 @click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
-    livelink_port: int | None, capture_sender: str | None,
+    livelink_port: int | None, capture_sender: str | None, camera: str | None,
     facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
     keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
@@ -84,7 +88,7 @@ def worker(
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
     config = build_config(
         settings, booth=booth, driver=driver, robot_url=robot_url, furhat_faces=furhat_faces,
-        livelink_port=livelink_port, capture_sender=capture_sender,
+        livelink_port=livelink_port, capture_sender=capture_sender, camera=camera,
         facecapturex_port=facecapturex_port, behaviour=behaviour, copy_delay=copy_delay,
         natural_path=natural_path, control=control, telemetry=telemetry, keys_dir=keys_dir,
         tick_rate=tick_rate,
@@ -143,6 +147,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         telemetry_endpoint=pick("telemetry", "worker_telemetry_endpoint", "tcp://127.0.0.1:5556"),
         capture_host=_setting(settings, "capture_bind_host", "0.0.0.0"),
         capture_sender=pick("capture_sender", "capture_sender", None),
+        camera=pick("camera", "worker_camera", None),
         livelink_port=pick("livelink_port", "livelink_port", 11111),
         facecapturex_port=pick("facecapturex_port", "facecapturex_port", 19977),
         livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "radians"),

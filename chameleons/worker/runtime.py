@@ -79,6 +79,7 @@ class WorkerConfig:
     capture_sender: str | None = None  # None: the first sender after a reset
     livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
     facecapturex_port: int | None = 19977
+    camera: str | None = None  # a local camera (or a video file) the worker tracks itself
     livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
@@ -220,9 +221,16 @@ class Worker:
         if cfg.facecapturex_port is not None:
             receiver = FaceCaptureXReceiver(port=cfg.facecapturex_port, **common)
             self.receivers["facecapturex"] = receiver.start()
+        if cfg.camera is not None:
+            from chameleons.worker.ingest.webcam import CameraReceiver
+
+            camera = CameraReceiver(device=cfg.camera, publish_endpoint=self.endpoints.capture,
+                                    context=self.context, transform=common["transform"])
+            self.receivers["webcam"] = camera.start()
 
     def ingest_stats(self) -> dict[str, Any]:
-        snapshots = {name: r.stats.snapshot() for name, r in self.receivers.items()}
+        snapshots = {name: getattr(r, "snapshot", r.stats.snapshot)()
+                     for name, r in self.receivers.items()}  # fmt: skip
         drops: dict[str, int] = {}
         for name, snap in snapshots.items():
             for reason, count in snap.get("drops", {}).items():
@@ -232,9 +240,13 @@ class Worker:
         problem = next((s["problem"] for s in snapshots.values() if s.get("problem")), None)
         heads = [s["head_range"] for s in snapshots.values() if s.get("head_range")]
         head_range = max(heads, key=lambda h: h["frames"]) if heads else None
+        # Which input the face comes from: the busiest one, else the only one configured.
+        busiest = max(snapshots, key=lambda n: snapshots[n].get("input_fps", 0.0), default=None)
+        active = busiest if busiest and snapshots[busiest].get("input_fps") else (
+            "webcam" if "webcam" in snapshots else None)  # fmt: skip
         return {"input_fps": fps, "drops": drops, "receivers": snapshots,
                 "no_face": no_face, "problem": problem, "head_range": head_range,
-                "pairing": self.pairing.snapshot()}  # fmt: skip
+                "pairing": self.pairing.snapshot(), "source": active}  # fmt: skip
 
     def stop(self, timeout: float = 5.0) -> None:
         """Stop every stage (the hub last) and free the sockets; a second call does nothing."""

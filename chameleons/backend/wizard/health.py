@@ -156,8 +156,17 @@ def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) 
     if not fps_ok and ingest.get("problem"):
         return str(ingest["problem"])
     if not fps_ok and ingest.get("no_face"):
-        return "phone sees no face"
+        return "camera sees no face" if _webcam(ingest) else "phone sees no face"
+    if _webcam(ingest):
+        receiver = (ingest.get("receivers") or {}).get(ingest["source"]) or {}
+        calibration = receiver.get("calibration") if isinstance(receiver, Mapping) else None
+        return _fmt(fps, "fps") + " from the webcam" + (
+            f" ({calibration})" if calibration else "")  # fmt: skip
     return _fmt(fps, "fps") + _sender(ingest.get("pairing"))
+
+
+def _webcam(ingest: Mapping[str, Any]) -> bool:
+    return str(ingest.get("source") or "").startswith("webcam")
 
 
 def _sender(pairing: Any) -> str:
