@@ -31,6 +31,7 @@ from functools import cache
 
 import numpy as np
 import numpy.typing as npt
+from scipy import ndimage
 
 F32Array = npt.NDArray[np.float32]
 F64Array = npt.NDArray[np.float64]
@@ -197,28 +198,17 @@ def rect_to_image(rect: Rect, width: int, height: int) -> F64Array:
 def sample(image: U8Array, affine: F64Array, size: int, *, replicate: bool) -> F32Array:
     """Bilinear resampling: output pixel (u, v) of a ``size`` square takes the image at
     ``affine @ ((u + 0.5) / size, (v + 0.5) / size, 1)``. Outside the image: the nearest
-    edge pixel (``replicate``) or 0."""
-    height, width = image.shape[:2]
+    edge pixel (``replicate``) or 0 (SciPy's ``map_coordinates``, order 1)."""
     grid = (np.arange(size, dtype=np.float64) + 0.5) / size
     a, b = np.meshgrid(grid, grid)  # a across, b down
     x = affine[0, 0] * a + affine[0, 1] * b + affine[0, 2] - 0.5
     y = affine[1, 0] * a + affine[1, 1] * b + affine[1, 2] - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
-    x0i, y0i = x0.astype(np.int64), y0.astype(np.int64)
-    pixels = image.astype(np.float32)
-
-    def at(xi: npt.NDArray[np.int64], yi: npt.NDArray[np.int64]) -> F32Array:
-        cx, cy = np.clip(xi, 0, width - 1), np.clip(yi, 0, height - 1)
-        values = pixels[cy, cx]
-        if not replicate:
-            inside = (xi >= 0) & (xi < width) & (yi >= 0) & (yi < height)
-            values = values * inside[..., None]
-        return values
-
-    top = at(x0i, y0i) * (1 - fx) + at(x0i + 1, y0i) * fx
-    bottom = at(x0i, y0i + 1) * (1 - fx) + at(x0i + 1, y0i + 1) * fx
-    return np.asarray(top * (1 - fy) + bottom * fy, dtype=np.float32)
+    out = np.empty((size, size, image.shape[2]), dtype=np.float32)
+    mode = "nearest" if replicate else "constant"
+    for channel in range(image.shape[2]):
+        ndimage.map_coordinates(image[..., channel], [y, x], output=out[..., channel],
+                                order=1, mode=mode, cval=0.0)  # fmt: skip
+    return out
 
 
 def detector_input(image: U8Array) -> F32Array:
