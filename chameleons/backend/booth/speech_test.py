@@ -81,10 +81,10 @@ async def say_test_prompt(state: Any, booth: str) -> dict[str, Any]:
             result["problem"] = outcome.detail or "no events from the worker"
             return result
         await _follow(events, prompt_id, play_id, catalogue.duration(prompt), sent_at, result)
+        if result["problem"] is not None and url not in result["problem"]:
+            result["problem"] += f" (the robot was given {url})"  # the robot's own problem
     finally:
         speech.close(events)
-    if result["problem"] is not None and url not in result["problem"]:
-        result["problem"] += f" (the robot was given {url})"
     return result
 
 
