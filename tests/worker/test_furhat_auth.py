@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import queue
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import pytest
 import zmq
 from click.testing import CliRunner
 
@@ -21,20 +20,6 @@ from chameleons.worker.frames import N_BLENDSHAPES
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.worker.control_peer import ControlPeer
 from tests.worker.furhat_peer import FurhatPeer
-
-
-@pytest.fixture
-def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
-    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    yield ctx
-    ctx.term()
-
-
-@pytest.fixture
-def server(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    peer = ControlPeer(zmq_context)
-    yield peer
-    peer.close()
 
 
 def _config(server: ControlPeer, robot_url: str) -> WorkerConfig:

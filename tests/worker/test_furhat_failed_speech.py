@@ -6,8 +6,6 @@ left on 127.0.0.1 (``CHAMELEONS_PUBLIC_URL`` unset), which the reason names."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import pytest
 import zmq
 
@@ -19,20 +17,6 @@ from tests.worker.furhat_peer import FurhatPeer
 BOOTH = "booth-f"
 LOOPBACK_URL = "http://127.0.0.1:8000/media/prompts/m1/intro.wav?key=k"
 LAN_URL = "http://192.168.1.20:8000/media/prompts/m1/intro.wav?key=k"
-
-
-@pytest.fixture
-def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
-    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    yield ctx
-    ctx.term()
-
-
-@pytest.fixture
-def server(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    peer = ControlPeer(zmq_context)
-    yield peer
-    peer.close()
 
 
 def _config(server: ControlPeer, robot_url: str) -> WorkerConfig:

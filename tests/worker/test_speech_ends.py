@@ -13,9 +13,8 @@ play id, when a new prompt replaces it while it speaks (issue 28):
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
-import pytest
 import zmq
 
 from chameleons.worker.envelope import Message
@@ -25,20 +24,6 @@ from tests.worker.furhat_peer import FurhatPeer
 
 BOOTH = "booth-e"
 ROUNDS = 6  # the Furhat race is a matter of ticks: several rounds, each must hold
-
-
-@pytest.fixture
-def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
-    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    yield ctx
-    ctx.term()
-
-
-@pytest.fixture
-def server(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    peer = ControlPeer(zmq_context)
-    yield peer
-    peer.close()
 
 
 def _config(server: ControlPeer, driver: str, robot_url: str = "ws://127.0.0.1:9") -> WorkerConfig:
