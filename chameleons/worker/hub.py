@@ -276,6 +276,7 @@ class ControlHub:
             # Why the robot is not connected (a refused login) and face problems: the
             # wizard's health strip shows them.
             "robot_problem": driver.get("problem"),
+            "robot_retry_in": driver.get("retry_in"),  # seconds to the next login attempt
             "robot_face": {k: driver.get(k) for k in ROBOT_FACE_FIELDS if k in driver},
             "speaking": renderer.get("speaking", False), "prompt_id": renderer.get("prompt_id"),
             "recording": self._stage("recorder"),

@@ -15,7 +15,7 @@ import math
 import queue
 import threading
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable
 from typing import Any
 
@@ -48,6 +48,7 @@ from chameleons.worker.stage import (
 DriverFactory = Callable[[Publish], Driver]
 STATS_INTERVAL = 1.0
 _LATENCY_RING = 1024
+_ENDED_PLAYS = 64  # recent plays whose end went out: a second end of one is dropped
 
 
 class RendererStage:
@@ -69,6 +70,9 @@ class RendererStage:
         # driver event of another play (the same prompt played again) is that play's.
         self.loaded_play: str | None = None
         self.speaking_play: str | None = None
+        # Each play gets exactly one end: the first one given (this stage's own, when a new
+        # prompt cuts it short, or the driver's). Later events of an ended play are dropped.
+        self._ended: deque[str] = deque(maxlen=_ENDED_PLAYS)
         self.ready = threading.Event()  # set once the first tick ran
         self._requests: queue.SimpleQueue[tuple[Any, ...]] = queue.SimpleQueue()
         self._events: queue.SimpleQueue[DriverEvent] = queue.SimpleQueue()
@@ -154,10 +158,12 @@ class RendererStage:
     def _on_tick(self, due: float, now: float) -> None:
         core = self.core
         assert core is not None
-        if not self._requests.empty():
-            self._run_requests()
+        # The driver's events first: a prompt that started or ended is known as such before
+        # a new prompt replaces it (else its start or end raced the replacement).
         if not self._events.empty():
             self._handle_driver_events()
+        if not self._requests.empty():
+            self._run_requests()
         input_time = core.tick(due)
         if self.speaking is not None and due >= core.lipsync.end:
             # A driver that cannot report the end of the audio: speech ends with the curves.
@@ -216,15 +222,17 @@ class RendererStage:
         while not self._events.empty():
             event = self._events.get_nowait()
             if event.kind in (SPEECH_START, SPEECH_END) and self._replaced(event):
-                # A replaced play's late start or end: report it as its own, keep the
-                # current play's lip-sync and speaking state.
-                self._publish_event("event.speech", event.kind, event.time, **event.body)
+                # A replaced play's late start or end: report it as its own (unless it has
+                # ended already), keep the current play's lip-sync and speaking state.
+                self._publish_speech(event.kind, event.time, **event.body)
+            elif event.kind == SPEECH_START and self.loaded_play in self._ended:
+                self.errors["late_speech_start"] += 1  # it ended (stopped) before it started
             elif event.kind == SPEECH_START:
                 prompt = event.body.get("prompt_id") or self.core.lipsync.prompt_id
                 self.core.lipsync.begin(event.time)
                 self.speaking, self.speaking_play = prompt or "", self.loaded_play
-                self._publish_event("event.speech", SPEECH_START, event.time,
-                                    prompt_id=prompt, play_id=self.loaded_play)  # fmt: skip
+                self._publish_speech(SPEECH_START, event.time, prompt_id=prompt,
+                                     play_id=self.loaded_play)  # fmt: skip
                 if not self.driver or not self.driver.reports_speech_end:
                     self.core.lipsync.finish(self.core.lipsync.curve_end())
             elif event.kind == SPEECH_END:
@@ -254,7 +262,17 @@ class RendererStage:
         self.speaking = self.speaking_play = None
         extra.pop("prompt_id", None)
         extra.pop("play_id", None)
-        self._publish_event("event.speech", kind, when, prompt_id=prompt, play_id=play, **extra)
+        self._publish_speech(kind, when, prompt_id=prompt, play_id=play, **extra)
+
+    def _publish_speech(self, kind: str, when: float, **body: Any) -> None:
+        """A speech start or end, unless its play has had its end (counted, dropped)."""
+        play = body.get("play_id")
+        if play and play in self._ended:
+            self.errors[f"late_{kind}"] += 1
+            return
+        if play and kind == SPEECH_END:
+            self._ended.append(play)
+        self._publish_event("event.speech", kind, when, **body)
 
     def _publish_event(self, topic: str, kind: str, when: float, **body: Any) -> None:
         wall = time.time() - (time.monotonic() - when)

@@ -14,6 +14,14 @@ this project's driver:
   ``request.speak.stop`` stops the current one and drops the queue. Each play answers
   ``response.speak.start`` after ``start_latency`` seconds and ``response.speak.end`` after
   ``speech_seconds`` more (or when stopped, with ``aborted: true``).
+- ``response.speak.end`` carries ``text``, ``aborted`` and ``failed`` (booleans), the fields
+  Furhat's documented speech end has (a Unity client's typed copy of the Realtime API's
+  events, github.com/andre-pereira/furhat-unity-api ``Runtime/FurhatResponses.cs``,
+  ``SpeakEndEvent``). Audio the robot cannot fetch (``unplayable(url)`` true: a URL on the
+  server's loopback address, say) ends with ``failed: true`` and no speech, after a
+  ``response.speak.start`` (``start_before_failure``, the default: the speech action starts
+  and then fails; False: the end comes alone).
+- ``auth_delay``: the login is answered that many seconds late (a robot still booting).
 - ``request.voice.config`` (the client's ``request_voice_config``) with a ``name`` from
   ``voices`` sets the TTS voice and is answered ``response.voice.status`` (what the client
   waits for) with ``voice_id``; the sentences said in it are kept in ``said``. The answer
@@ -74,21 +82,38 @@ class _Voice:
                 await self.task
         if self.playing is not None:
             playing, self.playing = self.playing, None
-            await self.peer.reply(self.ws, "response.speak.end", playing, aborted=True)
+            await self._end(playing, aborted=True)
 
     async def _run(self) -> None:
         while self.queue:
             message = self.queue.popleft()
             self.playing = message
             await asyncio.sleep(self.peer.start_latency)
+            url = str(message.get("url"))
+            failing = message.get("type") == "request.speak.audio" and self.peer.unplayable(url)
+            if failing and not self.peer.start_before_failure:
+                self.playing = None
+                await self._end(message, failed=True)
+                continue
             await self.peer.reply(self.ws, "response.speak.start", message)
+            if failing:
+                self.peer.failed.append(url)
+                self.playing = None
+                await self._end(message, failed=True)
+                continue
             if message.get("type") == "request.speak.text":
                 self.peer.said.append((str(message.get("text")), self.peer.voice))
             else:
-                self.peer.spoken.append(str(message.get("url")))
+                self.peer.spoken.append(url)
             await asyncio.sleep(self.peer.speech_seconds)
             self.playing = None
-            await self.peer.reply(self.ws, "response.speak.end", message)
+            await self._end(message)
+
+    async def _end(self, message: dict[str, Any], *, aborted: bool = False,
+                   failed: bool = False) -> None:  # fmt: skip
+        await self.peer.reply(self.ws, "response.speak.end", message,
+                              text=str(message.get("text") or ""), aborted=aborted,
+                              failed=failed)  # fmt: skip
 
 
 class FurhatPeer:
@@ -98,8 +123,13 @@ class FurhatPeer:
         faces: tuple[str, ...] = ("adult - Alex", "Isabel", "Marty"),
         refuse_fields: frozenset[str] = frozenset(),
         voices: tuple[str, ...] = ("Matthew-Neural", "Joanna-Neural", "Astrid"),
+        unplayable: Callable[[str], bool] = lambda _url: False,
+        start_before_failure: bool = True, auth_delay: float = 0.0,
     ) -> None:  # fmt: skip
         self.speech_seconds, self.start_latency = speech_seconds, start_latency
+        self.unplayable, self.start_before_failure = unplayable, start_before_failure
+        self.auth_delay = auth_delay
+        self.failed: list[str] = []  # audio URLs the robot could not play, in order
         self.access, self.echo_request_id = access, echo_request_id
         self.faces, self.refuse_fields = faces, refuse_fields
         self.received: list[Received] = []
@@ -175,6 +205,7 @@ class FurhatPeer:
     async def _answer(self, ws: ServerConnection, voice: _Voice, message: dict[str, Any]) -> None:
         kind = message.get("type")
         if kind == "request.auth":
+            await asyncio.sleep(self.auth_delay)
             if self.access is not None:
                 await self.reply(ws, "response.auth", message, access=self.access,
                                  scope="local_network" if self.access else None)  # fmt: skip

@@ -5,15 +5,42 @@ from __future__ import annotations
 
 import queue
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+import zmq
 from click.testing import CliRunner
 
+from chameleons.backend.wizard import health
 from chameleons.cli.worker_command import worker
 from chameleons.worker.drivers import ROBOT_STATE, DriverEvent, FurhatDriver
 from chameleons.worker.drivers.furhat_check import run_check
 from chameleons.worker.frames import N_BLENDSHAPES
+from chameleons.worker.runtime import Worker, WorkerConfig
+from tests.worker.control_peer import ControlPeer
 from tests.worker.furhat_peer import FurhatPeer
+
+
+def _config(server: ControlPeer, robot_url: str) -> WorkerConfig:
+    return WorkerConfig(booth="booth-a", driver="furhat", robot_url=robot_url,
+                        livelink_port=None, facecapturex_port=None,
+                        command_endpoint=server.command_endpoint,
+                        telemetry_endpoint=server.telemetry_endpoint)  # fmt: skip
+
+
+def _heartbeat(
+    server: ControlPeer, wanted: Callable[[dict[str, Any]], bool], timeout: float
+) -> dict[str, Any]:
+    """The first heartbeat (of those not yet looked at) that ``wanted`` accepts."""
+    seen = len(server.of_type("heartbeat"))
+
+    def found() -> dict[str, Any] | None:
+        beats = server.of_type("heartbeat")[seen:]
+        return next((dict(b.body) for b in beats if wanted(b.body)), None)
+
+    beat: dict[str, Any] = server.wait(found, timeout)
+    return beat
 
 
 def _driver(url: str, **options: object) -> tuple[FurhatDriver, queue.SimpleQueue[DriverEvent]]:
@@ -64,23 +91,51 @@ def test_a_refused_login_stops_the_driver_with_the_reason_and_sends_nothing() ->
     assert stats["faces_sent"] == stats["heads_sent"] == 0
 
 
-def test_an_unanswered_login_is_a_timeout_and_is_not_retried_until_asked() -> None:
+def test_an_unanswered_login_is_retried_with_backoff_until_the_robot_answers() -> None:
+    """A robot still booting answers no login: the driver tries again by itself (nobody
+    presses retry), saying when, and logs in once the robot answers."""
     with FurhatPeer(access=None) as peer:
         driver, events = _driver(peer.url)
         driver.start()
         try:
             timeout = _state(events, "auth_timeout")
-            time.sleep(0.3)  # a retrying driver would have come back by now (backoff 0.05 s)
-            assert peer.connections == 1
-            peer.access = True  # the lab fixes the robot, then the wizard asks for a retry
-            driver.retry()
+            peer.wait_for(lambda p: p.connections >= 3, timeout=15)  # twice more, unasked
+            problem = driver.stats()["problem"]
+            peer.access = True  # the robot has booted
             _state(events, "connected")
             peer.wait_for(lambda p: bool(p.of_type("request.face.config")))
         finally:
             driver.close()
-    assert "did not answer" in timeout.body["reason"]
-    assert peer.connections == 2
+    assert timeout.body["reason"] == "the robot did not answer the login within 0.5 s"
+    assert timeout.body["retry_in"] > 0
+    assert problem == timeout.body["reason"]
     assert driver.problem is None
+
+
+def test_the_login_waits_as_long_as_the_vendors_client_and_a_worker_reports_the_retry(
+    zmq_context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer
+) -> None:
+    """Through a real worker: a robot that answers the login after 4 s is logged in (the
+    vendor's client waits 5 s; this driver gave up after 3 s and stopped for good), and one
+    that does not answer at all is shown on the heartbeat, and so on the wizard's health
+    strip, with when it is tried again."""
+    assert FurhatDriver("ws://robot:9000/v1/events").auth_timeout == 5.0
+    slow = FurhatPeer(auth_delay=4.0)
+    with slow, Worker(_config(server, slow.url), context=zmq_context):
+        connected = _heartbeat(server, lambda b: b.get("robot_connected") is True, 30)
+    assert connected["robot_problem"] is None
+    assert not [m for m in server.of_type("robot_state") if m.body["state"] == "auth_timeout"]
+    silent = FurhatPeer(access=None)
+    with silent, Worker(_config(server, silent.url), context=zmq_context):
+        waiting = _heartbeat(server, lambda b: b.get("robot_retry_in") is not None, 30)
+        silent.access = True  # the robot has booted: the worker logs in by itself
+        _heartbeat(server, lambda b: b.get("robot_connected") is True, 30)
+    assert waiting["robot_state"] == "auth_timeout"
+    assert waiting["robot_problem"] == "the robot did not answer the login within 5 s"
+    robot = health.evaluate(waiting, 0.0)["robot"]
+    assert robot.ok is False
+    assert robot.value.startswith("login not answered: the robot did not answer the login "
+                                  "within 5 s; retrying in ")  # fmt: skip
 
 
 def test_only_access_true_is_a_login_even_with_a_reply_without_error() -> None:

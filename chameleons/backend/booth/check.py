@@ -11,7 +11,12 @@ with the session's events.
   seconds, against the expected sign and size. A turn of 20-90 degrees to the left is yaw >
   0 (nose to the camera's right), a nod of 8-60 degrees is pitch > 0 (chin down). A turn the
   wrong way is a sign or mirror error; one far beyond 90 degrees a unit error (radians read
-  as degrees/180 copies a head turn about three times too large).
+  as degrees/180 copies a head turn about three times too large). A movement too small to
+  count that would be the right size times pi (degrees/180 read as radians) or 180/pi
+  (radians read as degrees) says so: the unit is the likely cause, not the technician.
+- **Robot copies**: also fails when the robot is not logged in (a refused or unanswered
+  Furhat login), with that reason: the worker measures the copy on what it sends, and a
+  robot that refused the login receives none of it.
 - **Robot**: connected (for the virtual robot: a display page open and playing).
 - **Robot copies**: the check runs the robot in ``copy`` with the study's configured delay
   while the head turns and nods (:mod:`.check_run`, which restores the behaviour before);
@@ -27,6 +32,7 @@ with the session's events.
 
 from __future__ import annotations
 
+import math
 import shutil
 import tempfile
 from collections.abc import Mapping
@@ -99,10 +105,32 @@ def head_turn(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
         return step("head", label, FAIL, f"{measured}: the turn reads the wrong way, "
                     "check the mirror and mounting settings", **figures)  # fmt: skip
     if yaw_max < MIN_TURN_DEG:
-        return step("head", label, FAIL, f"{measured}: no turn to the left seen", **figures)
+        hint = unit_hint(yaw_max, MIN_TURN_DEG, MAX_TURN_DEG, "turn")
+        return step("head", label, FAIL, f"{measured}: no turn to the left seen{hint}",
+                    **figures)  # fmt: skip
     if pitch_max < MIN_NOD_DEG or pitch_max > MAX_NOD_DEG:
-        return step("head", label, FAIL, f"{measured}: no nod seen", **figures)
+        hint = unit_hint(pitch_max, MIN_NOD_DEG, MAX_NOD_DEG, "nod")
+        return step("head", label, FAIL, f"{measured}: no nod seen{hint}", **figures)
     return step("head", label, PASS, measured, **figures)
+
+
+# A rotation read in the wrong unit is too small by one of these factors.
+UNIT_MISTAKES = (
+    (math.pi, "the phone sends degrees/180 and the worker reads radians"),
+    (180.0 / math.pi, "the phone sends radians and the worker reads degrees"),
+)
+
+
+def unit_hint(measured: float, low: float, high: float, movement: str) -> str:
+    """A hint when a movement too small to count is the expected size read in the wrong
+    unit (empty when no unit mistake explains it)."""
+    for factor, how in UNIT_MISTAKES:
+        meant = measured * factor
+        if measured > 0 and low <= meant <= high:
+            return (f"; if the head moved about {meant:.0f}°, the rotation unit is wrong "
+                    f"({how}: {factor:.3g} times too small): check "
+                    "CHAMELEONS_LIVELINK_ROTATION_SCALE")  # fmt: skip
+    return ""
 
 
 def robot(telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None) -> dict[str, Any]:
@@ -142,6 +170,10 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
     if movement.problem:
         return step("copy", label, FAIL, f"the robot could not be switched to copy: "
                     f"{movement.problem}", **figures)  # fmt: skip
+    latest = movement.copy or telemetry
+    if latest.get("robot_connected") is False:  # the copy is measured on what is sent
+        return step("copy", label, FAIL, f"{configured}; the robot cannot copy: "
+                    f"{health.robot_value(latest, False)}", **figures)  # fmt: skip
     seen = movement.copy or {}
     if seen.get("behaviour") != "copy":
         return step("copy", label, FAIL, f"{configured}; the robot ran "

@@ -1,6 +1,9 @@
 """The booth check's test prompt: the robot says one recorded prompt and must report its
 speech start and end (a Furhat through its own speech events, the virtual robot through
 its display page), as in a session, but logged with the check and not as a played prompt.
+An end that says the robot could not play it (a Furhat's ``failed: true``, also after its
+start) fails the step with the reason: the URL the robot was given, and the likely cause
+when it names a loopback address (``CHAMELEONS_PUBLIC_URL`` not set).
 
 The prompt is the first prompt with audio of the first actor in the catalogue
 (``CHAMELEONS_BOOTH_CHECK_ACTOR`` picks another actor); its id on the wire is prefixed with
@@ -69,8 +72,8 @@ async def say_test_prompt(state: Any, booth: str) -> dict[str, Any]:
                               "problem": None}  # fmt: skip
     bridge = worker_link.bridge_of(state)
     events = speech.open_events(bridge, booth)
-    body = {"prompt_id": prompt_id, "play_id": play_id,
-            "audio_url": _audio_url(state, catalogue.actor, prompt, booth)}  # fmt: skip
+    url = _audio_url(state, catalogue.actor, prompt, booth)
+    body = {"prompt_id": prompt_id, "play_id": play_id, "audio_url": url}
     sent_at = time.monotonic()
     try:
         outcome = await worker_link.send_command(bridge, booth, PLAY_PROMPT, body)
@@ -78,6 +81,8 @@ async def say_test_prompt(state: Any, booth: str) -> dict[str, Any]:
             result["problem"] = outcome.detail or "no events from the worker"
             return result
         await _follow(events, prompt_id, play_id, catalogue.duration(prompt), sent_at, result)
+        if result["problem"] is not None and url not in result["problem"]:
+            result["problem"] += f" (the robot was given {url})"  # the robot's own problem
     finally:
         speech.close(events)
     return result
@@ -88,18 +93,27 @@ async def _follow(
     result: dict[str, Any],
 ) -> None:  # fmt: skip
     try:
-        kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
-                                         speech.START_TIMEOUT_SECONDS)  # fmt: skip
+        kind, body = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
+                                            speech.START_TIMEOUT_SECONDS)  # fmt: skip
     except TimeoutError:
         return
     if kind == speech.SPEECH_END:
-        result["problem"] = "the robot ended the prompt before it started"
+        result["problem"] = _failure(body) if speech.failed(body) else (
+            "the robot ended the prompt before it started"
+            + (f": {body['error']}" if body.get("error") else ""))  # fmt: skip
         return
     result["start_ms"] = round((time.monotonic() - sent_at) * 1000.0, 1)
     try:
         while kind != speech.SPEECH_END:
-            kind, _ = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
-                                             duration + speech.END_MARGIN_SECONDS)  # fmt: skip
+            kind, body = await asyncio.wait_for(speech.next_speech(events, prompt_id, play_id),
+                                                duration + speech.END_MARGIN_SECONDS)  # fmt: skip
     except TimeoutError:
         return
+    if speech.failed(body):  # it started, and the robot could not play it
+        result["problem"] = _failure(body)
+        return
     result["ended"] = True
+
+
+def _failure(body: dict[str, Any]) -> str:
+    return str(body.get("error") or "the robot could not play the prompt")

@@ -211,18 +211,24 @@ def _robot_check(
     if telemetry.get("driver") == "virtual" and display is not None:
         open_and_playing, why = display
         return Check("robot", open_and_playing, why)
-    return Check("robot", connected, _robot_value(telemetry, connected))
+    return Check("robot", connected, robot_value(telemetry, connected))
 
 
-def _robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
-    """``connected``, or why not: a refused login says so with the robot's reason."""
+def robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
+    """``connected``, or why not: a refused or unanswered login says so with the robot's
+    reason, and a robot the worker tries again says when (``retrying in 8 s``)."""
     if connected:
         return "connected"
     state = str(telemetry.get("robot_state") or "disconnected")
     problem = telemetry.get("robot_problem")
+    retry_in = _number(telemetry, "robot_retry_in")
+    if state == "connecting" and problem:  # a login that failed is being tried again
+        return f"login failed: {problem}; trying again now"
     if state in ROBOT_PROBLEMS:
-        return f"{ROBOT_PROBLEMS[state]}: {problem}" if problem else ROBOT_PROBLEMS[state]
-    return "disconnected"
+        value = f"{ROBOT_PROBLEMS[state]}: {problem}" if problem else ROBOT_PROBLEMS[state]
+    else:
+        value = "disconnected"
+    return value if retry_in is None else f"{value}; retrying in {retry_in:.0f} s"
 
 
 def _face_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:

@@ -10,8 +10,10 @@ first play's interrupted end is never taken for the second's. (An event without 
 ``play_id``, from a worker that sends none, is placed by its ``prompt_id``.)
 
 A play that no robot voices is not voiced: no speech start within
-:data:`START_TIMEOUT_SECONDS`, or an end before any start (the robot skipped it, or was not
-connected). :func:`watch` reports it through ``on_not_voiced`` with the reason; the play
+:data:`START_TIMEOUT_SECONDS`, an end before any start (the robot skipped it, or was not
+connected), or an end with outcome ``failed`` (a Furhat's ``response.speak.end`` with
+``failed: true``: it could not play the audio, also after its speech start).
+:func:`watch` reports it through ``on_not_voiced`` with the reason; the play
 is then logged ``prompt.not_voiced``, shown NOT VOICED on the console and counted in the
 dashboard's data-quality flags.
 
@@ -44,6 +46,7 @@ OnSpeech = Callable[[bool, float | None, str | None], Awaitable[None]]
 # why it was not voiced -> logged
 OnNotVoiced = Callable[[str], Awaitable[None]]
 NOT_STARTED = "the robot never started speaking it"
+FAILED = "failed"  # the outcome of a speech end the robot could not play
 # reason -> logged
 OnFailure = Callable[[str], Awaitable[None]]
 
@@ -154,13 +157,20 @@ def _time(body: dict[str, Any]) -> float | None:
 
 
 def _why_silent(body: dict[str, Any]) -> str:
-    """Why a play ended before it started, from the worker's speech end."""
+    """Why a play ended before it started (or failed), from the worker's speech end."""
     error, outcome = body.get("error"), body.get("outcome")
     if error:
         return str(error)
     if outcome == "skipped":
         return "skipped: another prompt was played before it started"
+    if outcome == FAILED:
+        return "the robot could not play it"
     return "the robot ended it before it started"
+
+
+def failed(body: dict[str, Any]) -> bool:
+    """The speech end says the robot could not play it (it was not heard)."""
+    return body.get("outcome") == FAILED
 
 
 async def watch(
@@ -186,6 +196,9 @@ async def watch(
         while kind != SPEECH_END:
             kind, body = await asyncio.wait_for(_next(subscription, prompt_id, play_id),
                                                 duration + END_MARGIN_SECONDS)  # fmt: skip
+        if failed(body) and on_not_voiced is not None:  # it started, and was never heard
+            await on_not_voiced(_why_silent(body))
+            return
         outcome = body.get("outcome")
         await on_speech(False, _time(body), str(outcome) if outcome else None)
     except TimeoutError:

@@ -4,15 +4,23 @@ Checked against Furhat's own client (PyPI ``furhat-realtime-api`` 0.1.3,
 ``AsyncFurhatClient``; see docs/furhat.md):
 
 - **Authentication.** The login succeeds only when ``response.auth`` has ``access: true``
-  (the vendor's ``connect`` raises otherwise). A refusal or no answer within
-  ``auth_timeout`` stops the driver in state ``auth_refused``/``auth_timeout`` with the
-  reason: it sends nothing and does not retry until :meth:`retry` (the wizard's button) or
-  a new worker configuration (a restart). A robot that cannot be reached is retried.
+  (the vendor's ``connect`` raises otherwise), answered within ``auth_timeout`` (5 s, the
+  vendor's ``send_event_and_wait`` default). A refusal stops the driver in state
+  ``auth_refused`` with the reason: a wrong key does not fix itself, so it sends nothing
+  and does not retry until :meth:`retry` (the wizard's button) or a new worker
+  configuration (a restart). No answer (``auth_timeout``: a robot still booting) is
+  retried with backoff, like a robot that cannot be reached, and the state says when the
+  next try is (``retry_in``, also in :meth:`stats`). Retrying happens only while the
+  driver is not logged in, so never during a prompt; one played meanwhile ends at once,
+  not voiced, with the reason.
 - **Face set-up.** ``request.face.config`` carries only the fields the vendor's client
   sends (``face_id``, ``visibility``, ``microexpressions``). ``blinking`` and
   ``head_sway`` are not in it: each goes in a message of its own, so a robot that refuses
   one cannot lose the chosen face with it; a refusal is kept in ``stats()["refused"]``.
-- **Speech.** See :mod:`.furhat_speech`. Typed speech (the wizard's fallback sentence) is
+- **Speech.** See :mod:`.furhat_speech`. A ``response.speak.end`` with ``failed: true``
+  ends the play ``failed`` with the reason (the URL the robot could not play, and a hint
+  when that URL names the server's loopback address, which no robot elsewhere can reach).
+  Typed speech (the wizard's fallback sentence) is
   ``request.speak.text`` (the vendor's ``request_speak_text``: ``text``, ``abort``) with a
   ``request_id``, tracked like audio; a voice the study names for the actor is set first
   with ``request.voice.config`` (``request_voice_config``'s ``name``), else the robot's
@@ -36,6 +44,7 @@ import contextlib
 import json
 import logging
 import threading
+import time
 from collections import deque
 from collections.abc import Mapping
 from typing import Any
@@ -45,7 +54,12 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
 from chameleons.worker.drivers.base import SPEECH_END, SPEECH_START, Driver
-from chameleons.worker.drivers.furhat_speech import Credit, SpeechTracker
+from chameleons.worker.drivers.furhat_speech import (
+    FAILED,
+    Credit,
+    SpeechTracker,
+    failure_reason,
+)
 from chameleons.worker.frames import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, F32Array, upper_snake
 
 log = logging.getLogger(__name__)
@@ -55,6 +69,7 @@ DEFAULT_EXCLUDED = ("tongueOut",)
 # Idle behaviour the project switches off, in fields the vendor's client does not send.
 UNCERTAIN_FACE_FIELDS = ("blinking", "head_sway")
 AUTH_REFUSED, AUTH_TIMEOUT = "auth_refused", "auth_timeout"
+AUTH_TIMEOUT_S = 5.0  # the vendor's client waits 5 s for ``response.auth``
 
 
 class AuthFailedError(Exception):
@@ -70,7 +85,8 @@ class FurhatDriver(Driver):
     def __init__(
         self, url: str = DEFAULT_URL, *, key: str | None = None, face_id: str | None = None,
         faces: Mapping[str, str] | None = None, excluded: tuple[str, ...] = DEFAULT_EXCLUDED,
-        backoff_initial: float = 0.25, backoff_max: float = 8.0, auth_timeout: float = 3.0,
+        backoff_initial: float = 0.25, backoff_max: float = 8.0,
+        auth_timeout: float = AUTH_TIMEOUT_S,
         queue_size: int = 8,
     ) -> None:  # fmt: skip
         super().__init__()
@@ -91,7 +107,8 @@ class FurhatDriver(Driver):
         self._control: deque[dict[str, Any]] = deque(maxlen=64)
         self.speech = SpeechTracker()
         self.voice: str | None = None  # the TTS voice last set on this connection
-        self.problem: str | None = None  # why the driver stopped (auth), for the wizard
+        self.problem: str | None = None  # why the login failed (auth), for the wizard
+        self._retry_at: float | None = None  # monotonic time of the next connection attempt
         self.refused: dict[str, str] = {}  # uncertain face field -> the robot's refusal
         self._pending_fields: dict[str, str] = {}  # request_id -> uncertain field
         self._retry = threading.Event()
@@ -150,17 +167,17 @@ class FurhatDriver(Driver):
         """Send one speech request, tracked by ``request_id``; one under way is stopped."""
         if not self.connected:  # nothing will ever answer: end the speech at once
             self.emit(SPEECH_END, prompt_id=prompt_id, play_id=play_id, outcome="skipped",
-                      error=self.problem or "robot not connected")  # fmt: skip
+                      error=self._absence())  # fmt: skip
             return
         busy, stopped = self.speech.busy, self.speech.stopped
-        play, skipped = self.speech.begin(prompt_id, play_id)
+        play, replaced = self.speech.begin(prompt_id, play_id, str(request.get("url") or ""))
         if busy and not stopped:  # the robot would queue it behind the one that plays
             self._queue_control({"type": "request.speak.stop"})
         # A play the wizard has just stopped (the stop went out) counts as under way whether
         # or not the robot's end has come back yet: the flag must not depend on that race.
         abort = busy or stopped
         self._queue_control({**request, "abort": abort, "request_id": play.request_id})
-        self._credit(skipped)
+        self._credit(replaced)
 
     def stop_audio(self) -> None:
         # Marked as stopping before the request goes out: the robot's end event can come
@@ -178,13 +195,28 @@ class FurhatDriver(Driver):
                 "face_id": self.face_id, "robot_face_id": self.robot_face_id,
                 "unmapped_face": self.unmapped_face, "problem": self.problem,
                 "refused": dict(self.refused), "voice": self.voice,
-                "speech_swallowed": self.speech.swallowed}  # fmt: skip
+                "speech_swallowed": self.speech.swallowed,
+                "retry_in": self._retry_in()}  # fmt: skip
+
+    def _absence(self) -> str:
+        """Why nothing can be said now, and when the robot is tried again."""
+        why = self.problem or "robot not connected"
+        retry_in = self._retry_in()
+        return why if retry_in is None else f"{why}; retrying in {retry_in:.0f} s"
+
+    def _retry_in(self) -> float | None:
+        """Seconds to the next connection attempt (None: not waiting to retry)."""
+        at = self._retry_at
+        return None if at is None else round(max(0.0, at - time.monotonic()), 1)
 
     def _credit(self, credit: Credit | None) -> None:
         if credit is None:
             return
         if credit.kind == "start":
             self.emit(SPEECH_START, prompt_id=credit.prompt_id, play_id=credit.play_id)
+        elif credit.outcome == FAILED:
+            self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
+                      outcome=FAILED, error=failure_reason(credit, self.voice))  # fmt: skip
         else:
             self.emit(SPEECH_END, prompt_id=credit.prompt_id, play_id=credit.play_id,
                       outcome=credit.outcome)  # fmt: skip
@@ -230,15 +262,21 @@ class FurhatDriver(Driver):
         delay = self.backoff_initial
         while not self._stopping.is_set():
             self.set_state("connecting")
+            state, detail = "disconnected", {}
             try:
                 async with connect(self.url, open_timeout=self.auth_timeout) as ws:
                     await self._handshake(ws)
                     delay = self.backoff_initial
                     await self._session(ws)
             except AuthFailedError as exc:
-                await self._halt(exc)
-                delay = self.backoff_initial
-                continue
+                if exc.state == AUTH_REFUSED:  # a wrong key: only the wizard can fix it
+                    await self._halt(exc)
+                    delay = self.backoff_initial
+                    continue
+                # Not answered: a robot still booting answers later. Retried with backoff.
+                log.warning("furhat at %s: %s; retrying in %g s", self.url, exc.reason, delay)
+                self.problem = exc.reason
+                state, detail = exc.state, {"reason": exc.reason}
             except (OSError, TimeoutError, WebSocketException, ValueError) as exc:
                 log.info("furhat connection to %s failed: %s", self.url, exc)
             self._pending_fields.clear()
@@ -248,8 +286,10 @@ class FurhatDriver(Driver):
                           outcome=credit.outcome, error="robot disconnected")  # fmt: skip
             if self._stopping.is_set():
                 break
-            self.set_state("disconnected", retry_in=delay)
+            self._retry_at = time.monotonic() + delay
+            self.set_state(state, retry_in=delay, **detail)
             await self._sleep(delay)
+            self._retry_at = None
             delay = min(delay * 2, self.backoff_max)
 
     async def _halt(self, failure: AuthFailedError) -> None:
@@ -265,9 +305,13 @@ class FurhatDriver(Driver):
         self._retry.clear()
 
     async def _sleep(self, seconds: float) -> None:
+        """Wait ``seconds``, less when closing or when the wizard asks for a retry."""
         assert self._wake is not None
         end = asyncio.get_running_loop().time() + seconds
         while not self._stopping.is_set():
+            if self._retry.is_set():
+                self._retry.clear()
+                return
             remaining = end - asyncio.get_running_loop().time()
             if remaining <= 0:
                 return
@@ -366,7 +410,11 @@ class FurhatDriver(Driver):
             kind = str(message.get("type", ""))
             request_id = message.get("request_id")
             if kind in ("response.speak.start", "response.speak.end"):
-                self._credit(self.speech.on_message(kind, request_id))
+                detail = message.get("error") or message.get("message")
+                self._credit(self.speech.on_message(
+                    kind, request_id, failed=message.get("failed") is True,
+                    aborted=message.get("aborted") is True,
+                    detail=str(detail) if detail else None))  # fmt: skip
             elif isinstance(request_id, str) and request_id in self._pending_fields:
                 self._field_answer(self._pending_fields.pop(request_id), kind, message)
 

@@ -16,16 +16,29 @@ tracker works the same way:
   if it has not started, an end to it only once it has started (an end before the new
   play's start is the aborted one's);
 - a play replaced before it started is ``skipped``, one replaced while speaking is
-  ``interrupted``: neither is ever reported as played, and the robot's late events for
-  it are swallowed so they cannot end the new prompt.
+  ``interrupted`` (``stopped`` when the wizard had stopped it): neither is ever reported as
+  played, and the robot's late events for it are swallowed so they cannot end the new
+  prompt. The tracker ends every play exactly once, a replaced one when it is replaced
+  (also when its start reached the tracker but not yet the renderer, which then never
+  heard of it speaking; the renderer drops an end it has already given);
+- ``response.speak.end`` says how the speech ended (Furhat's documented fields ``aborted``
+  and ``failed``; docs/furhat.md): ``failed: true`` is ``failed`` (the robot could not
+  play it, e.g. an audio URL it cannot reach), never ``played``; ``aborted: true`` on a
+  play nobody here stopped is ``interrupted``. A failed end without a ``request_id`` is
+  the current play's even before its start (an aborted earlier play ends ``aborted``, not
+  ``failed``).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ipaddress
 import uuid
 from dataclasses import dataclass
+from urllib.parse import urlsplit
 
 PLAYED, INTERRUPTED, SKIPPED, STOPPED = "played", "interrupted", "skipped", "stopped"
+FAILED = "failed"  # the robot could not speak it (``response.speak.end`` ``failed: true``)
 
 
 @dataclass
@@ -33,6 +46,7 @@ class Play:
     prompt_id: str
     request_id: str
     play_id: str | None = None  # the server's id of this play (its events carry it)
+    what: str = ""  # what the robot was asked to say: the audio URL ("" for typed text)
     started: bool = False
     stopping: bool = False  # the wizard stopped it: its end is not "played"
     outcome: str | None = None  # set once the play is over (or replaced)
@@ -46,6 +60,8 @@ class Credit:
     prompt_id: str
     outcome: str | None = None
     play_id: str | None = None
+    what: str = ""  # the play's audio URL ("" for typed text), for a failure's reason
+    detail: str | None = None  # the robot's own words on a failure, if it gave any
 
 
 class SpeechTracker:
@@ -65,24 +81,32 @@ class SpeechTracker:
         """The current play was stopped by the wizard (its stop request went out)."""
         return self.current is not None and self.current.stopping
 
-    def begin(self, prompt_id: str, play_id: str | None = None) -> tuple[Play, Credit | None]:
-        """A new play; the replaced play's credit when it never started (``skipped``: the
-        renderer has not heard of it speaking, so nobody else will end it)."""
+    def begin(
+        self, prompt_id: str, play_id: str | None = None, what: str = ""
+    ) -> tuple[Play, Credit | None]:
+        """A new play; the end of the play it replaces, if one was under way: ``skipped``
+        (never started), ``stopped`` (the wizard stopped it) or ``interrupted``. Given also
+        when the renderer ended it already (it drops the second): its start may have
+        reached this tracker but not yet the renderer, which then ends nothing."""
         credit = None
         old = self.current
         if old is not None and old.outcome is None:
-            old.outcome = INTERRUPTED if old.started else SKIPPED
+            old.outcome = (SKIPPED if not old.started else STOPPED if old.stopping
+                           else INTERRUPTED)  # fmt: skip
             self.replaced = [*self.replaced[-15:], old]
-            if not old.started:
-                credit = Credit("end", old.prompt_id, SKIPPED, old.play_id)
-        play = Play(prompt_id, uuid.uuid4().hex, play_id)
+            credit = Credit("end", old.prompt_id, old.outcome, old.play_id)
+        play = Play(prompt_id, uuid.uuid4().hex, play_id, what)
         self.current = play
         self._by_id[play.request_id] = play
         return play, credit
 
-    def on_message(self, kind: str, request_id: object) -> Credit | None:
-        """The credit for a ``response.speak.start``/``end`` (None: nobody's)."""
-        play = self._find(kind, request_id)
+    def on_message(
+        self, kind: str, request_id: object, *, failed: bool = False, aborted: bool = False,
+        detail: str | None = None,
+    ) -> Credit | None:  # fmt: skip
+        """The credit for a ``response.speak.start``/``end`` (None: nobody's); ``failed``
+        and ``aborted`` are the end's fields, ``detail`` the robot's words on a failure."""
+        play = self._find(kind, request_id, failed)
         if play is None:
             self.swallowed += 1
             return None
@@ -94,7 +118,11 @@ class SpeechTracker:
         if kind == "response.speak.start":
             play.started = True
             return Credit("start", play.prompt_id, play_id=play.play_id)
-        play.outcome = SKIPPED if not play.started else STOPPED if play.stopping else PLAYED
+        if failed:
+            play.outcome = FAILED
+            return Credit("end", play.prompt_id, FAILED, play.play_id, play.what, detail)
+        play.outcome = (SKIPPED if not play.started else STOPPED if play.stopping
+                        else INTERRUPTED if aborted else PLAYED)  # fmt: skip
         return Credit("end", play.prompt_id, play.outcome, play.play_id)
 
     def stop(self) -> Credit | None:
@@ -118,7 +146,7 @@ class SpeechTracker:
         play.outcome = INTERRUPTED if play.started else SKIPPED
         return Credit("end", play.prompt_id, play.outcome, play.play_id)
 
-    def _find(self, kind: str, request_id: object) -> Play | None:
+    def _find(self, kind: str, request_id: object, failed: bool = False) -> Play | None:
         if isinstance(request_id, str) and request_id:
             return self._by_id.get(request_id)
         play = self.current
@@ -126,4 +154,40 @@ class SpeechTracker:
             return None
         if kind == "response.speak.start":
             return None if play.started else play
-        return play if play.started else None
+        return play if play.started or failed else None
+
+
+def failure_reason(credit: Credit, voice: str | None = None) -> str:
+    """Why the robot did not say a failed play, in the words the wizard and the booth check
+    show: the URL it could not play, with a hint when that URL names a loopback address
+    (the server's ``CHAMELEONS_PUBLIC_URL`` left unset: only a robot on the server's own
+    computer, e.g. Furhat's SDK, reaches it)."""
+    said = f" ({credit.detail})" if credit.detail else ""
+    if not credit.what:
+        in_voice = f" in the voice {voice}" if voice else ""
+        return f"the robot could not say the typed text{in_voice}{said}"
+    reason = f"the robot could not play the audio at {credit.what}{said}"
+    host = _host(credit.what)
+    if host is not None and loopback(host):
+        reason += (f"; {host} is the server's own loopback address, which a robot on another "
+                   "computer cannot reach: set CHAMELEONS_PUBLIC_URL to the server's address "
+                   "on the robot's network")  # fmt: skip
+    return reason
+
+
+def _host(url: str) -> str | None:
+    with contextlib.suppress(ValueError):
+        return urlsplit(url).hostname
+    return None
+
+
+def loopback(host: str) -> bool:
+    """An address only this computer reaches (``localhost``, 127.x, ::1, 0.0.0.0)."""
+    name = host.lower()
+    if name == "localhost" or name.endswith(".localhost"):
+        return True
+    try:
+        address = ipaddress.ip_address(name)
+    except ValueError:
+        return False
+    return address.is_loopback or address.is_unspecified

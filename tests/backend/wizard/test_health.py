@@ -140,6 +140,20 @@ def test_a_refused_robot_login_shows_the_reason_on_the_robot_chip() -> None:
     assert plain["robot"].value == "disconnected"
 
 
+def test_a_robot_the_worker_tries_again_says_when_on_the_robot_chip() -> None:
+    """An unanswered login (a robot still booting) and a lost connection are retried by the
+    worker with backoff: the chip says when the next try is, and that one is under way."""
+    why = "the robot did not answer the login within 5 s"
+    waiting = {**GOOD, "robot_connected": False, "robot_state": "auth_timeout",
+               "robot_problem": why, "robot_retry_in": 7.6}  # fmt: skip
+    robot = evaluate(waiting, age=0.5)["robot"]
+    assert robot.value == f"login not answered: {why}; retrying in 8 s"
+    trying = {**waiting, "robot_state": "connecting", "robot_retry_in": None}
+    assert evaluate(trying, age=0.5)["robot"].value == f"login failed: {why}; trying again now"
+    lost = {**GOOD, "robot_connected": False, "robot_state": "disconnected", "robot_retry_in": 2}
+    assert evaluate(lost, age=0.5)["robot"].value == "disconnected; retrying in 2 s"
+
+
 def test_an_unmapped_study_face_or_a_refused_face_field_gets_a_chip_of_its_own() -> None:
     assert "face" not in evaluate({**GOOD, "robot_face": {"unmapped_face": None}}, age=0.5)
     telemetry = {**GOOD, "robot_face": {"unmapped_face": "face-3",
