@@ -34,7 +34,8 @@ def catalogue_languages(root: Path, base: Catalogue) -> list[str]:
 
 def empty_catalogue(base: Catalogue, language: str) -> Catalogue:
     """No prompts in ``language``: the console shows none, and says so."""
-    return Catalogue(base.actor, base.directory / language, base.profile, ())
+    return Catalogue(base.actor, base.directory / language, base.profile, (),
+                     language_folder=language)  # fmt: skip
 
 
 def missing_groups(base: Catalogue, translated: Catalogue) -> list[str]:
