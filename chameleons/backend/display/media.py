@@ -107,16 +107,15 @@ def lipsync_url_for(settings: Settings, audio_url: str) -> str | None:
 
 
 def _actor_dir(settings: Settings, actor: str, language: str | None) -> Path:
-    """The actor's folder (in ``language``'s folder when given), never outside the prompts
-    folder; 404 for anything else."""
+    """The actor's folder (in ``language``'s folder when given): one plain folder name
+    under the prompts folder (an actor folder may be a symbolic link the lab made); 404 for
+    anything else."""
     root = prompts_root(settings).resolve()
     if language is not None and not LANGUAGE.match(language):
         raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
-    parent = root if language is None else (root / language).resolve()
-    actor_dir = (parent / actor).resolve()
-    if actor_dir.parent != parent or (language is not None and parent.parent != root):
+    if actor in ("", ".", "..") or "/" in actor or "\\" in actor:
         raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
-    return actor_dir
+    return (root / actor if language is None else root / language / actor).resolve()
 
 
 def _actor_file(settings: Settings, actor: str, relative: str, language: str | None) -> Path:
@@ -148,22 +147,22 @@ def prompt_media(
     settings: Settings = request.app.state.settings
     path = _actor_file(settings, actor, relative, lang)
     if not path.is_file() and path.suffix.lower() == ".wav":
-        path = _cached_wav(settings, path)
+        inside = path.relative_to(_actor_dir(settings, actor, lang))
+        path = _cached_wav(settings, path, Path(lang or "", actor, inside))
     if not path.is_file():
         raise HTTPException(status.HTTP_404_NOT_FOUND, "No such prompt file.")
     return FileResponse(path, media_type=MEDIA_TYPES[path.suffix.lower()])
 
 
-def _cached_wav(settings: Settings, wav_path: Path) -> Path:
-    """The WAV decoded from the same-named MP3/Ogg/FLAC beside ``wav_path``, cached at the
-    same place under ``<data_dir>/media-cache`` as the file under the prompts folder (so
+def _cached_wav(settings: Settings, wav_path: Path, relative: Path) -> Path:
+    """The WAV decoded from the same-named MP3/Ogg/FLAC beside ``wav_path``, cached under
+    ``<data_dir>/media-cache`` at ``relative``, its place under the prompts folder (so
     ``sv/m1/audio/x.wav`` and ``m1/audio/x.wav`` never share a cache entry)."""
     source = next(
         (s for s in (wav_path.with_suffix(x) for x in TRANSCODE_SOURCES) if s.is_file()), None
     )
     if source is None:
         return wav_path
-    relative = wav_path.relative_to(prompts_root(settings).resolve())
     cached = settings.data_dir / "media-cache" / relative
     if not cached.is_file() or cached.stat().st_mtime < source.stat().st_mtime:
         transcode_to_wav(source, cached)

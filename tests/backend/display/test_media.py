@@ -168,3 +168,17 @@ def test_a_language_names_only_a_language_folder(
 ) -> None:
     assert client.get(url(app, "audio/hello.mp3", language=language)).status_code == 404
     assert client.get(url(app, "../secret.mp3", language="sv")).status_code == 404
+
+
+def test_an_actor_folder_may_be_a_link_the_lab_made(
+    client: TestClient, app: FastAPI, settings: Settings, tmp_path: Path
+) -> None:
+    root = settings.prompts_dir
+    assert root is not None
+    elsewhere = tmp_path / "recordings" / "m8"
+    shutil.copytree(root / ACTOR, elsewhere)
+    (root / "m8").symlink_to(elsewhere, target_is_directory=True)
+    key = signing_key(app)
+    assert client.get(media_path(key, "m8", "audio/hello.mp3")).status_code == 200
+    assert client.get(media_path(key, "m8", "audio/hello.mp3", wav=True)).status_code == 200
+    assert client.get(media_path(key, "m8", "../m9/audio/hello.mp3")).status_code == 404
