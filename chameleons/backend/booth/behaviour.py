@@ -212,8 +212,8 @@ def demo_clip_warning(state: Any, spec: Study, conditions: list[str] | None = No
     return (
         f"Condition {which} replays the synthetic demo clip {DEFAULT_CLIP} (the face "
         "simulator's, made for the demo), not a recording of a real conversation. Before "
-        "real participants, record a natural clip (chameleons prompts import ... --natural "
-        "NAME) and name it in the study's natural condition (params.clip)."
+        "real participants, record a natural clip (chameleons prompts import prompts/m1 TAKE "
+        "--natural NAME) and name it in the study's natural condition (clip: m1/natural/NAME)."
     )
 
 

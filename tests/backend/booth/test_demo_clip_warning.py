@@ -62,7 +62,7 @@ def test_the_default_study_is_warned_about_and_a_recorded_clip_is_not(tmp_path: 
     demo = SimpleNamespace(settings=SimpleNamespace(prompts_dir=str(PROMPTS), data_dir=None))
     warning = demo_clip_warning(demo, spec)
     assert warning.startswith("Condition natural replays the synthetic demo clip demo-natural")
-    assert "chameleons prompts import ... --natural NAME" in warning
+    assert "chameleons prompts import prompts/m1 TAKE --natural NAME" in warning
     assert demo_clip_warning(demo, spec, ["still", "copy"]) == ""
     lab = SimpleNamespace(settings=SimpleNamespace(
         prompts_dir=str(lab_prompts(tmp_path / "prompts")), data_dir=None))  # fmt: skip
