@@ -5,28 +5,20 @@ recordings and curves (issue 28: a Swedish session had no suggestion phrasings).
 from __future__ import annotations
 
 import csv
-import importlib.util
-import sys
-from types import ModuleType
 
 import pytest
 
 from chameleons.prompts import Catalogue, load_catalogue
-from tests.prompts.test_demo_catalogue import ACTORS, KNOWN_ITEMS, PROMPTS, REPO, ROBOT_NAMES
+from tests.prompts.test_demo_catalogue import (
+    ACTORS,
+    KNOWN_ITEMS,
+    PROMPTS,
+    ROBOT_NAMES,
+    _load_writer,
+)
 
 SWEDISH = PROMPTS / "sv"
 MAX_AUDIO_BYTES = 20 * 1024 * 1024  # as the English demo's (tests/backend/display)
-
-
-def _writer() -> ModuleType:
-    path = REPO / "scripts" / "write_demo_catalogue.py"
-    spec = importlib.util.spec_from_file_location("write_demo_catalogue", path)
-    assert spec is not None
-    assert spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclasses look their module up while defined
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +78,7 @@ def test_the_swedish_audio_stays_compact() -> None:
 
 
 def test_committed_swedish_files_match_the_generator() -> None:
-    rendered = _writer().render_catalogue(PROMPTS, "sv")
+    rendered = _load_writer().render_catalogue(PROMPTS, "sv")
     assert len(rendered) == 2 * len(ACTORS)  # a manifest and a profile per actor
     for path, text in rendered.items():
         committed = path.read_text(encoding="utf-8")
@@ -104,7 +96,7 @@ def test_committed_swedish_files_match_the_generator() -> None:
 
 
 def test_swedish_pronouns_follow_gender_and_number() -> None:
-    item = _writer().Item
+    item = _load_writer().Item
     fields = ("lunar", 1, "x", "n", "s", "w", "w")
     assert item(*fields, language="sv").pronouns()["it"] == "den"
     assert item(*fields, gender="ett", language="sv").pronouns()["it"] == "det"

@@ -11,6 +11,7 @@ from __future__ import annotations
 import io
 import json
 from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from chameleons.backend.display.media import lipsync_url_for
 from chameleons.backend.display.relay import forward_speech_events, relay_envelope
 from chameleons.backend.display.tokens import display_token, signing_key
 from chameleons.settings import Settings
+from chameleons.worker.lipsync import load_lipsync
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.backend.wizard.conftest import api
 from tests.backend.wizard.test_booth_check_virtual import TELEMETRY
@@ -100,17 +102,32 @@ def local(url: str) -> str:
     return f"{parts.path}?{parts.query}"
 
 
-@pytest.mark.usefixtures("display_worker")
-def test_the_display_is_served_the_swedish_recording_and_curves(
-    app: FastAPI, client: TestClient, pi: StaffApi
-) -> None:
-    wizard, actor, group = swedish_intro(pi)
+@contextmanager
+def page_playing(
+    app: FastAPI, client: TestClient, wizard: WizardBot, group: str
+) -> Iterator[tuple[Any, dict[str, Any]]]:
+    """An open display page of the booth, the wizard's play of ``group`` and the page's
+    ``play_audio`` message of it."""
     path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
     with client.websocket_connect(path) as page:
         page.send_text(json.dumps(TELEMETRY))
         result = wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": group})
         assert result["text"].startswith("Hej")
-        play = _until_play_audio(page)
+        yield page, _until_play_audio(page)
+
+
+def speech(play: dict[str, Any], event: str, **extra: Any) -> str:
+    """The page's speech report of ``play``."""
+    return json.dumps({"type": "speech", "event": event, "play_id": play["play_id"],
+                       "prompt_id": play["prompt_id"], **extra})  # fmt: skip
+
+
+@pytest.mark.usefixtures("display_worker")
+def test_the_display_is_served_the_swedish_recording_and_curves(
+    app: FastAPI, client: TestClient, pi: StaffApi
+) -> None:
+    wizard, actor, group = swedish_intro(pi)
+    with page_playing(app, client, wizard, group) as (page, play):
         audio = client.get(local(play["url"]))
         assert audio.status_code == 200, play["url"]
         swedish = PROMPTS / "sv" / actor / "audio" / f"{group}.mp3"
@@ -119,9 +136,8 @@ def test_the_display_is_served_the_swedish_recording_and_curves(
         assert play["lipsync_url"] is not None
         curves = client.get(local(play["lipsync_url"])).text
         assert curves == (PROMPTS / "sv" / actor / "lipsync" / f"{group}.csv").read_text()
-        speech = {"type": "speech", "play_id": play["play_id"], "prompt_id": play["prompt_id"]}
-        page.send_text(json.dumps({**speech, "event": "start", "audio_delay_ms": 5.0}))
-        page.send_text(json.dumps({**speech, "event": "end", "reason": "ended"}))
+        page.send_text(speech(play, "start", audio_delay_ms=5.0))
+        page.send_text(speech(play, "end", reason="ended"))
         until(lambda: "prompt.speech_end" in prompt_events(wizard))
     assert "prompt.not_voiced" not in prompt_events(wizard)
 
@@ -131,15 +147,9 @@ def test_audio_the_display_cannot_load_is_not_voiced_for_that_reason(
     app: FastAPI, client: TestClient, pi: StaffApi
 ) -> None:
     wizard, actor, group = swedish_intro(pi)
-    path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
-    with client.websocket_connect(path) as page:
-        page.send_text(json.dumps(TELEMETRY))
-        wizard.staff.post(f"{api(wizard)}/prompts/play", {"group": group})
-        play = _until_play_audio(page)
+    with page_playing(app, client, wizard, group) as (page, play):
         # What the page sends when its audio element cannot load the file (display.js).
-        page.send_text(json.dumps({"type": "speech", "event": "end", "reason": "error",
-                                   "play_id": play["play_id"],
-                                   "prompt_id": play["prompt_id"]}))  # fmt: skip
+        page.send_text(speech(play, "end", reason="error"))
         silent = until(lambda: prompt_events(wizard).get("prompt.not_voiced"), timeout=20)
     assert silent["payload"]["detail"] == (
         "the robot display could not load or play the prompt's audio "
@@ -163,3 +173,9 @@ def test_a_furhat_is_given_the_swedish_recording_as_wav(
     english, _ = soundfile.read(PROMPTS / actor / "audio" / f"{group}.mp3", dtype="int16")
     assert np.array_equal(served, swedish)
     assert not (len(served) == len(english) and np.array_equal(served, english))
+    # The worker moves the Furhat's lips with the Swedish curves (it loads them itself).
+    acked = prompt_events(wizard)["prompt.acked"]["payload"]["result"]
+    curves = load_lipsync(PROMPTS / "sv" / actor / "lipsync" / f"{group}.csv")
+    english_curves = load_lipsync(PROMPTS / actor / "lipsync" / f"{group}.csv")
+    assert acked["lipsync_seconds"] == pytest.approx(curves.duration)
+    assert curves.duration != pytest.approx(english_curves.duration)
