@@ -81,19 +81,22 @@ SHAPES: dict[str, dict[str, float]] = {
     "rest": {},
 }  # fmt: skip
 CHANNELS = tuple(sorted({name for shape in SHAPES.values() for name in shape}))
-# espeak-ng English mnemonics -> shape; longest prefix first (e.g. "tS" before "t").
+# espeak-ng mnemonics -> shape; longest prefix first (e.g. "tS" before "t"). English's,
+# plus Swedish's own (espeak-ng phsource/ph_swedish): the rounded front and central vowels
+# y: y (y), Y: (ø), u- (ʉ), 8 (ɵ), the "sj" sound sx, and R. (None of them occurs in
+# the English demo, whose curves stay as they were.)
 PHONEME_CLASSES: tuple[tuple[str, str], ...] = tuple(sorted(
     [(p, "closed") for p in ("p", "b", "m")]
     + [(p, "labiodental") for p in ("f", "v")]
-    + [(p, "rounded") for p in ("u:", "U", "w", "oU", "o@", "u@", "W")]
+    + [(p, "rounded") for p in ("u:", "U", "w", "oU", "o@", "u@", "W", "y", "Y", "u-", "8")]
     + [(p, "round_open") for p in ("O:", "O", "0", "aU", "OI", "o")]
     + [(p, "spread") for p in ("i:", "i", "I", "j", "eI", "e@", "I@", "i@")]
     + [(p, "mid") for p in ("E", "e", "3:", "3")]
     + [(p, "open") for p in ("a", "A:", "A", "aI", "a#", "V", "&")]
     + [(p, "schwa") for p in ("@",)]
-    + [(p, "postalveolar") for p in ("S", "Z", "tS", "dZ", "r")]
+    + [(p, "postalveolar") for p in ("S", "Z", "tS", "dZ", "r", "sx")]
     + [(p, "teeth") for p in ("s", "z", "T", "D")]
-    + [(p, "tongue") for p in ("t", "d", "n", "l", "N")]
+    + [(p, "tongue") for p in ("t", "d", "n", "l", "N", "R")]
     + [(p, "back") for p in ("k", "g", "h", "x")]
     + [(p, "rest") for p in ("_",)],
     key=lambda pair: -len(pair[0]),

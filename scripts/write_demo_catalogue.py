@@ -4,11 +4,17 @@ The content lives in ``prompts/_demo_source/``: ``items.yaml`` (what to say abou
 item, in expert order) and ``phrasing.yaml`` (how each actor says things). Run this after
 editing either; ``--check`` only reports whether the committed manifests are up to date.
 
+``--language sv`` writes the same catalogue in another language from
+``prompts/_demo_source/sv/`` (the same structure, the same ids and group names) into
+``prompts/sv/<actor>/``, with an ``actor.yaml`` made from the English one (espeak-ng's
+voice of that language, the same pitch, speed and variant).
+
 Audio and lip-sync cells are filled in for files that already exist as
 ``<actor>/audio/<id>.<ext>`` and ``<actor>/lipsync/<id>.csv``, so re-running after the
 voices are synthesised records them in the manifests.
 
-Usage: ``.venv/bin/python scripts/write_demo_catalogue.py [--root prompts] [--check]``
+Usage: ``.venv/bin/python scripts/write_demo_catalogue.py [--root prompts] [--language sv]
+[--check]``
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from typing import Any
 
 import yaml
 
+from chameleons.i18n import language_name
 from chameleons.prompts import manifest_text
 
 ACTORS = ("m1", "m2", "f1", "f2")
@@ -32,6 +39,7 @@ ROBOT_NAMES = ("Nova", "Milo", "Iris", "Theo", "Luna", "Oskar", "Vera", "Kai")
 DEFAULT_SETS = (range(3, 8), range(8, 13))
 AUDIO_EXTENSIONS = (".ogg", ".opus", ".mp3", ".m4a", ".wav")
 SOURCE_DIR = "_demo_source"
+ENGLISH = "en"
 
 Row = dict[str, str]
 
@@ -46,6 +54,8 @@ class Item:
     why: str
     why_short: str
     plural: bool = False
+    gender: str = ""  # Swedish: "ett" for ett-words (en-words need nothing)
+    language: str = ENGLISH
 
     def fields(self) -> dict[str, str]:
         """Template fields for this item (README of the source: phrasing.yaml header)."""
@@ -56,22 +66,29 @@ class Item:
             "Short": _capitalise(self.short),
             "why": self.why,
             "why_short": self.why_short,
-            "it": "them" if self.plural else "it",
-            "they": "they" if self.plural else "it",
-            "is": "are" if self.plural else "is",
+            **self.pronouns(),
         }
+
+    def pronouns(self) -> dict[str, str]:
+        """``it`` (object), ``they`` (subject) and ``is`` for this item in its language."""
+        if self.language == "sv":
+            it = "dem" if self.plural else "det" if self.gender == "ett" else "den"
+            return {"it": it, "they": "de" if self.plural else it, "is": "är"}
+        return {"it": "them" if self.plural else "it", "they": "they" if self.plural else "it",
+                "is": "are" if self.plural else "is"}  # fmt: skip
 
 
 def _capitalise(text: str) -> str:
     return text[:1].upper() + text[1:]
 
 
-def load_items(path: Path) -> dict[str, list[Item]]:
+def load_items(path: Path, language: str = ENGLISH) -> dict[str, list[Item]]:
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
     return {
-        task: [Item(task=task, rank=rank, **entry) for rank, entry in enumerate(entries, 1)]
+        task: [Item(task=task, rank=rank, language=language, **entry)
+               for rank, entry in enumerate(entries, 1)]
         for task, entries in data.items()
-    }
+    }  # fmt: skip
 
 
 def actor_rows(phrasing: dict[str, Any], items: dict[str, list[Item]]) -> list[Row]:
@@ -171,26 +188,51 @@ def with_existing_assets(actor_dir: Path, rows: list[Row]) -> Iterator[Row]:
         yield {**row, "audio": audio, "lipsync": lipsync if (actor_dir / lipsync).is_file() else ""}
 
 
-def render_catalogue(root: Path) -> dict[Path, str]:
-    """Manifest path -> its text, for every demo actor under ``root``."""
-    source = root / SOURCE_DIR
-    items = load_items(source / "items.yaml")
+def render_catalogue(root: Path, language: str = ENGLISH) -> dict[Path, str]:
+    """File path -> its text: every demo actor's manifest under ``root`` (in ``language``:
+    under ``root/<language>``, with the actor's ``actor.yaml`` for that language)."""
+    english = language == ENGLISH
+    source = root / SOURCE_DIR if english else root / SOURCE_DIR / language
+    target = root if english else root / language
+    items = load_items(source / "items.yaml", language)
     phrasing = yaml.safe_load((source / "phrasing.yaml").read_text(encoding="utf-8"))
-    return {
-        root / actor / "manifest.csv": manifest_text(
-            with_existing_assets(root / actor, actor_rows(phrasing[actor], items))
+    files = {
+        target / actor / "manifest.csv": manifest_text(
+            with_existing_assets(target / actor, actor_rows(phrasing[actor], items))
         )
         for actor in ACTORS
     }
+    if not english:
+        files |= {target / actor / "actor.yaml": profile_text(root / actor, language)
+                  for actor in ACTORS}  # fmt: skip
+    return files
+
+
+def profile_text(english: Path, language: str) -> str:
+    """The English actor's ``actor.yaml`` in ``language``: espeak-ng's voice of that
+    language with the English voice's variant (``en-gb-x-rp+m3`` -> ``sv+m3``), the same
+    pitch, speed and gaps."""
+    data = yaml.safe_load((english / "actor.yaml").read_text(encoding="utf-8"))
+    voice = dict(data["voice"])
+    variant = str(voice["espeak_voice"]).rpartition("+")[2]
+    voice["espeak_voice"] = f"{language}+{variant}"
+    profile = {**data, "display_name": f"{data['display_name']} ({language_name(language)})",
+               "language": language, "voice": voice}  # fmt: skip
+    header = (f"# The {language} prompts of actor {english.name} "
+              f"(scripts/write_demo_catalogue.py --language {language}).\n")  # fmt: skip
+    return header + yaml.safe_dump(profile, allow_unicode=True, sort_keys=False)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--root", type=Path, default=Path(__file__).parents[1] / "prompts")
+    parser.add_argument("--language", default=ENGLISH,
+                        help="write the catalogue in this language (source: "
+                        "_demo_source/<language>/, target: <language>/<actor>/)")  # fmt: skip
     parser.add_argument("--check", action="store_true", help="exit 1 if a manifest is stale")
     args = parser.parse_args(argv)
     stale: list[Path] = []
-    for path, text in render_catalogue(args.root).items():
+    for path, text in render_catalogue(args.root, args.language).items():
         current = path.read_text(encoding="utf-8") if path.is_file() else None
         if current == text:
             continue
@@ -199,7 +241,8 @@ def main(argv: list[str] | None = None) -> int:
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(text, encoding="utf-8", newline="")
         rows = len(text.splitlines()) - 1  # no demo text spans lines
-        print(f"{'stale' if args.check else 'wrote'} {path} ({rows} prompts)")
+        what = f"{rows} prompts" if path.suffix == ".csv" else "profile"
+        print(f"{'stale' if args.check else 'wrote'} {path} ({what})")
     return 1 if args.check and stale else 0
 
 

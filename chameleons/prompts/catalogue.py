@@ -20,10 +20,20 @@ class Catalogue:
     """All prompts of one actor, in manifest order. Build it with ``load_catalogue``."""
 
     def __init__(
-        self, actor: str, directory: Path, profile: ActorProfile, prompts: Iterable[Prompt]
+        self,
+        actor: str,
+        directory: Path,
+        profile: ActorProfile,
+        prompts: Iterable[Prompt],
+        *,
+        language_folder: str | None = None,
     ) -> None:
         self.actor = actor
         self.directory = directory
+        # The language folder the catalogue was read from (``prompts/<lang>/<actor>/``), or
+        # None for the actor's own folder: media URLs carry it, so the robot is served the
+        # file of this catalogue and not the same-named one of the actor's main language.
+        self.language_folder = language_folder
         self.profile = profile
         self.prompts: tuple[Prompt, ...] = tuple(prompts)
         self._by_id = {prompt.id: prompt for prompt in self.prompts}

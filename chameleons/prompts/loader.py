@@ -40,18 +40,21 @@ def load_catalogue(
     known_items: KnownItems | None = None,
     *,
     robot_names: Collection[str] | None = None,
+    language_folder: str | None = None,
 ) -> Catalogue:
     """Load ``actor_dir/manifest.csv`` (and ``actor.yaml`` when present), validated.
 
     ``known_items`` maps task id -> item ids; when given, every task/item/other_item must
     be one of them. ``robot_names``, when given, limits the ``robot_name`` column likewise.
+    ``language_folder`` names the language folder ``actor_dir`` lies in
+    (``prompts/<language_folder>/<actor>/``; None: the actor's own folder).
     """
     prompts, problems = _load_prompts(actor_dir, known_items, robot_names)
     profile, profile_problems = load_profile(actor_dir / ACTOR_PROFILE_NAME, actor_dir.name)
     problems += profile_problems
     if problems:
         raise CatalogueError(problems)
-    return Catalogue(actor_dir.name, actor_dir, profile, prompts)
+    return Catalogue(actor_dir.name, actor_dir, profile, prompts, language_folder=language_folder)
 
 
 def load_catalogues(

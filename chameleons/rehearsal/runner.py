@@ -72,6 +72,10 @@ class Summary:
     tally: Tally
     display: dict[str, int] = field(default_factory=dict)
     situations: list[str] = field(default_factory=list)  # dropouts and deviations made
+    voiced: int = 0  # prompts the display loaded the audio of and reported spoken
+    unloaded: list[str] = field(default_factory=list)  # "prompt: why" of audio that failed
+    fetched: list[tuple[str, str, str]] = field(default_factory=list)  # (prompt, path, sha256)
+    warnings: list[str] = field(default_factory=list)  # said before the first session
 
     def lines(self) -> list[str]:
         count = len(self.codes)
@@ -92,8 +96,15 @@ class Summary:
             lines.append(
                 f"Virtual robot display: {self.display.get('face', 0)} face frames, "
                 f"{self.display.get('head', 0)} head poses, "
-                f"{self.display.get('play_audio', 0)} prompts voiced."
+                f"{self.voiced} prompts voiced (audio loaded from the server)."
             )
+        if self.unloaded:
+            lines.append(
+                f"NOT VOICED: the audio of {len(self.unloaded)} prompts could not be loaded: "
+                + "; ".join(self.unloaded[:3])
+                + ("; ..." if len(self.unloaded) > 3 else "")
+            )
+        lines += [f"Warning: {warning}" for warning in self.warnings]
         accepted = ", ".join(
             f"{condition} {mean(values):.2f}"
             for condition, values in sorted(tally.accepted.items())
@@ -141,6 +152,14 @@ def pick_study(staff: StaffApi, study_id: int | None) -> Json:
     return found[0]
 
 
+def language_warnings(study: Json, language: str | None) -> list[str]:
+    """Why the sessions' language cannot voice every prompt (the server refuses real
+    sessions in it; rehearsals run, and the prompts it lacks are never played)."""
+    chosen = language or study.get("default_language") or ""
+    gap = (study.get("prompt_gaps") or {}).get(chosen)
+    return [f"{gap} Rehearsing anyway: those prompts will not be played."] if gap else []
+
+
 OPEN_STATES = ("pending", "running", "final_questionnaire")
 
 
@@ -186,15 +205,22 @@ def rehearse(target: Target, options: Options, progress: Progress | None = None)
         staff = _log_in(http, target)
         study = pick_study(staff, target.study_id)
         check_booth(staff, target, say)
+        warnings = language_warnings(study, options.language)
+        for warning in warnings:
+            say(f"Warning: {warning}")
         display = _open_display(target, http, say) if options.display else None
         try:
             summary = _sessions(target, options, staff, phone_http, study, say)
             if display is not None:  # every play the server sent, before the page closes
-                display.wait_for_received("play_audio", summary.tally.prompts_played)
+                display.wait_for_answered(summary.tally.prompts_played)
         finally:
             if display is not None:
                 display.close()
-        summary.display = dict(display.received) if display is not None else {}
+        summary.warnings = warnings
+        if display is not None:
+            summary.display = dict(display.received)
+            summary.voiced, summary.unloaded = display.voiced, list(display.unloaded)
+            summary.fetched = list(display.fetched)
     summary.seconds = time.monotonic() - started
     return summary
 

@@ -3,9 +3,11 @@
 - :class:`PhoneSocket` is the phone page's ``/ws/p/<token>``: the server pushes the
   phone's view whenever the session changes; the scripted participant waits on it.
 - :class:`DisplayScreen` is the robot display page's ``/ws/display/<booth>``: it receives
-  the virtual robot's face frames and prompt audio, and reports each prompt's speech start
-  and end at once (a rehearsal does not wait for audio), which the server forwards to
-  the worker, exactly as the page does after playing it.
+  the virtual robot's face frames and prompt audio, loads each prompt's audio (and curves)
+  from the URL the page would, and reports the prompt's speech start and end at once (a
+  rehearsal does not wait for audio), or, when the audio cannot be loaded, the end with
+  the page's ``error`` reason; the server forwards them to the worker, exactly as the page
+  does after playing it.
 
 Each reads in a thread of its own; waiting is on a condition, never on a sleep.
 """
@@ -13,6 +15,7 @@ Each reads in a thread of its own; waiting is on a condition, never on a sleep.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import threading
 from collections import Counter
@@ -20,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
+import httpx
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
@@ -111,6 +115,10 @@ class DisplayScreen(_Reader):
         )
         self.received: Counter[str] = Counter()
         self.faces: list[str] = []
+        self.voiced = 0  # prompts whose audio loaded (and was reported spoken)
+        self.unloaded: list[str] = []  # "prompt_id: why" of audio that did not load
+        self.fetched: list[tuple[str, str, str]] = []  # (prompt id, URL path, sha256)
+        self._media = httpx.Client(base_url=origin, timeout=30, trust_env=proxy)
         super().__init__(connection, "rehearsal-display")
 
     def _on_message(self, message: Json) -> None:
@@ -124,10 +132,52 @@ class DisplayScreen(_Reader):
             self._speak(message)
 
     def _speak(self, play: Json) -> None:
-        """Report the prompt as spoken: start (no delay) and end, as the page does."""
+        """Load the prompt's audio and curves as the page does, then report it spoken:
+        start (no delay) and end; audio that does not load ends with ``error``."""
         ids = {"play_id": str(play.get("play_id", "")), "prompt_id": play.get("prompt_id")}
+        problem = self._load(str(ids["prompt_id"]), play.get("url"), audio=True)
+        problem = problem or self._load(str(ids["prompt_id"]), play.get("lipsync_url"))
+        if problem is not None:
+            with self._condition:
+                self.unloaded.append(f"{ids['prompt_id']}: {problem}")
+            self._send({"type": "speech", "event": "end", "reason": "error", **ids})
+            with self._condition:
+                self._condition.notify_all()
+            return
         self._send({"type": "speech", "event": "start", "audio_delay_ms": 0.0, **ids})
         self._send({"type": "speech", "event": "end", "reason": "ended", **ids})
+        with self._condition:
+            self.voiced += 1
+            self._condition.notify_all()
+
+    def wait_for_answered(self, count: int, timeout: float = 60.0) -> bool:
+        """Whether ``count`` prompts were answered (voiced, or their audio did not load)
+        within ``timeout``: the last play of a run may still be on its way or loading."""
+        with self._condition:
+            return self._condition.wait_for(
+                lambda: self.closed or self.voiced + len(self.unloaded) >= count, timeout
+            ) and (self.voiced + len(self.unloaded) >= count)
+
+    def _load(self, prompt_id: str, url: object, *, audio: bool = False) -> str | None:
+        """Why ``url`` could not be loaded, or None (no URL: nothing to load, as for curves
+        the prompt has none of; an empty audio URL is a prompt without a recording)."""
+        if not isinstance(url, str) or not url:
+            return "the prompt has no audio" if audio else None
+        try:
+            response = self._media.get(url)  # a path: from the server the page came from
+        except httpx.HTTPError as error:
+            return f"{urlsplit(url).path}: {error}"
+        if response.status_code != httpx.codes.OK or not response.content:
+            return f"{urlsplit(url).path}: HTTP {response.status_code}"
+        if audio:
+            digest = hashlib.sha256(response.content).hexdigest()
+            with self._condition:
+                self.fetched.append((prompt_id, urlsplit(url).path, digest))
+        return None
+
+    def close(self) -> None:
+        super().close()
+        self._media.close()
 
     def wait_for_received(self, kind: str, count: int, timeout: float = 60.0) -> bool:
         """Whether ``count`` messages of ``kind`` have arrived within ``timeout`` (the last

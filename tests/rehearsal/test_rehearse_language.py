@@ -4,6 +4,7 @@ system (phone, prompts, robot), exported with the participant's language in the 
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import secrets
 from pathlib import Path
@@ -16,7 +17,7 @@ from chameleons.backend.export.service import ExportRequest, export_to_directory
 from chameleons.cli.main import cli
 from chameleons.prompts import load_catalogue
 from chameleons.rehearsal.embedded import embedded_system
-from chameleons.rehearsal.runner import Options, RehearsalError, rehearse
+from chameleons.rehearsal.runner import Options, RehearsalError, Summary, rehearse
 from chameleons.settings import Settings
 
 pytestmark = pytest.mark.slow
@@ -73,3 +74,34 @@ def test_a_language_the_study_does_not_have_is_refused(tmp_path: Path) -> None:
     assert str(refused.value) == (
         "Cannot open a session: The study has no language 'de' (its languages: en, sv)."
     )
+
+
+def _rehearse(tmp_path: Path, language: str) -> Summary:
+    settings = Settings(
+        data_dir=tmp_path / language, secret_key=secrets.token_urlsafe(32), _env_file=None
+    )
+    with embedded_system(settings, simulate_face=False) as target:
+        return rehearse(target, Options(1, seed=5, script="full", language=language))
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_a_swedish_rehearsal_voices_as_many_prompts_as_an_english_one(tmp_path: Path) -> None:
+    """The same participant (seed) in English and in Swedish: every prompt the wizard
+    plays in English has a Swedish one, and the display is served the Swedish file."""
+    english, swedish = _rehearse(tmp_path, "en"), _rehearse(tmp_path, "sv")
+    assert english.warnings == swedish.warnings == []
+    assert english.tally.prompts_played > 40
+    assert swedish.tally.prompts_played == english.tally.prompts_played
+    assert swedish.tally.prompts_not_sent == english.tally.prompts_not_sent == 0
+    assert (swedish.unloaded, english.unloaded) == ([], [])
+    assert swedish.voiced == english.voiced == english.tally.prompts_played
+    assert len(swedish.fetched) == swedish.voiced
+    for prompt_id, path, digest in swedish.fetched:
+        actor, name = path.split("/")[3], path.rsplit("/", 1)[1]
+        assert digest == _sha256(PROMPTS / "sv" / actor / "audio" / name), prompt_id
+        assert digest != _sha256(PROMPTS / actor / "audio" / name), prompt_id
+    for _prompt_id, path, digest in english.fetched:
+        assert digest == _sha256(PROMPTS / path.split("/")[3] / "audio" / path.rsplit("/")[-1])

@@ -13,13 +13,21 @@ A condition runs the behaviour the study declares, with the study's parameters. 
 
 The choice is made once per interaction, logged (``behaviour.natural_source``) and written on
 the interaction (``natural_source``, ``natural_recording``: exported, shown to the wizard), so
-every later set-up of that interaction replays the same recording. The path goes to the
+every later set-up of that interaction replays the same recording.
+
+The shipped ``demo-natural`` clip is synthetic (the face simulator's, made by
+``scripts/make_demo_natural_clip.py``), not a recording of a real conversation: a real study
+records its own. A source that is that clip (recognised by its content, wherever it lies) is
+marked ``synthetic_demo`` and said so in its description, and :func:`demo_clip_warning`
+says so to the PI and the wizard before a real participant sees it. The path goes to the
 worker marked (``prompts:_natural/demo-natural.npz``, ``data:recordings/...``) so a worker on
 a booth PC resolves it against its own install (``chameleons.prompts.locations``).
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +40,7 @@ from chameleons.backend.booth.service import data_dir_of
 from chameleons.backend.events import repository as events
 from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.withdrawal.files import recording_file
+from chameleons.experiment.model import Study
 from chameleons.prompts.locations import (
     REPOSITORY_PROMPTS,
     marked_path,
@@ -44,6 +53,7 @@ DEFAULT_CLIP = "demo-natural"  # the natural behaviour's default clip parameter
 # <prompts>/_natural/<name>.npz; the demo clip is made by scripts/make_demo_natural_clip.py
 NATURAL_CLIPS = Path("_natural")
 PHONE_FPS = 60.0  # the capture apps' frame rate: yoked_min_seconds -> recorded frames
+SYNTHETIC_DEMO_CLIP = REPOSITORY_PROMPTS / NATURAL_CLIPS / f"{DEFAULT_CLIP}.npz"
 
 
 @dataclass(frozen=True)
@@ -118,7 +128,10 @@ def describe_source(source: dict[str, Any]) -> str:
             f"{source['recording_id']}"
         )
     text = f"clip {source['clip']}"
-    return text + (f" ({source['note']})" if source.get("note") else "")
+    notes = [source["note"]] if source.get("note") else []
+    if source.get("synthetic_demo"):
+        notes.append("the synthetic demo clip, not a real conversation")
+    return text + (f" ({'; '.join(notes)})" if notes else "")
 
 
 def clip_file(state: Any, clip: str) -> Path:
@@ -150,10 +163,58 @@ def _choose(
         note = "yoked: no recording of another participant yet"
     clip = str(params.get("clip", DEFAULT_CLIP))
     path = clip_file(state, clip)
-    source = {"source": "clip", "clip": clip, "path": marked_path(path, state.settings)}
+    source: dict[str, Any] = {"source": "clip", "clip": clip,
+                              "path": marked_path(path, state.settings)}  # fmt: skip
     if note:
         source["note"] = note
+    if is_synthetic_demo(path):
+        source["synthetic_demo"] = True
     return source
+
+
+def is_synthetic_demo(path: Path) -> bool:
+    """Whether ``path`` holds the shipped synthetic demo clip (by content, so a copy of it
+    in a lab's own prompts folder, under any name, counts too)."""
+    try:
+        if not path.is_file() or path.stat().st_size != SYNTHETIC_DEMO_CLIP.stat().st_size:
+            return False
+        return _digest(path.resolve(), path.stat().st_mtime_ns) == _digest(
+            SYNTHETIC_DEMO_CLIP.resolve(), SYNTHETIC_DEMO_CLIP.stat().st_mtime_ns
+        )
+    except OSError:
+        return False
+
+
+@functools.lru_cache(maxsize=32)
+def _digest(path: Path, _mtime_ns: int) -> str:
+    """A file's SHA-256 (cached per modification time: asked on every console load)."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def demo_clip_conditions(state: Any, spec: Study) -> list[str]:
+    """The conditions whose ``natural`` replays the synthetic demo clip: its ``clip``
+    source, or ``yoked`` until another participant has been recorded."""
+    return [
+        condition.id
+        for condition in spec.conditions
+        if condition.behaviour == NATURAL
+        and condition.params.get("source", "clip") in ("clip", "yoked")
+        and is_synthetic_demo(clip_file(state, str(condition.params.get("clip", DEFAULT_CLIP))))
+    ]
+
+
+def demo_clip_warning(state: Any, spec: Study, conditions: list[str] | None = None) -> str:
+    """The warning for real participants, or "" (only ``conditions`` when given)."""
+    found = [c for c in demo_clip_conditions(state, spec) if conditions is None or c in conditions]
+    if not found:
+        return ""
+    which = ", ".join(found)
+    return (
+        f"Condition {which} replays the synthetic demo clip {DEFAULT_CLIP} (the face "
+        "simulator's, made for the demo), not a recording of a real conversation. Before "
+        "real participants, record a natural clip (chameleons prompts import prompts/m1 TAKE "
+        "--natural NAME) and name it in the study's natural condition (clip: m1/natural/NAME)."
+    )
 
 
 def _yoked(

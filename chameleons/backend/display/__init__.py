@@ -3,7 +3,8 @@
 - ``pages``: ``/display`` (staff: every booth's link), ``/display/<booth>/<token>`` (the
   booth screen, no login), ``/display/<booth>`` (staff);
 - ``endpoints``: ``/ws/display/<booth>`` (protocol in :mod:`.protocol`);
-- ``media``: ``/media/prompts/<actor>/<file>`` (MP3 for browsers, WAV for a Furhat);
+- ``media``: ``/media/prompts/<actor>/<file>[?lang=<language folder>]`` (MP3 for browsers,
+  WAV for a Furhat);
 - ``channel``: :class:`DisplayChannel`, the hub the worker bridge publishes into;
 - ``relay``: worker ``display.<booth>`` envelopes -> page messages, speech events -> worker.
 """

@@ -197,9 +197,14 @@ class DisplayChannel:
             return self._faces.get(booth)
 
     # -- upstream -----------------------------------------------------------------------
-    def add_listener(self, listener: Listener) -> None:
-        """``listener(booth, message)`` gets every speech event and telemetry report."""
-        self._listeners.append(listener)
+    def add_listener(self, listener: Listener, *, first: bool = False) -> None:
+        """``listener(booth, message)`` gets every speech event and telemetry report;
+        ``first``: before the listeners there are (e.g. before the one that forwards the
+        report to the worker, whose answer may otherwise overtake it)."""
+        if first:
+            self._listeners.insert(0, listener)
+        else:
+            self._listeners.append(listener)
 
     def remove_listener(self, listener: Listener) -> None:
         self._listeners.remove(listener)

@@ -59,6 +59,19 @@ def catalogue_version(actor_dir: Path) -> str | None:
     return digest.hexdigest()[:16]
 
 
+def language_catalogues(spec: StudySpec, prompts_dir: Path) -> dict[str, dict[str, str | None]]:
+    """Language -> actor id -> catalogue version of ``prompts/<language>/<actor>/``, the
+    prompts a session in that language played, for each declared language that has any."""
+    found = {
+        language: {
+            actor.id: catalogue_version(prompts_dir / language / actor.id) for actor in spec.actors
+        }
+        for language in spec.languages
+    }
+    return {language: versions for language, versions in found.items()
+            if any(version is not None for version in versions.values())}  # fmt: skip
+
+
 def provenance(study: Study, spec: StudySpec, prompts_dir: Path) -> dict[str, Any]:
     return {
         "study_config_hash_recipe": HASH_RECIPE,
@@ -70,6 +83,7 @@ def provenance(study: Study, spec: StudySpec, prompts_dir: Path) -> dict[str, An
         "prompt_catalogues": {
             actor.id: catalogue_version(prompts_dir / actor.id) for actor in spec.actors
         },
+        "prompt_catalogues_by_language": language_catalogues(spec, prompts_dir),
         "prompt_catalogue_version_recipe": CATALOGUE_NOTE,
     }
 
@@ -97,6 +111,12 @@ PROVENANCE_CODEBOOK: tuple[tuple[str, str, str], ...] = (
         "('-dirty': with uncommitted changes).",
     ),
     ("prompt_catalogues", "object", "Actor id -> prompt catalogue version (see the recipe)."),
+    (
+        "prompt_catalogues_by_language",
+        "object",
+        "Language -> actor id -> version of the actor's catalogue in that language "
+        "(prompts/<language>/<actor>/, played in sessions in that language; see the recipe).",
+    ),
     ("prompt_catalogue_version_recipe", "string", "What a prompt catalogue version covers."),
 )
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import contextlib
 
-from fastapi import WebSocket
+from fastapi import Request, WebSocket
 from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -16,6 +16,7 @@ from chameleons.backend.events import live
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, Message, session_channel
 from chameleons.backend.events.unit_of_work import WriteDb, write_session
+from chameleons.backend.models import Event
 from chameleons.backend.phone import devices
 from chameleons.backend.phone.language import phone_errors
 from chameleons.backend.phone.retained import committed
@@ -30,10 +31,16 @@ from chameleons.backend.phone.view import PhoneState, phone_state
 from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.answers import submit_questionnaire, submit_ranking
 from chameleons.backend.sessions.consent import record_consent
-from chameleons.backend.sessions.flow import load_by_token
+from chameleons.backend.sessions.flow import Flow, load_by_token
 from chameleons.backend.sessions.language import choose_language
 from chameleons.backend.sessions.snapshot import phone_presence_key
-from chameleons.backend.studies.errors import GoneError, NotFoundError
+from chameleons.backend.studies.errors import (
+    ConflictError,
+    GoneError,
+    InvalidInputError,
+    NotFoundError,
+)
+from chameleons.backend.wizard import readiness
 from chameleons.i18n import N_
 
 router = make_router(tags=["phone"])
@@ -73,15 +80,19 @@ def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
 
 
 @router.post("/api/phone/{token}/language")
-def post_language(token: str, data: LanguageSubmission, db: WriteDb) -> Receipt:
-    """The participant's language, before consent; the phone reloads its page in it."""
+def post_language(token: str, data: LanguageSubmission, request: Request, db: WriteDb) -> Receipt:
+    """The participant's language, before consent; the phone reloads its page in it. A
+    real session is refused a language whose prompts cannot voice it (``readiness``)."""
+
+    def change(flow: Flow) -> Event:
+        try:
+            readiness.require_prompts(request.app.state, flow, data.language)
+        except ConflictError:
+            raise InvalidInputError(N_("This study is not available in that language.")) from None
+        return choose_language(flow, data.client_id, data.language)
+
     with phone_errors(db, token):
-        return submit(
-            db,
-            token,
-            data.client_id,
-            lambda flow: choose_language(flow, data.client_id, data.language),
-        )
+        return submit(db, token, data.client_id, change)
 
 
 @router.post("/api/phone/{token}/questionnaire")

@@ -65,6 +65,7 @@ from chameleons.backend.sessions.schemas import (
 from chameleons.backend.sessions.snapshot import retain, session_snapshot
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import http_errors
+from chameleons.backend.wizard import readiness
 
 router = make_router(prefix="/api/sessions", tags=["sessions"])
 WRITE = [Depends(verify_csrf)]
@@ -97,6 +98,7 @@ def create_session(
         else:
             participant = studies.participant_by_code(db, study, data.participant_code)
         flow = service.create_session(db, study, participant, data.booth, data.language)
+        readiness.require_prompts(request.app.state, flow)  # before the session exists
         return snapshot_of(flow, request, hub)
 
 
@@ -140,6 +142,8 @@ def start(
 ) -> Snapshot:
     with http_errors():
         flow = load(db, session_id)
+        if flow.session.state == "pending":  # the phone may have changed the language
+            readiness.require_prompts(request.app.state, flow)
         service.start(flow, data.worker_time)
         return snapshot_of(flow, request, hub)
 

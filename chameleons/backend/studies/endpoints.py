@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
+from typing import Any
 
-from fastapi import Depends, HTTPException, status
+from fastapi import Depends, HTTPException, Request, status
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentPI, CurrentStaff
+from chameleons.backend.booth.behaviour import demo_clip_warning
 from chameleons.backend.dependencies import DbSession
 from chameleons.backend.events.unit_of_work import WriteDb
 from chameleons.backend.models import Participant, PlanRow
@@ -27,6 +29,7 @@ from chameleons.backend.studies.schemas import (
     StudyRead,
 )
 from chameleons.backend.studies.specs import spec_of
+from chameleons.backend.wizard import readiness
 from chameleons.experiment.model import Study
 from chameleons.experiment.study import StudyError, load_default_study, load_study
 
@@ -34,9 +37,12 @@ router = make_router(prefix="/api/studies", tags=["studies"])
 WRITE = [Depends(verify_csrf)]
 
 
-def study_read(db: Session, study: StudyRow) -> StudyRead:
+def study_read(db: Session, study: StudyRow, state: Any | None = None) -> StudyRead:
+    """The study as staff see it; with the app's ``state``, also the languages whose prompt
+    catalogues cannot run a session (``wizard.readiness``)."""
     rows = db.scalar(select(func.count()).where(PlanRow.study_id == study.id)) or 0
     people = db.scalar(select(func.count()).where(Participant.study_id == study.id)) or 0
+    spec = spec_of(study)
     return StudyRead(
         id=study.id,
         name=study.name,
@@ -46,7 +52,11 @@ def study_read(db: Session, study: StudyRow) -> StudyRead:
         created_at=study.created_at,
         plan_rows=rows,
         participants=people,
-        warnings=list(spec_of(study).warnings),
+        warnings=list(spec.warnings),
+        languages=list(spec.languages),
+        default_language=spec.default_language,
+        prompt_gaps={} if state is None else readiness.study_warnings(state, spec),
+        natural_clip_warning="" if state is None else demo_clip_warning(state, spec),
     )
 
 
@@ -76,21 +86,23 @@ def spec_from_yaml(text: str | None) -> Study:
 
 
 @router.get("")
-def list_studies(_user: CurrentStaff, db: DbSession) -> list[StudyRead]:
-    return [study_read(db, study) for study in service.list_studies(db)]
+def list_studies(request: Request, _user: CurrentStaff, db: DbSession) -> list[StudyRead]:
+    state = request.app.state
+    return [study_read(db, study, state) for study in service.list_studies(db)]
 
 
 @router.post("", status_code=status.HTTP_201_CREATED, dependencies=WRITE)
-def create_study(data: StudyCreate, _pi: CurrentPI, db: WriteDb) -> StudyRead:
+def create_study(data: StudyCreate, request: Request, _pi: CurrentPI, db: WriteDb) -> StudyRead:
     spec = spec_from_yaml(data.yaml)
     with http_errors():
-        return study_read(db, service.create_study(db, spec, data.plan_seed))
+        study = service.create_study(db, spec, data.plan_seed)
+        return study_read(db, study, request.app.state)
 
 
 @router.get("/{study_id}")
-def get_study(study_id: int, _user: CurrentStaff, db: DbSession) -> StudyRead:
+def get_study(study_id: int, request: Request, _user: CurrentStaff, db: DbSession) -> StudyRead:
     with http_errors():
-        return study_read(db, service.get_study(db, study_id))
+        return study_read(db, service.get_study(db, study_id), request.app.state)
 
 
 @router.get("/{study_id}/plan")
@@ -114,11 +126,13 @@ def get_plan(study_id: int, _user: CurrentStaff, db: DbSession) -> list[PlanRowR
 
 
 @router.post("/{study_id}/plan", dependencies=WRITE)
-def generate_plan(study_id: int, data: PlanRequest, _pi: CurrentPI, db: WriteDb) -> StudyRead:
+def generate_plan(
+    study_id: int, data: PlanRequest, request: Request, _pi: CurrentPI, db: WriteDb
+) -> StudyRead:
     with http_errors():
         study = service.get_study(db, study_id)
         service.generate_plan(db, study, data.participants, data.seed)
-        return study_read(db, study)
+        return study_read(db, study, request.app.state)
 
 
 @router.get("/{study_id}/participants")

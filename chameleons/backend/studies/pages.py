@@ -25,7 +25,7 @@ router = make_router(tags=["studies"])
 def _render(
     request: Request, templates: Templates, db: DbSession, user: object, error: str | None = None
 ) -> Response:
-    studies = [study_read(db, study) for study in service.list_studies(db)]
+    studies = [study_read(db, study, request.app.state) for study in service.list_studies(db)]
     return templates.TemplateResponse(
         request,
         "studies/studies.html",

@@ -24,6 +24,14 @@ class StudyRead(BaseModel):
     participants: int
     # The loader's warnings about the study file (e.g. item wording used twice).
     warnings: list[str] = Field(default_factory=list)
+    languages: list[str] = Field(default_factory=list)
+    default_language: str = ""
+    # language -> why its prompt catalogue cannot run a session (real sessions in it are
+    # refused; rehearsals warned): the prompts the study can need that it lacks.
+    prompt_gaps: dict[str, str] = Field(default_factory=dict)
+    # Why a natural condition must not reach real participants as it is (it replays the
+    # shipped synthetic demo clip), or "".
+    natural_clip_warning: str = ""
 
 
 class PlanRequest(BaseModel):

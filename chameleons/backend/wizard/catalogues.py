@@ -45,7 +45,9 @@ def catalogue_for(state: Any, actor: str, language: str | None = None) -> Catalo
         if (language, actor) not in cache:
             directory = language_directory(root, language, actor)
             cache[language, actor] = (
-                empty_catalogue(base, language) if directory is None else _load(directory, actor)
+                empty_catalogue(base, language)
+                if directory is None
+                else _load(directory, actor, language)
             )
         return cache[language, actor]
 
@@ -69,9 +71,9 @@ def _base_catalogue(state: Any, actor: str) -> Catalogue:
         return cache[actor]
 
 
-def _load(directory: Path, actor: str) -> Catalogue:
+def _load(directory: Path, actor: str, language_folder: str | None = None) -> Catalogue:
     try:
-        return load_catalogue(directory)
+        return load_catalogue(directory, language_folder=language_folder)
     except CatalogueError as error:
         raise MissingCatalogueError(
             f"The prompt catalogue of actor {actor!r} in {directory} cannot be used: "

@@ -47,10 +47,13 @@ def console_state(
     if snapshot is None:
         snapshot = session_snapshot(load_flow(db, session_id, lock=False), base_url, phones)
     position = prompt_position(snapshot)
+    groups, missing = _suggestion_prompts(app_state, snapshot, position)
     state: dict[str, Any] = {
         "session": snapshot,
         "prompt_position": position,
-        "suggestion_prompts": _suggestion_prompts(app_state, snapshot, position),
+        "suggestion_prompts": groups,
+        # When none phrases the pending suggestion: which prompt the catalogue lacks.
+        "suggestion_missing": missing,
         "worker": {"bridge": getattr(app_state, "bridge", None) is not None},
     }
     if new_events is None:
@@ -73,21 +76,32 @@ def prompt_position(snapshot: dict[str, Any]) -> int:
     return int(current)
 
 
-def _suggestion_prompts(app_state: Any, snapshot: dict[str, Any], position: int) -> list[str]:
-    """Groups phrasing the pending suggestion of ``position``, best first (may be empty)."""
+def _suggestion_prompts(
+    app_state: Any, snapshot: dict[str, Any], position: int
+) -> tuple[list[str], str | None]:
+    """Groups phrasing the pending suggestion of ``position``, best first, and when there
+    is none the sentence naming the prompt the catalogue lacks (the wizard must not word a
+    suggestion himself)."""
     interaction = next(i for i in snapshot["interactions"] if i["position"] == position)
     pending = next((s for s in interaction["suggestions"] if s["accepted"] is None), None)
     if pending is None or interaction["state"] != "negotiation":
-        return []
+        return [], None
+    language = snapshot.get("language")
     try:
-        catalogue = catalogue_for(app_state, interaction["actor"], snapshot.get("language"))
-    except MissingCatalogueError:
-        return []
+        catalogue = catalogue_for(app_state, interaction["actor"], language)
+    except MissingCatalogueError as error:
+        return [], str(error)
     ranking = interaction["current_ranking"] or interaction["initial_ranking"] or []
-    return layout.suggestion_groups(
-        catalogue,
-        interaction["task"],
-        item_key(pending["item"]),
-        pending["to_rank"],
-        [item_key(item) for item in ranking],
+    task, item = interaction["task"], item_key(pending["item"])
+    groups = layout.suggestion_groups(
+        catalogue, task, item, pending["to_rank"], [item_key(i) for i in ranking]
+    )
+    if groups:
+        return groups, None
+    move = "down" if pending["to_rank"] > pending["from_rank"] else "up"
+    return [], (
+        f"No prompt phrases this suggestion: actor {interaction['actor']} has no 'move {move}' "
+        f"suggestion prompt for {task}:{item}{f' in {language}' if language else ''} (the "
+        f"demo names it {task}_{item}_move_{move}). Do not word it yourself: note it and "
+        "add the prompt to the catalogue (prompts/README.md)."
     )

@@ -13,6 +13,7 @@ from pydantic import BaseModel, Field, field_validator
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
+from chameleons.backend.booth.behaviour import demo_clip_warning
 from chameleons.backend.dependencies import DbSession
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import http_errors
@@ -106,7 +107,17 @@ def get_prompts(
         # The session's language: only its prompts are offered; these have no recording.
         "language": language,
         "missing": missing,
+        # Before the robot shows the condition to a real participant: what is not for them.
+        "warnings": _interaction_warnings(request.app.state, view, interaction.condition),
     }
+
+
+def _interaction_warnings(state: Any, view: repository.SessionView, condition: str) -> list[str]:
+    """The synthetic demo clip a real participant's natural condition would replay."""
+    if view.session.is_rehearsal:
+        return []
+    warning = demo_clip_warning(state, view.spec, [condition])
+    return [warning] if warning else []
 
 
 @router.post("/sessions/{session_id}/prompts/play", dependencies=WRITE)

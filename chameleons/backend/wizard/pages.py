@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
+from chameleons.backend.booth.behaviour import demo_clip_warning
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.events.unit_of_work import WriteDb
 from chameleons.backend.input_guard import MAX_ROW_ID
@@ -20,7 +21,7 @@ from chameleons.backend.sessions import service as sessions
 from chameleons.backend.studies import service as studies
 from chameleons.backend.studies.errors import FlowError
 from chameleons.backend.studies.specs import spec_of
-from chameleons.backend.wizard import repository
+from chameleons.backend.wizard import readiness, repository
 
 router = make_router(tags=["wizard"])
 BOOTH_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -36,6 +37,17 @@ def _picker(
     active = [study for study in studies.list_studies(db) if study.is_active]
     # The participant's language: any the active studies declare (a study refuses others).
     languages = sorted({lang for study in active for lang in spec_of(study).languages})
+    # Languages whose prompts cannot run a session of some active study (refused for it).
+    gaps = {
+        f"{study.id} · {study.name}: {language}": why
+        for study in active
+        for language, why in readiness.study_warnings(request.app.state, spec_of(study)).items()
+    }
+    clips = {
+        f"{study.id} · {study.name}": warning
+        for study in active
+        if (warning := demo_clip_warning(request.app.state, spec_of(study)))
+    }
     return templates.TemplateResponse(
         request,
         "wizard/index.html",
@@ -44,6 +56,8 @@ def _picker(
             "sessions": repository.recent_sessions(db),
             "studies": active,
             "languages": languages,
+            "prompt_gaps": gaps,
+            "natural_clips": clips,
             "error": error,
         },
         status_code=status.HTTP_200_OK if error is None else status.HTTP_409_CONFLICT,
@@ -80,6 +94,7 @@ def open_session(
             else studies.register_participant(db, study, rehearsal)
         )
         flow = sessions.create_session(db, study, participant, booth, language or None)
+        readiness.require_prompts(request.app.state, flow)
     except FlowError as exc:
         db.rollback()  # nothing of a refused request is kept (not even the registration)
         return _picker(request, templates, db, user, exc.message)

@@ -119,7 +119,8 @@ def audio_url(state: Any, cue: Cue) -> str:
     if cue.audio is None:
         return ""
     key = signing_key(cast(FastAPI, SimpleNamespace(state=state)))
-    path = media_path(key, cue.actor, cue.audio, wav=_driver(state, cue.booth) == "furhat")
+    path = media_path(key, cue.actor, cue.audio, wav=_driver(state, cue.booth) == "furhat",
+                      language=cue.language_folder)  # fmt: skip
     return f"{state.settings.effective_public_url}{path}"
 
 
@@ -148,9 +149,19 @@ def _not_voiced_logger(
         if display is not None and display.said_why():
             return  # the display said why already (e.g. it needs a click for sound)
         why = _virtual_robot_absence(state, cue.booth) or detail
+        if display is not None and display.audio_error:
+            why = _audio_error(cue)
         await run_in_threadpool(write, state, service.record_not_voiced, cue, why, utcnow())
 
     return log_not_voiced
+
+
+def _audio_error(cue: Cue) -> str:
+    """Why the display could not voice a play it was sent: the file it could not load."""
+    if cue.audio is None:
+        return "the prompt has no audio recording"
+    where = "/".join(part for part in (cue.language_folder, cue.actor, cue.audio) if part)
+    return f"the robot display could not load or play the prompt's audio ({where})"
 
 
 def _virtual_robot_absence(state: Any, booth: str) -> str | None:

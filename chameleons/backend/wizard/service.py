@@ -47,6 +47,9 @@ class Cue:
     clicked_at: datetime
     audio: str | None
     lipsync: str | None
+    # The language folder the prompt's catalogue lies in (None: the actor's own folder):
+    # the audio URL must name it, or the robot is served the main language's recording.
+    language_folder: str | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -122,6 +125,7 @@ def start_play(
         clicked_at=clicked_at,
         audio=str(prompt.audio) if prompt.audio else None,
         lipsync=str(catalogue.lipsync_file(prompt)) if prompt.lipsync else None,
+        language_folder=catalogue.language_folder,
     )
 
 

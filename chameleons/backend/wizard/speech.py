@@ -18,9 +18,12 @@ is then logged ``prompt.not_voiced``, shown NOT VOICED on the console and counte
 dashboard's data-quality flags.
 
 The virtual robot's page also says why a play never started (``autoplay_blocked``: the
-browser wants one click before it plays sound). That reason does not travel through the
+browser wants one click before it plays sound; ``error``: it could not load or play the
+audio, e.g. a file the server does not have). That reason does not travel through the
 worker, so :class:`DisplayWatch` hears it on the server's display channel, where the page
-reports it, and the play's ``prompt.speech_end`` carries it to the console.
+reports it (before the report is forwarded to the worker, whose answer would otherwise
+overtake it): a blocked autoplay ends the play's ``prompt.speech_end`` with the reason, an
+audio the page could not load is the play's NOT VOICED reason.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ START_TIMEOUT_SECONDS = 5.0
 END_MARGIN_SECONDS = 10.0
 
 DISPLAY_FAILURES = {"autoplay_blocked": "robot display needs a click to enable sound"}
+# The page's end of a play it could not load or play (before any start of it).
+AUDIO_ERROR = "error"
 
 # (started, worker_time, outcome) -> logged; outcome "played", "interrupted", "stopped"...
 OnSpeech = Callable[[bool, float | None, str | None], Awaitable[None]]
@@ -61,15 +66,21 @@ class DisplayWatch:
         self.channel, self.booth, self.prompt_id = channel, booth, prompt_id
         self.play_id = play_id
         self.failed: asyncio.Future[str] = asyncio.get_running_loop().create_future()
-        channel.add_listener(self._hear)
+        self.started = False
+        self.audio_error = False  # the page could not load or play the audio
+        channel.add_listener(self._hear, first=True)
 
     def _hear(self, booth: str, message: dict[str, Any]) -> None:
-        reason = message.get("reason")
-        if (booth == self.booth and message.get("type") == "speech"
-                and message.get("event") == "end" and reason in DISPLAY_FAILURES
-                and message.get("prompt_id") == self.prompt_id
-                and _same_play(message.get("play_id"), self.play_id)
-                and not self.failed.done()):  # fmt: skip
+        if (booth != self.booth or message.get("type") != "speech"
+                or message.get("prompt_id") != self.prompt_id
+                or not _same_play(message.get("play_id"), self.play_id)):  # fmt: skip
+            return
+        event, reason = message.get("event"), message.get("reason")
+        if event == "start":
+            self.started = True
+        elif event == "end" and reason == AUDIO_ERROR and not self.started:
+            self.audio_error = True
+        elif event == "end" and reason in DISPLAY_FAILURES and not self.failed.done():
             self.failed.set_result(str(reason))
 
     def said_why(self) -> bool:

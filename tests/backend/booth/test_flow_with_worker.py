@@ -160,12 +160,13 @@ def test_yoked_replays_the_clip_until_another_participant_was_recorded(
     path = "prompts:_natural/demo-natural.npz"
     assert applied["payload"]["natural_source"] == {
         "source": "clip", "clip": "demo-natural", "path": path,
-        "note": "yoked: no recording of another participant yet",
+        "note": "yoked: no recording of another participant yet", "synthetic_demo": True,
     }  # fmt: skip
     recorded = natural_interaction(app, wizard)
     assert recorded.natural_source == "clip"
     assert recorded.natural_recording == (
-        "clip demo-natural (yoked: no recording of another participant yet)"
+        "clip demo-natural (yoked: no recording of another participant yet; "
+        "the synthetic demo clip, not a real conversation)"
     )
 
 
@@ -179,13 +180,15 @@ def test_natural_replays_the_studys_clip_by_default(
     applied = wait_for_event(wizard, "robot.applied")  # the worker loaded the clip
     path = "prompts:_natural/demo-natural.npz"  # the worker's own prompts folder
     assert applied["payload"]["natural_source"] == {
-        "source": "clip", "clip": "demo-natural", "path": path,
+        "source": "clip", "clip": "demo-natural", "path": path, "synthetic_demo": True,
     }  # fmt: skip
     assert applied["payload"]["behaviour_name"] == "natural"
     assert bridge.state(BOOTH).behaviour == {
         "name": "natural", "params": {"offset": 0.0, "loop": True, "path": path},
     }  # fmt: skip
-    assert natural_interaction(app, wizard).natural_recording == "clip demo-natural"
+    assert natural_interaction(app, wizard).natural_recording == (
+        "clip demo-natural (the synthetic demo clip, not a real conversation)"
+    )
 
 
 def test_a_synthetic_source_is_used_only_when_the_study_asks_for_it(

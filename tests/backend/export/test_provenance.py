@@ -50,6 +50,12 @@ def test_metadata_carries_the_provenance(db_session: DbSession, tmp_path: Path) 
     versions = [v for v in metadata["prompt_catalogues"].values() if v is not None]
     assert versions, "the repository's demo catalogue has a version"
     assert all(len(v) == 16 for v in versions)
+    # The Swedish catalogues a Swedish session played, versioned too (and not the English).
+    swedish = metadata["prompt_catalogues_by_language"]["sv"]
+    assert set(swedish) == actors
+    assert all(swedish[a] is not None and swedish[a] != metadata["prompt_catalogues"][a]
+               for a in actors)  # fmt: skip
+    assert "en" not in metadata["prompt_catalogues_by_language"]
 
     with (out / "codebook.csv").open(newline="", encoding="utf-8") as handle:
         book = [r for r in csv.DictReader(handle) if r["table"] == "metadata.json"]

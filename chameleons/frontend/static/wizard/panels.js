@@ -205,7 +205,7 @@ export function renderNegotiation(state, board, act) {
                 const b = board.find(group);
                 return b ? board.button(b, SUGGESTION_KEYS[i]) : null;
               })
-            : el("span", { class: "muted", text: "No matching prompt in the catalogue: say it in your own words." }),
+            : el("span", { class: "error", id: "suggestion-missing", text: state.suggestion_missing || "No prompt phrases this suggestion." }),
         ),
         el(
           "div",

@@ -28,7 +28,8 @@ export class PromptBoard {
     this.byShortcut.clear();
     const sections = data.sections.map((section) => this.section(section));
     const warning = this.languageWarning(data);
-    this.container.replaceChildren(...(warning ? [warning] : []), ...sections);
+    const notes = (data.warnings || []).map((text) => el("p", { class: "wz-language-warning wz-natural-warning", role: "note", text }));
+    this.container.replaceChildren(...(warning ? [warning] : []), ...notes, ...sections);
     if (this.disabled) this.setDisabled(true);
     this.filter();
   }
@@ -40,7 +41,7 @@ export class PromptBoard {
     return el("p", { class: "wz-language-warning", id: "prompt-language-warning", role: "note" },
       `${data.missing.length} prompt${data.missing.length === 1 ? "" : "s"} of this actor ` +
       `ha${data.missing.length === 1 ? "s" : "ve"} no recording in ${data.language}: ${names}. ` +
-      "Use the Say field for them.");
+      "Do not word them yourself: real sessions in this language are refused until they are recorded.");
   }
 
   section(section) {
