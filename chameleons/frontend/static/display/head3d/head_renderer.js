@@ -192,10 +192,17 @@ class CanonicalHead {
     };
   }
 
-  /** Named screen points (px) of the resting face, for tests that check where pixels change. */
-  screenPoints(ids) {
+  /** Named landmarks' screen points (px) on the resting face, at width x height (default:
+      the canvas), for tests that check where pixels change. */
+  screenPoints(ids, width, height) {
+    const saved = [this.stage.width, this.stage.height];
+    if (width) this.stage.resize(width, height, 1);
+    this.pose(new Float32Array(this.names.length), null);
+    this.orient([0, 0, 0]);
     const project = projector(this.stage);
-    return Object.fromEntries(Object.entries(ids).map(([name, i]) => [name, project(this.landmark(i))]));
+    const out = Object.fromEntries(Object.entries(ids).map(([name, i]) => [name, project(this.landmark(i))]));
+    if (width) this.stage.resize(saved[0], saved[1]);
+    return out;
   }
 
   /** Test hook: render each request ({bs, head, eyes}) at width x height; PNG data URLs. */
