@@ -29,8 +29,7 @@ WEBGL_ARGS = [a for a in CHROMIUM_ARGS if a != "--disable-gpu"] + [
 ]
 NO_WEBGL_ARGS = [*CHROMIUM_ARGS, "--disable-webgl", "--disable-3d-apis"]
 HEAD_READY = (
-    "window.robotDisplay && window.robotDisplay.connected()"
-    " && window.robotDisplay.renderer().ready"
+    "window.robotDisplay && window.robotDisplay.connected() && window.robotDisplay.renderer().ready"
 )
 # Landmarks whose resting screen positions say where each shape may change pixels.
 POINTS = {
@@ -138,16 +137,19 @@ def _glb(
         return {"bufferView": view, "componentType": 5126, "count": count, "type": "VEC3",
                 "min": data.min(axis=0).tolist(), "max": data.max(axis=0).tolist()}  # fmt: skip
 
-    accessors = [vec3(0, pos), vec3(1, normals),
-                 {"bufferView": 2, "componentType": 5123, "count": len(index), "type": "SCALAR"}]
+    accessors = [
+        vec3(0, pos),
+        vec3(1, normals),
+        {"bufferView": 2, "componentType": 5123, "count": len(index), "type": "SCALAR"},
+    ]
     accessors += [vec3(3 + k, m) for k, m in enumerate(morphs)]  # fmt: skip
+    targets = [{"POSITION": 3 + k} for k in range(len(morphs))]
     document = {
         "asset": {"version": "2.0", "generator": "chameleons tests"},
         "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "face"}],
         "meshes": [{"name": "face", "extras": {"targetNames": names}, "weights": [0] * len(names),
                     "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2,
-                                    "material": 0,
-                                    "targets": [{"POSITION": 3 + k} for k in range(len(morphs))]}]}],
+                                    "material": 0, "targets": targets}]}],
         "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.85, 0.7, 0.6, 1],
                                                 "metallicFactor": 0, "roughnessFactor": 1}}],
         "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}],

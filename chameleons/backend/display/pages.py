@@ -136,10 +136,10 @@ def set_defaults(
     up when they reload."""
     _valid_or_404(booth)
     if renderer not in ("", *renderers.RENDERERS):
-        raise HTTPException(status.HTTP_422_UNPROCESSABLE_ENTITY, "The face is 2D or 3D.")
+        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, "The face is 2D or 3D.")
     if head and renderers.head_file(settings, head) is None:
         raise HTTPException(
-            status.HTTP_422_UNPROCESSABLE_ENTITY,
+            status.HTTP_422_UNPROCESSABLE_CONTENT,
             f"No head file {head!r} in {renderers.heads_dir(settings)}.",
         )
     links.set_defaults(db, booth, renderer or None, head or None)

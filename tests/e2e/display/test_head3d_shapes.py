@@ -6,6 +6,7 @@ renderer (``robotDisplay.head3d().stills``)."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -49,21 +50,22 @@ def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
     browser.close()
 
 
+Renders = tuple[dict[str, np.ndarray], dict[str, tuple[float, float]]]
+
+
 @pytest.fixture(scope="module")
-def renders(
-    webgl_browser: Browser, display_url_module: str
-) -> Iterator[tuple[dict[str, np.ndarray], dict[str, tuple[float, float]]]]:
+def renders(webgl_browser: Browser, display_url_module: str) -> Renders:
     page: Page = webgl_browser.new_page(viewport={"width": 640, "height": 480})
     open_head(page, display_url_module + "?renderer=3d")
     assert page.evaluate("window.robotDisplay.renderer().kind") == "3d"
-    requests = [{}] + [{"bs": {name: 1.0}} for name in BLENDSHAPE_NAMES]
+    requests: list[dict[str, Any]] = [{}, *({"bs": {name: 1.0}} for name in BLENDSHAPE_NAMES)]
     images = stills(page, requests, WIDTH, HEIGHT)
     points = screen_points(page, WIDTH, HEIGHT)
     page.close()
-    yield dict(zip(["neutral", *BLENDSHAPE_NAMES], images, strict=True)), points
+    return dict(zip(["neutral", *BLENDSHAPE_NAMES], images, strict=True)), points
 
 
-def test_the_head_renders_all_52_shapes(renders: tuple[dict[str, np.ndarray], dict]) -> None:
+def test_the_head_renders_all_52_shapes(renders: Renders) -> None:
     images, _ = renders
     assert len(images) == 53
     neutral = images["neutral"]
@@ -72,9 +74,7 @@ def test_the_head_renders_all_52_shapes(renders: tuple[dict[str, np.ndarray], di
 
 
 @pytest.mark.parametrize("name", BLENDSHAPE_NAMES)
-def test_each_shape_changes_pixels_in_its_region_only(
-    name: str, renders: tuple[dict[str, np.ndarray], dict[str, tuple[float, float]]]
-) -> None:
+def test_each_shape_changes_pixels_in_its_region_only(name: str, renders: Renders) -> None:
     images, points = renders
     mask = changed(images["neutral"], images[name])
     count = int(mask.sum())
@@ -83,7 +83,8 @@ def test_each_shape_changes_pixels_in_its_region_only(
                                   points["eyeL"][1] - points["eyeR"][1]))  # fmt: skip
     where, radius = region_of(name)
     if where == "jaw":
-        centre = ((points["mouth"][0] + points["chin"][0]) / 2, (points["mouth"][1] + points["chin"][1]) / 2)
+        (mx, my), (cx, cy) = points["mouth"], points["chin"]
+        centre = ((mx + cx) / 2, (my + cy) / 2)
     else:
         centre = points[where]
     ys, xs = np.nonzero(mask)
@@ -107,9 +108,7 @@ PAIRS = [n for n in BLENDSHAPE_NAMES if n.endswith("Left")]
 
 
 @pytest.mark.parametrize("left", PAIRS)
-def test_left_mirrors_right(
-    left: str, renders: tuple[dict[str, np.ndarray], dict[str, tuple[float, float]]]
-) -> None:
+def test_left_mirrors_right(left: str, renders: Renders) -> None:
     images, points = renders
     right = left[: -len("Left")] + "Right"
     neutral = images["neutral"]
