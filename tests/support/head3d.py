@@ -12,8 +12,11 @@ import base64
 import io
 import json
 import math
+import secrets
 import struct
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -159,3 +162,27 @@ def _glb(
     body = struct.pack("<II", len(text), 0x4E4F534A) + text
     body += struct.pack("<II", len(blob), 0x004E4942) + blob
     return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+@contextmanager
+def display_server(folder: Path, **settings: Any) -> Iterator[str]:
+    """A migrated SQLite database, the app and a live server in this process; yields the
+    display link of booth-1 (for scripts and benchmarks that need the display page)."""
+    from chameleons.backend.app import create_app
+    from chameleons.backend.display.tokens import display_path, signing_key
+    from chameleons.backend.migrate import upgrade
+    from chameleons.settings import Settings
+    from tests.support.live_server import LiveServer
+
+    url = f"sqlite:///{folder / 'display.sqlite3'}"
+    upgrade(url)
+    key = secrets.token_urlsafe(32)
+    config = Settings(database_url=url, data_dir=folder / "data", secret_key=key,
+                      bridge_enabled=False, _env_file=None, **settings)  # fmt: skip
+    app = create_app(config)
+    server = LiveServer(app).start()
+    try:
+        yield server.url + display_path(signing_key(app), "booth-1")
+    finally:
+        server.stop()
+        app.state.engine.dispose()
