@@ -165,9 +165,9 @@ def _glb(
 
 
 @contextmanager
-def display_server(folder: Path, **settings: Any) -> Iterator[str]:
+def display_server(folder: Path, **settings: Any) -> Iterator[tuple[str, Any]]:
     """A migrated SQLite database, the app and a live server in this process; yields the
-    display link of booth-1 (for scripts and benchmarks that need the display page)."""
+    display link of booth-1 and the app (for scripts and benchmarks that need the page)."""
     from chameleons.backend.app import create_app
     from chameleons.backend.display.tokens import display_path, signing_key
     from chameleons.backend.migrate import upgrade
@@ -182,7 +182,7 @@ def display_server(folder: Path, **settings: Any) -> Iterator[str]:
     app = create_app(config)
     server = LiveServer(app).start()
     try:
-        yield server.url + display_path(signing_key(app), "booth-1")
+        yield server.url + display_path(signing_key(app), "booth-1"), app
     finally:
         server.stop()
         app.state.engine.dispose()

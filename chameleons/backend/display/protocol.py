@@ -31,10 +31,11 @@ Display -> server
 - ``{"type": "telemetry", "fps": float, "frames_in": float (frames/s received),
   "paint_latency_ms": {"p50", "p95", "max"}, "interp_delay_ms": float,
   "relay_to_paint_ms": float | null, "speaking": bool, "face": str, "renderer": "2d" | "3d",
-  "frame_ms": {"p50", "p95"} (time to paint one frame), "dropped_frames": int (refreshes
-  missed in the last second), "head_missing": [ARKit names a lab's own head lacks] (3D with
-  a lab's head only), "renderer_note": str (why a wanted 3D head is not shown)}`` once a
-  second.
+  "frame_ms": {"p50", "p95"} (time to paint one frame, on the page's thread; WebGL's own
+  rasterisation runs after it), "interval_ms": {"p50", "p95"} (between painted frames),
+  "dropped_frames": int (refreshes missed in the last second), "head_missing": [ARKit
+  names a lab's own head lacks] (3D with a lab's head only), "renderer_note": str (why a
+  wanted 3D head is not shown)}`` once a second.
   Paint latency runs from a frame's arrival at the page to the first paint that shows it
   fully (this includes the interpolation delay that keeps motion smooth).
 - ``{"type": "ping", "id": int, "t": float}``: clock-offset probe (``t`` is the page's

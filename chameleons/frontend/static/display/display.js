@@ -78,7 +78,7 @@
   let socket = null, connected = false, backoff = 500;
   const outbox = [];  // speech events wait here while disconnected
   const stats = { painted: 0, framesIn: 0, latencies: [], relay: [], fps: 0, inRate: 0,
-                  frameMs: [], dropped: 0, refreshMs: 1000 / 60 };
+                  frameMs: [], intervals: [], dropped: 0, refreshMs: 1000 / 60 };
   let clockOffset = null, bestRtt = Infinity, pingId = 0;
   let playback = null;
 
@@ -247,6 +247,7 @@
     stats.painted++;
     stats.frameMs.push(painted - started);
     if (stats.lastFrame !== undefined) {  // a frame interval of 2+ refreshes dropped frames
+      stats.intervals.push(now - stats.lastFrame);
       const refreshes = Math.round((now - stats.lastFrame) / stats.refreshMs);
       if (refreshes > 1) stats.dropped += refreshes - 1;
     }
@@ -270,7 +271,7 @@
 
   function report() {
     const lat = stats.latencies.sort((a, b) => a - b), relay = stats.relay.sort((a, b) => a - b);
-    const cost = stats.frameMs.sort((a, b) => a - b);
+    const cost = stats.frameMs.sort((a, b) => a - b), gaps = stats.intervals.sort((a, b) => a - b);
     const round = (v) => (v === null ? null : Math.round(v * 10) / 10);
     stats.fps = stats.painted;
     stats.inRate = stats.framesIn;
@@ -282,10 +283,12 @@
       speaking: Boolean(playback && playback.started), face,
       renderer: robotScreen.kind, frame_ms: { p50: round(percentile(cost, 0.5)), p95: round(percentile(cost, 0.95)) },
       dropped_frames: stats.dropped,
+      interval_ms: { p50: round(percentile(gaps, 0.5)), p95: round(percentile(gaps, 0.95)) },
     };
     if (robotScreen.missing) message.head_missing = robotScreen.missing;
     if (robotScreen.fallback) message.renderer_note = robotScreen.fallback;
     stats.painted = 0; stats.framesIn = 0; stats.latencies = []; stats.relay = []; stats.frameMs = [];
+    stats.intervals = [];
     stats.dropped = 0;
     stats.last = message;
     send(message, false);
@@ -296,6 +299,7 @@
         + `paint latency p50 ${message.paint_latency_ms.p50} p95 ${message.paint_latency_ms.p95} ms\n`
         + `relay->paint ${message.relay_to_paint_ms} ms · rtt ${round(bestRtt)} ms\n`
         + `renderer ${robotScreen.kind} (${robotScreen.source}) · frame ${message.frame_ms.p50}/${message.frame_ms.p95} ms`
+        + ` every ${message.interval_ms.p50} ms`
         + ` · dropped ${message.dropped_frames}/s\n`
         + (robotScreen.missing && robotScreen.missing.length ? `head lacks ${robotScreen.missing.length}: ${robotScreen.missing.join(", ")}\n` : "")
         + (stats.note ? "note: " + stats.note : "");
