@@ -7,10 +7,12 @@ browser, same frames) in Chromium at 1280x800.
 The app runs in this process on a fresh SQLite file; one headless Chromium with software
 WebGL (SwiftShader through ANGLE: ``--use-angle=swiftshader``; no GPU is used even where
 one exists, so the figures are a floor for a booth PC with a GPU) opens the booth's display
-link with ``?renderer=2d`` and then ``?renderer=3d``. For each, the server's display channel
-gets what a worker sends while the robot copies a face: face frames at 25 Hz (jaw, smile,
-blink, brows moving) and head pose at 125 Hz (yaw and pitch swaying). Figures, from the
-page's own once-a-second telemetry (``protocol.py``) and the Chromium processes' CPU time:
+link with ``?renderer=2d`` and then ``?renderer=3d`` (first, an empty page that only counts
+animation frames shows what the browser manages here at all). For each, the server's
+display channel gets what a worker sends while the robot copies a face: face frames at
+25 Hz (jaw, smile, blink, brows moving) and head pose at 125 Hz (yaw and pitch swaying).
+Figures, from the page's own once-a-second telemetry (``protocol.py``) and the Chromium
+processes' CPU time:
 
 - **frame time**: the time ``draw()`` takes per painted frame on the page's thread (p50 of
   the per-second medians, the largest per-second p95; WebGL rasterises after it, in the GPU
@@ -171,6 +173,36 @@ def summarise(reports: list[Message], kind: str, cpu: float | None) -> dict[str,
     }  # fmt: skip
 
 
+BARE_LOOP = """(seconds) => new Promise((done) => {
+  const gaps = []; let last = null; const end = performance.now() + seconds * 1000;
+  const tick = (now) => {
+    if (last !== null) gaps.push(now - last);
+    last = now;
+    if (now < end) requestAnimationFrame(tick);
+    else { gaps.sort((a, b) => a - b);
+           done({ fps: gaps.length / seconds, p50: gaps[Math.floor(gaps.length / 2)],
+                  p95: gaps[Math.floor(gaps.length * 0.95)] }); }
+  };
+  requestAnimationFrame(tick);
+})"""
+
+
+def bare_frames(page: Any, seconds: float) -> dict[str, Any]:
+    """The browser's own frame rate here: an empty page that only counts animation frames
+    (what this machine and its load allow any page)."""
+    page.set_content("<!doctype html><title>bare</title><body style='margin:0'></body>")
+    cpu0, wall0 = chromium_cpu_seconds(), time.monotonic()
+    got: dict[str, Any] = page.evaluate(BARE_LOOP, seconds)
+    cpu1, wall1 = chromium_cpu_seconds(), time.monotonic()
+    cpu = None if cpu0 is None or cpu1 is None else (cpu1 - cpu0) / (wall1 - wall0)
+    return {
+        "fps": round(got["fps"], 1),
+        "interval_ms_p50": round(got["p50"], 1),
+        "interval_ms_p95": round(got["p95"], 1),
+        "cpu_cores": None if cpu is None else round(cpu, 3),
+    }
+
+
 def ratios(three: dict[str, Any], two: dict[str, Any]) -> dict[str, float | None]:
     def ratio(key: str) -> float | None:
         a, b = three.get(key), two.get(key)
@@ -193,6 +225,9 @@ def main(argv: list[str] | None = None) -> int:
         channel = get_display_channel(app)
         browser = launch_webgl(playwright)
         try:
+            page = browser.new_page(viewport={"width": args.width, "height": args.height})
+            results["bare"] = bare_frames(page, seconds)
+            page.close()
             for kind in ("2d", "3d"):
                 page = browser.new_page(viewport={"width": args.width, "height": args.height})
                 results[kind] = measure(page, channel, f"{url}?renderer={kind}", seconds)
@@ -201,6 +236,11 @@ def main(argv: list[str] | None = None) -> int:
             browser.close()
     results["3d_vs_2d"] = ratios(results["3d"], results["2d"])
     print(f"Robot display at {results['viewport']}, {results['webgl']}, {seconds:g} s each")
+    bare = results["bare"]
+    print(
+        f"  a bare page's animation frames: {bare['fps']} /s, every {bare['interval_ms_p50']} ms"
+        f" (p95 {bare['interval_ms_p95']}), CPU {bare['cpu_cores']}"
+    )
     for key in ("fps", "interval_ms_p50", "interval_ms_p95", "frame_ms_p50", "frame_ms_p95_max",
                 "dropped_per_s",
                 "arrival_to_pixels_p50_ms", "interpolation_delay_ms", "cpu_cores"):  # fmt: skip

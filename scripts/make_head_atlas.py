@@ -40,7 +40,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "head-atlas.png")
     parser.add_argument("--face", default="face-1", choices=FACES)
     args = parser.parse_args(argv)
-    with tempfile.TemporaryDirectory() as tmp, display_server(Path(tmp)) as url, \
+    with tempfile.TemporaryDirectory() as tmp, display_server(Path(tmp)) as (url, _app), \
             sync_playwright() as playwright:  # fmt: skip
         browser = launch_webgl(playwright)
         page = browser.new_page(viewport={"width": 640, "height": 480})

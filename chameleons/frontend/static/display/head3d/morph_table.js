@@ -163,6 +163,6 @@ export const MIRRORED = {
 /** Where the jaw turns (cm, mesh frame): level with the ear canal, behind the cheek. */
 export const JAW_PIVOT = [0, -0.4, -2.8];
 
-/** Furhat-like neck limits (degrees). Furhat's basic neck parameters NECK_PAN, NECK_TILT and
-    NECK_ROLL take -50..50 (docs/robot-head.md gives the source). */
+/** Furhat-like neck limits (degrees): Furhat's basic neck parameters NECK_PAN, NECK_TILT and
+    NECK_ROLL take -50..50 (docs/robot-head.md); a lab that knows its robot's range sets it here. */
 export const NECK_LIMITS = { yaw: 50, pitch: 50, roll: 50 };
