@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi import FastAPI
-from playwright.sync_api import Page
+from playwright.sync_api import Browser, Page, Playwright
 
 from chameleons.backend.app import create_app
 from chameleons.backend.display.channel import DisplayChannel, get_display_channel
@@ -21,6 +21,7 @@ from chameleons.backend.display.protocol import Message
 from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.settings import Settings
 from tests.support.browser import wait_for_js
+from tests.support.head3d import launch_webgl
 from tests.support.live_server import LiveServer
 
 BOOTH = "booth-1"
@@ -114,3 +115,11 @@ def module_server(
 def display_url_module(module_server: tuple[FastAPI, LiveServer]) -> str:
     app, server = module_server
     return server.url + display_path(signing_key(app), BOOTH)
+
+
+@pytest.fixture(scope="module")
+def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
+    """Chromium with software WebGL (SwiftShader), for the 3D head."""
+    browser = launch_webgl(playwright_instance)
+    yield browser
+    browser.close()

@@ -43,13 +43,6 @@ def settings(settings: Settings) -> Settings:
     return settings
 
 
-@pytest.fixture(scope="module")
-def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
-    browser = launch_webgl(playwright_instance)
-    yield browser
-    browser.close()
-
-
 @pytest.fixture
 def head_page(webgl_browser: Browser, display_url: str) -> Iterator[Page]:
     context = webgl_browser.new_context(viewport={"width": 640, "height": 480})

@@ -5,11 +5,10 @@ lacks (debug overlay, console, telemetry) and renders it like the built-in head.
 from __future__ import annotations
 
 import queue
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from playwright.sync_api import Browser, ConsoleMessage, Playwright
+from playwright.sync_api import Browser, ConsoleMessage
 
 from chameleons.backend.display.protocol import Message
 from chameleons.backend.display.renderers import heads_dir
@@ -17,7 +16,7 @@ from chameleons.settings import Settings
 from chameleons.worker.frames import BLENDSHAPE_NAMES
 from tests.e2e.display.conftest import next_report
 from tests.support.browser import wait_for_js
-from tests.support.head3d import changed, launch_webgl, open_head, sphere_head, stills
+from tests.support.head3d import changed, open_head, sphere_head, stills
 
 pytestmark = pytest.mark.browser
 # Spellings: Furhat's UPPER_SNAKE behind a prefix, Swift's _L, PascalCase. Each bump moves
@@ -37,13 +36,6 @@ def settings(settings: Settings) -> Settings:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "lab-head.glb").write_bytes(sphere_head(TARGETS))
     return settings
-
-
-@pytest.fixture(scope="module")
-def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
-    browser = launch_webgl(playwright_instance)
-    yield browser
-    browser.close()
 
 
 def test_a_labs_head_loads_and_reports_what_it_lacks(

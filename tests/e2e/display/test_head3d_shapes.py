@@ -5,15 +5,14 @@ renderer (``robotDisplay.head3d().stills``)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
-from playwright.sync_api import Browser, Page, Playwright
+from playwright.sync_api import Browser, Page
 
 from chameleons.worker.frames import BLENDSHAPE_NAMES
-from tests.support.head3d import centroid, changed, launch_webgl, open_head, screen_points, stills
+from tests.support.head3d import centroid, changed, open_head, screen_points, stills
 
 pytestmark = pytest.mark.browser
 WIDTH, HEIGHT = 360, 450
@@ -41,13 +40,6 @@ def region_of(name: str) -> tuple[str, float]:
     if name.startswith("noseSneer"):
         return "nose" + side, 0.6
     raise AssertionError(f"no region for {name}")
-
-
-@pytest.fixture(scope="module")
-def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
-    browser = launch_webgl(playwright_instance)
-    yield browser
-    browser.close()
 
 
 Renders = tuple[dict[str, np.ndarray], dict[str, tuple[float, float]]]

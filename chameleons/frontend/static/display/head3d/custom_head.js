@@ -8,7 +8,7 @@
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { NECK_LIMITS } from "./morph_table.js";
-import { createStage, projector } from "./stage.js";
+import { createStage, projector, renderStills } from "./stage.js";
 
 const DEG = Math.PI / 180;
 const FACE_HEIGHT = 26;  // cm the head's morphing meshes are scaled to (the built-in's size)
@@ -111,16 +111,7 @@ class CustomHead {
   }
 
   stills(requests, width, height) {
-    const saved = [this.stage.width, this.stage.height];
-    this.stage.resize(width, height, 1);
-    const out = requests.map((r) => {
-      const bs = new Float32Array(this.names.length);
-      for (const [name, v] of Object.entries(r.bs || {})) bs[this.names.indexOf(name)] = v;
-      this.draw({ bs, head: r.head || [0, 0, 0] });
-      return this.stage.renderer.domElement.toDataURL("image/png");
-    });
-    this.stage.resize(saved[0], saved[1]);
-    return out;
+    return renderStills(this, requests, width, height, null);
   }
 
   resize(width, height) { this.stage.resize(width, height); }

@@ -11,7 +11,7 @@ import * as THREE from "three";
 import { buildHead, loadCanonicalMesh } from "./head_mesh.js";
 import { LOOKS, hex, paintEye, paintFace, shellColours } from "./looks.js";
 import { JAW_PIVOT, NECK_LIMITS } from "./morph_table.js";
-import { createStage, pixelsAsDataUrl, projector } from "./stage.js";
+import { createStage, projector, renderStills } from "./stage.js";
 
 const NECK_PIVOT = [0, -3.2, -3.4];  // cm, mesh frame: where the neck turns the head
 const TONGUE_REACH = 2.5;  // cm the tongue comes out at tongueOut = 1
@@ -57,9 +57,15 @@ class CanonicalHead {
     this.eyeTexture = new THREE.CanvasTexture(document.createElement("canvas"));
     this.eyeTexture.colorSpace = THREE.SRGBColorSpace;
     const material = new THREE.MeshLambertMaterial({ map: this.eyeTexture });
+    // A dark socket behind each eye (only its far, inner side is drawn, as for the mouth):
+    // what a glance past the eyeball, at an angle, sees through the lids' opening.
+    const socket = new THREE.MeshBasicMaterial({ color: 0x3a2a2a, side: THREE.BackSide });
     this.eyes = {};
     for (const side of ["L", "R"]) {
       const { centre, radius } = this.info.eyes[side];
+      const hollow = new THREE.Mesh(new THREE.SphereGeometry(radius * 1.5, 16, 12), socket);
+      hollow.position.set(...centre);
+      this.head.add(hollow);
       const ball = new THREE.Mesh(new THREE.SphereGeometry(radius, 24, 16), material);
       ball.position.set(...centre);
       ball.rotation.order = "YXZ";
@@ -205,18 +211,9 @@ class CanonicalHead {
     return out;
   }
 
-  /** Test hook: render each request ({bs, head, eyes}) at width x height; PNG data URLs. */
+  /** Test hook: PNG data URLs of each request ({bs, head, eyes}) at width x height. */
   stills(requests, width, height, faceId) {
-    const saved = [this.stage.width, this.stage.height];
-    this.stage.resize(width, height, 1);
-    const out = requests.map((r) => {
-      const bs = new Float32Array(this.names.length);
-      for (const [name, v] of Object.entries(r.bs || {})) bs[this.names.indexOf(name)] = v;
-      this.draw({ bs, head: r.head || [0, 0, 0], eyes: r.eyes || null }, faceId || this.face);
-      return pixelsAsDataUrl(this.stage);
-    });
-    this.stage.resize(saved[0], saved[1]);
-    return out;
+    return renderStills(this, requests, width, height, faceId || this.face);
   }
 
   resize(width, height) { this.stage.resize(width, height); }

@@ -20,7 +20,6 @@ const BROW_LOWER = { L: [276, 283, 282, 295, 285], R: [46, 53, 52, 65, 55] };
 const LIP_OUTER = [61, 185, 40, 39, 37, 0, 267, 269, 270, 409, 291, 375, 321, 405, 314, 17, 84, 181, 91, 146];
 const UPPER_LID = { L: [263, 466, 388, 387, 386, 385, 384, 398, 362], R: [33, 246, 161, 160, 159, 158, 157, 173, 133] };
 const LOWER_LID = { L: [263, 249, 390, 373, 374, 380, 381, 382, 362], R: [33, 7, 163, 144, 145, 153, 154, 155, 133] };
-const BROW_CREASE = { L: [276, 283, 282, 295], R: [46, 53, 52, 65] };
 const CHEEK = { L: 425, R: 205 };
 const NOSTRIL = { L: 327, R: 98 };
 const JAW_LINE = [234, 93, 132, 58, 172, 136, 150, 149, 176, 148, 152, 377, 400, 378, 379, 365, 397, 288, 361, 323, 454];
@@ -57,15 +56,13 @@ export function paintFace(canvas, uvs, style, look) {
   if (look.stubble) {
     path(JAW_LINE.concat([287, 273, 335, 406, 313, 18, 83, 182, 43, 57]), true);
     g.fillStyle = `rgba(40,28,22,${look.stubble})`;
-    g.filter = "blur(10px)";
     g.fill();
-    g.filter = "none";
+    feather(g, style.skin, [26, 14], 0.35);  // a soft edge (no canvas filter: see feather)
   }
   for (const side of ["L", "R"]) {
-    if (look.shadow) {  // lid colour above the lash line
-      path(UPPER_LID[side].concat(BROW_CREASE[side].slice().reverse()), true);
-      g.fillStyle = `rgba(90,60,110,${look.shadow})`;
-      g.fill();
+    if (look.shadow) {  // lid colour: a soft band just above the lash line
+      path(UPPER_LID[side], false);
+      feather(g, `rgba(90,60,110,${look.shadow * 0.6})`, [18, 12, 6]);
     }
     path(BROW_UPPER[side].concat(BROW_LOWER[side].slice().reverse()), true);  // brows
     g.fillStyle = style.brows.color;
@@ -140,6 +137,20 @@ export function shellColours(positions, start, style, look, out) {
     const w = i >= start || y > 4 ? smooth(edge - 0.6, edge + 0.6, y) : 0;
     for (let k = 0; k < 3; k++) out[3 * i + k] = skin[k] * (1 - w) + hair[k] * w;
   }
+}
+
+/** Strokes the current path several times, widest first, for a soft edge. (A canvas
+    filter such as blur() stalled Chromium's software WebGL texture upload for seconds.) */
+function feather(g, colour, widths, alpha = 1) {
+  g.save();
+  g.globalAlpha = alpha;
+  g.strokeStyle = colour;
+  g.lineJoin = "round";
+  for (const width of widths) {
+    g.lineWidth = width;
+    g.stroke();
+  }
+  g.restore();
 }
 
 function smooth(a, b, x) {

@@ -53,7 +53,18 @@ export function projector(stage) {
   };
 }
 
-/** The canvas as a PNG data URL (call right after render, before the frame is presented). */
-export function pixelsAsDataUrl(stage) {
-  return stage.renderer.domElement.toDataURL("image/png");
+/** Test hook of both heads: paint each request ({bs: {name: value}, head, eyes}) at
+    width x height and return PNG data URLs (read right after each render, before the
+    frame is presented, so no preserveDrawingBuffer is needed). */
+export function renderStills(painter, requests, width, height, face) {
+  const stage = painter.stage, saved = [stage.width, stage.height];
+  stage.resize(width, height, 1);
+  const out = requests.map((r) => {
+    const bs = new Float32Array(painter.names.length);
+    for (const [name, v] of Object.entries(r.bs || {})) bs[painter.names.indexOf(name)] = v;
+    painter.draw({ bs, head: r.head || [0, 0, 0], eyes: r.eyes || null }, face);
+    return stage.renderer.domElement.toDataURL("image/png");
+  });
+  stage.resize(saved[0], saved[1]);
+  return out;
 }
