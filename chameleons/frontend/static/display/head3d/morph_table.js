@@ -128,7 +128,7 @@ export const SHAPES = {
   browInnerUp: [{ move: { at: "innerBrows", move: [0, 0.55, 0], radius: 0.75 } }],
   browOuterUpLeft: [{ move: { at: "browOuterL", move: [0, 0.55, 0], radius: 0.8 } }],
   cheekPuff: [
-    { move: { at: "cheekL", move: [0.4, -0.1, 0.35], radius: 1.4 }, both: true },
+    { move: { at: "cheekL", move: [0.6, -0.1, 0.5], radius: 1.5 }, both: true },
     { move: { at: "lips", move: [0, 0, 0.12], radius: 0.5 } },
   ],
   cheekSquintLeft: [
@@ -136,8 +136,8 @@ export const SHAPES = {
     { move: { at: "lowerLidL", move: [0, 0.08, 0], radius: 0.35, region: "lowerEyeL" } },
   ],
   noseSneerLeft: [
-    { move: { at: "noseSideL", move: [0, 0.22, 0.05], radius: 0.6 } },
-    { move: { at: "alarL", move: [0.05, 0.25, 0], radius: 0.45 } },
+    { move: { at: "noseSideL", move: [0, 0.28, 0.06], radius: 0.6 } },
+    { move: { at: "alarL", move: [0.06, 0.32, 0], radius: 0.45 } },
   ],
   tongueOut: [
     { jaw: { open: 7 * DEG } },
