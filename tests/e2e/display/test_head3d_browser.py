@@ -136,6 +136,15 @@ def test_the_condition_switches_between_2d_and_3d(
     wait_for_js(head_page, "window.robotDisplay.renderer().kind === '3d'")
     geometry_when(head_page, "g.renderer === '3d'")
     expect(head_page.locator("#face3d")).to_be_visible()
+    # A condition that names no renderer leaves the page's own (here the link's, 3d; after
+    # a 2d condition it comes back).
+    channel.publish(BOOTH, set_face_message("face-3", "2d"))
+    wait_for_js(head_page, "window.robotDisplay.renderer().kind === '2d'")
+    channel.publish(BOOTH, set_face_message("face-3"))
+    wait_for_js(head_page, "window.robotDisplay.renderer().kind === '3d'"
+                " && window.robotDisplay.renderer().source === 'link'")  # fmt: skip
+    channel.publish(BOOTH, set_face_message("face-3", "3d"))
+    wait_for_js(head_page, "window.robotDisplay.renderer().source === 'study'")
     # A page that opens (or reconnects) later gets the condition's renderer at once, even
     # when its link asks for the other one.
     head_page.goto(display_url + "?renderer=2d")

@@ -137,7 +137,7 @@
     },
     set_face(m) {
       if (RobotFaces[m.face]) face = m.face;
-      if (m.renderer) robotScreen.choose(m.renderer, "study");
+      robotScreen.follow(m.renderer);
     },
     play_audio(m, now) { play(m, now); },
     stop_audio() { if (playback) finish(playback, "stopped"); },

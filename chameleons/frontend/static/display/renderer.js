@@ -19,7 +19,14 @@ class RobotScreen {
     this.loading = null;
     this.ready = false;
     this.size = [1, 1, 1];
-    this.choose(canvas3d.dataset.renderer || "2d", this.source);
+    this.own = [canvas3d.dataset.renderer || "2d", this.source];  // the link's or booth's
+    this.choose(...this.own);
+  }
+
+  /** A set_face from the worker: the condition's renderer, or back to the page's own. */
+  follow(renderer) {
+    if (renderer) this.choose(renderer, "study");
+    else this.choose(...this.own);
   }
 
   /** Switch to "2d" or "3d" (loading the 3D head the first time). */
