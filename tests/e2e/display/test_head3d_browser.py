@@ -153,12 +153,17 @@ def test_the_condition_switches_between_2d_and_3d(
 
 
 def test_telemetry_and_debug_overlay_report_the_3d_head(
-    head_page: Page, display_url: str, reports: queue.Queue[tuple[str, Message]]
+    head_page: Page,
+    display_url: str,
+    channel: DisplayChannel,
+    reports: queue.Queue[tuple[str, Message]],
 ) -> None:
     telemetry = next_report(reports, "telemetry")
     while telemetry.get("renderer") != "3d" or telemetry["frame_ms"]["p50"] is None:
         telemetry = next_report(reports, "telemetry")
     assert telemetry["fps"] > 0
+    # The console's and the booth check's "Robot" reads the same presence as for 2D.
+    assert channel.presence(BOOTH) == (True, "display open")
     assert 0 < telemetry["frame_ms"]["p50"] <= telemetry["frame_ms"]["p95"]
     assert isinstance(telemetry["dropped_frames"], int)
     head_page.goto(display_url + "?renderer=3d&debug=1")
