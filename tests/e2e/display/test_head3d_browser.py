@@ -197,3 +197,14 @@ def test_without_webgl_the_page_shows_the_2d_face_and_says_why(
         assert "WebGL" in telemetry["renderer_note"]
     finally:
         browser.close()
+
+
+def test_the_3d_page_reconnects_after_a_server_restart(
+    app: FastAPI, live_server: LiveServer, head_page: Page, channel: DisplayChannel
+) -> None:
+    live_server.stop()
+    wait_for_js(head_page, "!window.robotDisplay.connected()")
+    with LiveServer(app, live_server.port, lifespan="off"):
+        wait_for_js(head_page, "window.robotDisplay.connected()")
+        channel.publish(BOOTH, face_message(shapes(jawOpen=1.0), [0.0, 0.0, 0.0]))
+        geometry_when(head_page, "g.renderer === '3d' && g.mouthOpenPx > 15")
