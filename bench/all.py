@@ -5,8 +5,9 @@
 In order: ``bench.server_bench`` (think with an instant and a human-paced wizard, burst,
 hold; SQLite, and PostgreSQL when ``TEST_DATABASE_URL`` is set), ``bench.speech_bench``
 (wizard click -> speech start, virtual robot and Furhat peer), ``bench.data_bench``
-(planning, export, analysis page: time and peak memory) and ``bench.cli_bench`` (start-up
-CPU); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
+(planning, export, analysis page: time and peak memory), ``bench.cli_bench`` (start-up
+CPU) and ``bench.display_bench`` (the robot display's 3D head against its 2D face in
+Chromium); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
 own process included). Each prints its figures beside a baseline of its own run. With
 ``--quick`` each runs its smoke size (each well under two minutes on a quiet 2-core
 machine). The exit status is 1 when any benchmark failed or missed one of its goals; the
@@ -29,6 +30,7 @@ BENCHES: dict[str, list[str]] = {
     "speech": ["bench.speech_bench"],
     "data": ["bench.data_bench"],
     "cli": ["bench.cli_bench"],
+    "display": ["bench.display_bench"],
 }
 WORKER = {"worker": ["bench.worker_bench"]}
 

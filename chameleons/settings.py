@@ -88,6 +88,10 @@ class Settings(BaseSettings):
     # Embedded setup (`chameleons demo`): the server runs and supervises a local worker.
     embedded_worker: bool = False
     embedded_worker_booth: str = "booth-1"
+    # The robot display's face where neither the study's condition, the display link
+    # (?renderer=) nor the booth's own default (the PI's /display page) chooses: the 2D
+    # cartoon or the 3D head (README: "The robot display").
+    display_renderer: Literal["2d", "3d"] = "2d"
 
     # Face capture inputs of a worker.
     livelink_port: int = Field(default=11111, ge=0, le=65535)  # 0: any free port

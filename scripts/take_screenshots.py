@@ -51,6 +51,9 @@ CHROMIUM_ARGS = [
     "--disable-component-update",
     "--disable-sync",
     "--autoplay-policy=no-user-gesture-required",
+    # Software WebGL for the display's 3D head (no GPU needed).
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
 ]
 WIZARD_VIEWPORT = ViewportSize(width=1280, height=960)
 DISPLAY_VIEWPORT = ViewportSize(width=640, height=480)
@@ -207,6 +210,10 @@ def run_session(browser: Browser, demo: Demo, shots: Shots) -> None:
     expect(primary).to_contain_text("Start the session")
     primary.click()
     for position in (1, 2, 3):
+        if position == 2:  # the same booth's display with the 3D head (?renderer=3d)
+            display.goto(demo.display_url + "?renderer=3d")
+            display.mouse.click(10, 10)
+            expect(display.locator("#face3d")).to_be_visible(timeout=90_000)
         run_interaction(wizard, phone, display, position, shots)
     expect(phone.get_by_role("heading", name="Final questions")).to_be_visible()
     answer_questionnaire_page(phone, last=True)
@@ -222,9 +229,9 @@ def run_interaction(wizard: Page, phone: Page, display: Page, position: int, sho
     # over one that has not started yet is skipped, and flagged "prompt not voiced").
     speak(wizard, lambda: wizard.get_by_role("button", name=re.compile(r"Introduce")).click())
     speak(wizard, lambda: wizard.get_by_role("button", name=re.compile(r"Scenario")).click())
-    if position == 1:
+    if position in (1, 2):
         display.wait_for_timeout(600)  # mid-sentence, mouth moving
-        shots.take(display, "robot-display")
+        shots.take(display, "robot-display" if position == 1 else "robot-display-3d")
     primary.click()  # hand over: ranking on the phone
     expect(phone.get_by_role("heading", name="Rank the items")).to_be_visible()
     phone.locator("#ranking-list li").last.get_by_role("button", name=re.compile(" up$")).click()

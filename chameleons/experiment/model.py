@@ -80,13 +80,16 @@ class Scenario:
 @dataclass(frozen=True)
 class Condition:
     """A condition runs ``behaviour`` (a registered behaviour of the worker) with ``params``
-    (checked against the behaviour's declared parameters, defaults filled in)."""
+    (checked against the behaviour's declared parameters, defaults filled in). ``renderer``
+    ("2d" or "3d") sets the virtual robot display's face for the condition (so embodiment
+    can be a counterbalanced factor); None leaves the booth's own choice."""
 
     id: str
     label: str
     description: str
     behaviour: str
     params: dict[str, Any] = field(default_factory=dict, hash=False, compare=False)
+    renderer: str | None = None
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ GENDERS = ("female", "male", "other")
 MIN_CONDITIONS, MAX_CONDITIONS = 2, 6
 NAME_PAIRINGS = ("per_actor", "per_interaction")
 FACE_PAIRINGS = ("independent", "per_actor")
+RENDERERS = ("2d", "3d")  # the virtual robot display's face a condition may choose
 # Declared parameters per behaviour name (see chameleons.worker.behaviours.params); None
 # for a behaviour this machine does not have (a stored snapshot keeps its params as stored).
 Behaviours = Mapping[str, Mapping[str, Any] | None]
@@ -54,7 +55,9 @@ def read_conditions(
     behaviour of its own name (a study written before conditions named behaviours)."""
     conditions = []
     for cid, body, place in reader.keyed(node, "conditions", SNAKE):
-        reader.check_keys(body, place, ["label"], ["description", "behaviour", "params"])
+        reader.check_keys(
+            body, place, ["label"], ["description", "behaviour", "params", "renderer"]
+        )
         behaviour, params = _behaviour(reader, body, cid, place, behaviours, snapshot)
         conditions.append(
             Condition(
@@ -63,6 +66,7 @@ def read_conditions(
                 _optional(reader, body, "description", place),
                 behaviour,
                 params,
+                _renderer(reader, body, place),
             )
         )
     if not MIN_CONDITIONS <= len(conditions) <= MAX_CONDITIONS:
@@ -71,6 +75,19 @@ def read_conditions(
             f"needs {MIN_CONDITIONS} to {MAX_CONDITIONS} conditions, got {len(conditions)}",
         )
     return tuple(conditions)
+
+
+def _renderer(reader: Reader, body: dict[str, Any], place: str) -> str | None:
+    """The virtual robot's face for the condition: 2d, 3d, or None (the booth's own)."""
+    value = body.get("renderer")
+    if value is None:
+        return None
+    if value not in RENDERERS:
+        reader.problem(
+            join(place, "renderer"), f"must be 2d or 3d (the robot display's face), got {value!r}"
+        )
+        return None
+    return str(value)
 
 
 def _behaviour(

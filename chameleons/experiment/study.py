@@ -284,7 +284,7 @@ def _config_of(parts: dict[str, Any], name_genders: dict[str, str]) -> dict[str,
         "id": parts["id"],
         "name": parts["name"],
         "description": parts["description"],
-        "conditions": [asdict(c) for c in parts["conditions"]],
+        "conditions": [_condition_config(c) for c in parts["conditions"]],
         "tasks": [
             {
                 **{k: v for k, v in asdict(t).items() if k != "items"},
@@ -307,6 +307,15 @@ def _config_of(parts: dict[str, Any], name_genders: dict[str, str]) -> dict[str,
         "questionnaires": [_questionnaire_config(q) for q in parts["questionnaires"]],
         **({"procedure": p} if (p := procedure_config(parts["procedure"])) else {}),
     }
+
+
+def _condition_config(condition: Any) -> dict[str, Any]:
+    """A condition as stored; ``renderer`` only where the study names one, so studies
+    written before it existed keep their hash."""
+    data = asdict(condition)
+    if data["renderer"] is None:
+        del data["renderer"]
+    return data
 
 
 def _actor_config(actor: Any) -> dict[str, Any]:

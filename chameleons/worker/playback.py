@@ -27,6 +27,7 @@ import numpy as np
 import zmq
 
 from chameleons.worker.control import (
+    DISPLAY_RENDERERS,
     PLAY_PROMPT,
     RETRY_ROBOT,
     SET_FACE,
@@ -137,8 +138,14 @@ class PlaybackStage:
         return {}
 
     def _face(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        renderer = body.get("renderer")
+        if renderer not in (None, *DISPLAY_RENDERERS):
+            raise CommandError("bad_renderer", f"renderer is 2d or 3d, got {renderer!r}")
         self._publish(Message("playback.face", "face", 0, self.name, body=dict(body)))
-        return {"face_id": body["face_id"]}
+        result = {"face_id": body["face_id"]}
+        if renderer is not None:
+            result["renderer"] = renderer
+        return result
 
     def _retry(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
         self._publish(Message("playback.retry", "retry", 0, self.name))

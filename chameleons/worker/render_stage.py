@@ -144,7 +144,9 @@ class RendererStage:
             elif message.topic == "playback.retry":
                 self._requests.put(("retry",))
             elif message.topic == "playback.face":
-                self._requests.put(("face", str(message.body["face_id"])))
+                renderer = message.body.get("renderer")
+                self._requests.put(("face", str(message.body["face_id"]),
+                                    str(renderer) if renderer else None))  # fmt: skip
             elif message.topic == "playback.speech":
                 self._requests.put(("speech", str(message.body["event"]),
                                     message.body.get("prompt_id"),
@@ -211,7 +213,7 @@ class RendererStage:
                     self._speech_event(SPEECH_END, time.monotonic(), self.speaking,
                                        outcome="stopped")  # fmt: skip
             elif kind == "face":
-                self.driver.set_face(request[1])
+                self.driver.set_face(request[1], request[2])
             elif kind == "speech":
                 self.driver.remote_speech(request[1], request[2], request[3])
             elif kind == "retry":

@@ -20,6 +20,7 @@ from sqlalchemy import Engine
 
 from chameleons.backend.db import build_sessionmaker, session_scope
 from tests.support.bots import PASSWORD, WizardBot, add_staff, staff_api
+from tests.support.browser import wait_for_js
 from tests.support.factories import PopulatedStudy, populate
 from tests.support.live_server import LiveServer
 
@@ -158,8 +159,14 @@ def test_every_page_kind_runs_without_a_policy_violation(
     with page.expect_websocket(lambda ws: "/ws/display/booth-1" in ws.url) as socket_info:
         page.goto(f"{base}/display/booth-1")
     socket_info.value.wait_for_event("framereceived")
-    expect(page.locator("canvas")).to_be_visible()
+    expect(page.locator("canvas#face")).to_be_visible()
     watcher.check(page, "/display/booth-1")
+    # With the 3D head: the import map (allowed by its hash) and three.js's modules.
+    page.goto(f"{base}/display/booth-1?renderer=3d")
+    wait_for_js(page, "window.robotDisplay && window.robotDisplay.renderer().ready", 90_000)
+    assert page.evaluate("window.robotDisplay.renderer().kind") == "3d"
+    expect(page.locator("canvas#face3d")).to_be_visible()
+    watcher.check(page, "/display/booth-1?renderer=3d")
 
     # The participant's phone: the join page, then the session page with its live socket.
     _visit(phone_page, watcher, f"{base}/join", lambda p: expect(p.locator("form")).to_be_visible())

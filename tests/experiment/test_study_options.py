@@ -9,7 +9,12 @@ from typing import Any
 
 import pytest
 
-from chameleons.experiment.study import StudyError, load_study, study_from_config
+from chameleons.experiment.study import (
+    StudyError,
+    default_study_path,
+    load_study,
+    study_from_config,
+)
 from chameleons.worker.behaviours.params import Param
 from tests.experiment.study_files import default_document, write_study
 
@@ -253,3 +258,32 @@ def test_a_bad_furhat_voice_is_refused(tmp_path: Path) -> None:
         "actors.m2.voice.furhat.english: must be a language code with a voice name",
         "actors.m2.voice.furhat.sv: must be a language code with a voice name",
     ]
+
+
+def test_a_condition_may_choose_the_robot_displays_face(tmp_path: Path) -> None:
+    """Embodiment as a factor: conditions that differ only in the display's renderer."""
+    document = default_document()
+    document["conditions"] = {
+        "copy_2d": {"label": "Copy, flat face", "behaviour": "copy", "renderer": "2d"},
+        "copy_3d": {"label": "Copy, 3D head", "behaviour": "copy", "renderer": "3d"},
+        "still": {"label": "Still", "behaviour": "still"},
+    }
+    study = load_study(write_study(tmp_path, document))
+    assert [(c.id, c.renderer) for c in study.conditions] == [
+        ("copy_2d", "2d"), ("copy_3d", "3d"), ("still", None),
+    ]  # fmt: skip
+    stored = json.loads(json.dumps(study.config))
+    assert stored["conditions"][1]["renderer"] == "3d"
+    assert "renderer" not in stored["conditions"][2]
+    assert study_from_config(stored) == study
+    assert study_from_config(stored).condition("copy_3d").renderer == "3d"
+    # A study that names no renderer stores (and hashes) its conditions as before.
+    assert all("renderer" not in c for c in load_study(default_study_path()).config["conditions"])
+
+
+def test_a_bad_renderer_is_refused_at_its_line(tmp_path: Path) -> None:
+    document = default_document()
+    document["conditions"]["copy"]["renderer"] = "4d"
+    with pytest.raises(StudyError) as error:
+        load_study(write_study(tmp_path, document))
+    assert "conditions.copy.renderer: must be 2d or 3d" in str(error.value)

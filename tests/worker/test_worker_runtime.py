@@ -173,3 +173,13 @@ def test_what_the_stages_say_on_stopping_reaches_the_server(
     closed = peer.wait(lambda: [m for m in peer.of_type("robot_state")
                                 if m.body.get("state") == "closed"], timeout=10)  # fmt: skip
     assert closed[0].topic == f"event.{BOOTH}"
+
+
+def test_set_face_takes_the_display_renderer_and_refuses_a_wrong_one(
+    worker: Worker, peer: ControlPeer
+) -> None:
+    ack = peer.command(BOOTH, "set_face", {"face_id": "face-2", "renderer": "3d"})
+    assert ack.ok
+    assert ack.result == {"face_id": "face-2", "renderer": "3d"}
+    bad = peer.command(BOOTH, "set_face", {"face_id": "face-2", "renderer": "4d"})
+    assert (bad.ok, bad.error) == (False, "bad_renderer")

@@ -6,7 +6,7 @@ called from any thread (it hops onto the server's event loop). Upstream, pages'
 speech events and telemetry arrive through ``report`` and go to the listeners (the bridge
 forwards speech events to the worker).
 
-The current face and the last face frame of each booth are kept, so a page that
+The current face (with its renderer) and the last face frame of each booth are kept, so a page that
 (re)connects shows the right character at once. A slow page loses old face/head frames,
 never control messages; a page that does not read even those is disconnected.
 """
@@ -26,7 +26,7 @@ from typing import Any
 
 from fastapi import FastAPI
 
-from chameleons.backend.display.protocol import DROPPABLE_TYPES, Message, set_face_message
+from chameleons.backend.display.protocol import DROPPABLE_TYPES, Message
 from chameleons.backend.events.guard import POLICY_VIOLATION, SocketClosed, slow_client
 
 log = logging.getLogger(__name__)
@@ -125,7 +125,7 @@ class DisplayChannel:
         self._lock = threading.Lock()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._subscriptions: dict[str, set[Subscription]] = {}
-        self._faces: dict[str, str] = {}
+        self._faces: dict[str, Message] = {}  # the last set_face (face and renderer)
         self._last_frames: dict[str, Message] = {}
         self._telemetry: dict[str, Message] = {}
         self._telemetry_at: dict[str, float] = {}
@@ -148,7 +148,7 @@ class DisplayChannel:
         kind = message.get("type")
         with self._lock:
             if kind == "set_face":
-                self._faces[booth] = str(message["face"])
+                self._faces[booth] = message
             elif kind == "face":
                 self._last_frames[booth] = message
             subscriptions = list(self._subscriptions.get(booth, ()))
@@ -178,7 +178,7 @@ class DisplayChannel:
         subscription = Subscription(booth, self.queue_limit, by_link)
         with self._lock:
             if booth in self._faces:
-                subscription.put(set_face_message(self._faces[booth]))
+                subscription.put(self._faces[booth])
             if booth in self._last_frames:
                 subscription.put(self._last_frames[booth])
             self._subscriptions.setdefault(booth, set()).add(subscription)
@@ -194,7 +194,8 @@ class DisplayChannel:
 
     def current_face(self, booth: str) -> str | None:
         with self._lock:
-            return self._faces.get(booth)
+            message = self._faces.get(booth)
+        return None if message is None else str(message["face"])
 
     # -- upstream -----------------------------------------------------------------------
     def add_listener(self, listener: Listener, *, first: bool = False) -> None:

@@ -60,6 +60,20 @@ def retire(db: DbSession, booth: str) -> None:
     db.flush()
 
 
+def defaults(db: DbSession, booth: str) -> tuple[str | None, str | None]:
+    """The booth's display defaults: (renderer, head file), None where not set."""
+    row = db.get(DisplayLink, booth)
+    return (None, None) if row is None else (row.renderer, row.head)
+
+
+def set_defaults(db: DbSession, booth: str, renderer: str | None, head: str | None) -> None:
+    row = _row(db, booth)
+    row.renderer = renderer
+    row.head = head
+    row.updated_at = utcnow()
+    db.flush()
+
+
 def current_path(app: FastAPI, booth: str) -> str | None:
     """The booth's working display path, read from the app's database; ``None`` if retired."""
     with session_scope(app.state.sessionmaker) as db:

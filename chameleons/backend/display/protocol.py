@@ -14,7 +14,8 @@ Server -> display
 - ``{"type": "head", "seq": int, "t": float, "ts": float, "head": [yaw, pitch, roll]}``
   head pose (up to the worker's tick rate). Yaw > 0 turns the face towards the viewer's
   right, pitch > 0 tilts it down, roll > 0 tilts it counter-clockwise as the viewer sees it.
-- ``{"type": "set_face", "face": "face-1" | "face-2" | "face-3" | "face-4"}``.
+- ``{"type": "set_face", "face": "face-1" | "face-2" | "face-3" | "face-4",
+  "renderer": "2d" | "3d" (optional: the study's condition chose the face's renderer)}``.
 - ``{"type": "play_audio", "play_id": str, "prompt_id": str | null, "url": str,
   "lipsync_url": str | null}``: play the audio now. With ``lipsync_url`` the page drives
   mouth and jaw from those curves on the audio element's own clock (exact sync whatever
@@ -29,7 +30,12 @@ Display -> server
   the server forwards start/end to the worker (``speech_event`` command).
 - ``{"type": "telemetry", "fps": float, "frames_in": float (frames/s received),
   "paint_latency_ms": {"p50", "p95", "max"}, "interp_delay_ms": float,
-  "relay_to_paint_ms": float | null, "speaking": bool, "face": str}`` once a second.
+  "relay_to_paint_ms": float | null, "speaking": bool, "face": str, "renderer": "2d" | "3d",
+  "frame_ms": {"p50", "p95"} (time to paint one frame, on the page's thread; WebGL's own
+  rasterisation runs after it), "interval_ms": {"p50", "p95"} (between painted frames),
+  "dropped_frames": int (refreshes missed in the last second), "head_missing": [ARKit
+  names a lab's own head lacks] (3D with a lab's head only), "renderer_note": str (why a
+  wanted 3D head is not shown)}`` once a second.
   Paint latency runs from a frame's arrival at the page to the first paint that shows it
   fully (this includes the interpolation delay that keeps motion smooth).
 - ``{"type": "ping", "id": int, "t": float}``: clock-offset probe (``t`` is the page's
@@ -49,6 +55,7 @@ from typing import Any, Final
 from chameleons.worker.frames import BLENDSHAPE_NAMES, N_BLENDSHAPES
 
 FACE_IDS: Final = ("face-1", "face-2", "face-3", "face-4")
+RENDERERS: Final = ("2d", "3d")
 SPEECH_EVENTS: Final = frozenset({"start", "end"})
 END_REASONS: Final = frozenset({"ended", "stopped", "interrupted", "error", "autoplay_blocked"})
 INBOUND_TYPES: Final = frozenset({"speech", "telemetry", "ping"})
@@ -108,10 +115,15 @@ def head_message(head: Sequence[float], *, seq: int = 0, sent: float | None = No
             "head": _floats(head, 3, "head", 3)}  # fmt: skip
 
 
-def set_face_message(face: str) -> Message:
+def set_face_message(face: str, renderer: str | None = None) -> Message:
     if face not in FACE_IDS:
         raise ValueError(f"unknown face {face!r}; expected one of {', '.join(FACE_IDS)}")
-    return {"type": "set_face", "face": face}
+    if renderer is not None and renderer not in RENDERERS:
+        raise ValueError(f"unknown renderer {renderer!r}; expected 2d or 3d")
+    message: Message = {"type": "set_face", "face": face}
+    if renderer is not None:
+        message["renderer"] = renderer
+    return message
 
 
 def play_audio_message(

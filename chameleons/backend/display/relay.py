@@ -17,6 +17,7 @@ from typing import Any
 from chameleons.backend.display.channel import DisplayChannel
 from chameleons.backend.display.protocol import (
     FACE_IDS,
+    RENDERERS,
     Message,
     face_message,
     head_message,
@@ -103,7 +104,10 @@ def _set_face(envelope: Envelope) -> Message:
     face = str(envelope.body.get("face_id", envelope.body.get("face", "")))
     if face not in FACE_IDS:
         raise RelayError("unknown_face")
-    return set_face_message(face)
+    renderer = envelope.body.get("renderer")
+    if renderer is not None and renderer not in RENDERERS:
+        raise RelayError("unknown_renderer")
+    return set_face_message(face, renderer)
 
 
 def _play_audio(envelope: Envelope) -> Message:

@@ -247,6 +247,14 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "and recording id it was yoked to).",
             ),
             Column(
+                "renderer",
+                "string",
+                "The virtual robot display's face the study's condition chose (2d: the flat "
+                "face, 3d: the 3D head); empty where the condition names none (the booth's "
+                "own choice applied, or the robot is a Furhat).",
+                "2d, 3d",
+            ),
+            Column(
                 "recording_problem",
                 "string",
                 "Why the face recording of this interaction failed or never started (e.g. a "

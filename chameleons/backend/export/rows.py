@@ -123,6 +123,7 @@ def interaction_rows(
             "behaviour": behaviours.get(interaction.condition),
             "natural_source": interaction.natural_source,
             "natural_recording": interaction.natural_recording,
+            "renderer": interaction.renderer,
             "recording_problem": problems.get(interaction.id),
         }
 

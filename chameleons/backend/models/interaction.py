@@ -13,7 +13,9 @@ class Interaction(Base):
     """One of a session's interactions (one per condition), as planned and as actually run.
 
     ``natural_source``/``natural_recording``: what the ``natural`` behaviour replayed in this
-    interaction (clip, yoked or synthetic, and which recording), set when it first ran."""
+    interaction (clip, yoked or synthetic, and which recording), set when it first ran.
+    ``renderer``: the face the virtual robot's display was told to paint (2d|3d) when the
+    study's condition chose one; None where the booth's default applied."""
 
     __tablename__ = "interaction"
     __table_args__ = (
@@ -39,5 +41,6 @@ class Interaction(Base):
     final_ranking: Mapped[list[Any] | None]
     natural_source: Mapped[str | None] = mapped_column(String(16))
     natural_recording: Mapped[str | None] = mapped_column(String(255))
+    renderer: Mapped[str | None] = mapped_column(String(8))
     started_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]

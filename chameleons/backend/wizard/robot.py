@@ -22,8 +22,9 @@ from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.booth.behaviour import robot_behaviour
 from chameleons.backend.events import repository as events
-from chameleons.backend.models import Event
+from chameleons.backend.models import Event, Interaction, Study
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
+from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import repository, worker_link
 from chameleons.backend.wizard.playback import write
 from chameleons.backend.wizard.service import Outcome
@@ -46,6 +47,13 @@ class Target:
     behaviour: str = ""
     params: dict[str, Any] | None = None
     natural_source: dict[str, Any] | None = None
+    renderer: str | None = None  # the condition's display face (2d/3d); None: the booth's
+
+    def face_body(self) -> dict[str, Any]:
+        body: dict[str, Any] = {"face_id": self.face}
+        if self.renderer:
+            body["renderer"] = self.renderer
+        return body
 
     def behaviour_body(self) -> dict[str, Any]:
         body: dict[str, Any] = {"name": self.behaviour or self.condition}
@@ -75,12 +83,30 @@ def target_of(db: Session, session_id: int) -> Target:
 
 def prepared(db: Session, state: Any, find: Finder) -> Target:
     """The target with the study's behaviour for its condition (choosing what ``natural``
-    replays once per interaction)."""
+    replays once per interaction) and the display face the condition names, which the
+    interaction records."""
     target = find(db)
     chosen = robot_behaviour(db, state, target.interaction_id, target.condition)
+    renderer = condition_renderer(db, target.study_id, target.condition)
+    interaction = db.get(Interaction, target.interaction_id)
+    if interaction is not None and interaction.renderer != renderer:
+        interaction.renderer = renderer
     return replace(
-        target, behaviour=chosen.name, params=chosen.params, natural_source=chosen.natural_source
+        target,
+        behaviour=chosen.name,
+        params=chosen.params,
+        natural_source=chosen.natural_source,
+        renderer=renderer,
     )
+
+
+def condition_renderer(db: Session, study_id: int, condition: str) -> str | None:
+    """The robot display's face (2d/3d) the study's condition names, if any."""
+    study = db.get(Study, study_id)
+    if study is None:
+        return None
+    spec = spec_of(study)
+    return next((c.renderer for c in spec.conditions if c.id == condition), None)
 
 
 def _result(outcome: Outcome) -> dict[str, Any]:
@@ -98,6 +124,7 @@ def record(
         "condition": target.condition,
         "behaviour_name": target.behaviour,
         "face": target.face,
+        "renderer": target.renderer,
         "behaviour": _result(behaviour),
         "face_result": _result(face),
     }
@@ -133,7 +160,7 @@ async def apply_with(
     bridge = worker_link.bridge_of(state)
     behaviour = await _send(bridge, target.booth, SET_BEHAVIOUR, target.behaviour_body(),
                             only_changes)  # fmt: skip
-    face = await _send(bridge, target.booth, SET_FACE, {"face_id": target.face}, only_changes)
+    face = await _send(bridge, target.booth, SET_FACE, target.face_body(), only_changes)
     if _unchanged(behaviour) and _unchanged(face):
         return None
     event = await run_in_threadpool(write, state, record, target, behaviour, face, source)

@@ -97,8 +97,9 @@ class Driver(ABC):
     def stop_audio(self) -> None:  # noqa: B027 - optional
         """Stop the audio that is playing, if any."""
 
-    def set_face(self, face_id: str) -> None:  # noqa: B027 - optional
-        """Select the robot's face (character/mask)."""
+    def set_face(self, face_id: str, renderer: str | None = None) -> None:  # noqa: B027 - optional
+        """Select the robot's face (character/mask); ``renderer`` (2d|3d) is for the virtual
+        robot's display and ignored by physical robots."""
 
     def retry(self) -> None:  # noqa: B027 - optional
         """Try the robot again after the driver stopped itself (a refused login)."""

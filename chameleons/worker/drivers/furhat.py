@@ -186,7 +186,7 @@ class FurhatDriver(Driver):
         self._queue_control({"type": "request.speak.stop"})
         self._credit(credit)
 
-    def set_face(self, face_id: str) -> None:
+    def set_face(self, face_id: str, renderer: str | None = None) -> None:
         self._select_face(face_id)
         self._queue_control(self._face_config())
 

@@ -65,5 +65,5 @@ class RecordDriver(Driver):
     def stop_audio(self) -> None:
         self._write({"type": "stop_audio"})
 
-    def set_face(self, face_id: str) -> None:
-        self._write({"type": "set_face", "face_id": face_id})
+    def set_face(self, face_id: str, renderer: str | None = None) -> None:
+        self._write({"type": "set_face", "face_id": face_id, "renderer": renderer})

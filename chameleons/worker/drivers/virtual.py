@@ -7,7 +7,7 @@ PUB connection to the server, which relays it to the booth's robot display page:
 - ``head``: body ``{"yaw", "pitch", "roll"}`` in degrees, at most ``head_rate`` per second
   (the page draws at display rate; more would only load the relay);
 - ``play_audio`` ``{"prompt_id", "url", "play_id"}``, ``stop_audio``, ``set_face``
-  ``{"face_id"}``. The page reports speech start/end with the play's ``play_id``.
+  ``{"face_id", "renderer"?}``. The page reports speech start/end with the play's ``play_id``.
 
 The page reports when the audio really starts and ends; the server sends those back as
 ``speech_event`` commands, which reach :meth:`VirtualDriver.remote_speech`.
@@ -67,8 +67,11 @@ class VirtualDriver(Driver):
     def stop_audio(self) -> None:
         self._send("stop_audio")
 
-    def set_face(self, face_id: str) -> None:
-        self._send("set_face", {"face_id": face_id})
+    def set_face(self, face_id: str, renderer: str | None = None) -> None:
+        body = {"face_id": face_id}
+        if renderer:
+            body["renderer"] = renderer
+        self._send("set_face", body)
 
     def remote_speech(self, event: str, prompt_id: str | None, play_id: str | None = None) -> None:
         self.emit(SPEECH_START if event == "start" else SPEECH_END, prompt_id=prompt_id,

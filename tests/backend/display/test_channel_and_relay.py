@@ -216,3 +216,28 @@ def test_speech_events_are_forwarded_as_worker_commands() -> None:
 
     run(scenario())
     assert sent == [(BOOTH, "speech_event", {"event": "end", "prompt_id": "x"})]
+
+
+def test_the_condition_s_renderer_reaches_the_page_and_stays_for_late_pages() -> None:
+    sent: list[Envelope] = []
+    driver = VirtualDriver(BOOTH, sent.append)
+    driver.set_face("face-3", "3d")
+    driver.set_face("face-1")
+    three_d, plain = (display_message(deserialize(serialize(e))) for e in sent)
+    assert three_d == {"type": "set_face", "face": "face-3", "renderer": "3d"}
+    assert plain == {"type": "set_face", "face": "face-1"}
+    channel = DisplayChannel()
+    body = {"face_id": "face-1", "renderer": "4d"}
+    bad = Envelope("display." + BOOTH, "set_face", 1, "renderer", body=body)
+    assert relay_envelope(channel, bad) is False
+    assert channel.counters["relay.unknown_renderer"] == 1
+    with pytest.raises(ValueError, match="unknown renderer"):
+        set_face_message("face-1", "4d")
+
+    async def late_page() -> Message:
+        channel.publish(BOOTH, three_d)
+        with channel.subscribe(BOOTH) as page:
+            return await page.get()
+
+    assert run(late_page()) == three_d
+    assert channel.current_face(BOOTH) == "face-3"

@@ -4,6 +4,8 @@ the booth's display link, and a recorder of what pages report back."""
 from __future__ import annotations
 
 import queue
+import secrets
+import shutil
 import wave
 from collections.abc import Iterator
 from pathlib import Path
@@ -11,13 +13,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fastapi import FastAPI
-from playwright.sync_api import Page
+from playwright.sync_api import Browser, Page, Playwright
 
+from chameleons.backend.app import create_app
 from chameleons.backend.display.channel import DisplayChannel, get_display_channel
 from chameleons.backend.display.protocol import Message
 from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.settings import Settings
 from tests.support.browser import wait_for_js
+from tests.support.head3d import launch_webgl
 from tests.support.live_server import LiveServer
 
 BOOTH = "booth-1"
@@ -88,3 +92,34 @@ def next_report(
         _booth, message = received.get(timeout=timeout)
         if message.get("type") == kind:
             return message
+
+
+@pytest.fixture(scope="module")
+def module_server(
+    tmp_path_factory: pytest.TempPathFactory, sqlite_template: Path
+) -> Iterator[tuple[FastAPI, LiveServer]]:
+    """One app and live server for a whole module (tests that share one slow page load)."""
+    folder = tmp_path_factory.mktemp("display-module")
+    shutil.copyfile(sqlite_template, folder / "db.sqlite3")
+    settings = Settings(database_url=f"sqlite:///{folder / 'db.sqlite3'}", data_dir=folder / "data",
+                        secret_key=secrets.token_urlsafe(32), bridge_enabled=False,
+                        _env_file=None)  # fmt: skip
+    app = create_app(settings)
+    server = LiveServer(app).start()
+    yield app, server
+    server.stop()
+    app.state.engine.dispose()
+
+
+@pytest.fixture(scope="module")
+def display_url_module(module_server: tuple[FastAPI, LiveServer]) -> str:
+    app, server = module_server
+    return server.url + display_path(signing_key(app), BOOTH)
+
+
+@pytest.fixture(scope="module")
+def webgl_browser(playwright_instance: Playwright) -> Iterator[Browser]:
+    """Chromium with software WebGL (SwiftShader), for the 3D head."""
+    browser = launch_webgl(playwright_instance)
+    yield browser
+    browser.close()

@@ -158,3 +158,20 @@ def test_a_prompt_speaks_with_lips_moved_by_the_worker(
     end = worker_event(events, "speech_end")
     assert end.body["prompt_id"] == "short"
     assert 0.3 < end.body["worker_time"] - start.body["worker_time"] < 5.0
+
+
+def test_the_worker_switches_the_page_to_the_3d_head_and_turns_it(
+    chain: tuple[BridgeThread, queue.Queue[Envelope]], display_page: Page, tmp_path: Path
+) -> None:
+    """A study condition's renderer travels with set_face through the worker to the page."""
+    bridge, _events = chain
+    assert display_page.evaluate("window.robotDisplay.renderer().kind") == "2d"
+    command(bridge, "set_face", {"face_id": "face-2", "renderer": "3d"})
+    wait_for_js(display_page, "window.robotDisplay.renderer().kind === '3d'", timeout=90_000)
+    clip = natural_clip(tmp_path / "turned.npz", -30.0)
+    command(bridge, "set_behaviour", {"name": "natural", "params": {"path": str(clip)}})
+    wait_for_js(
+        display_page,
+        "(() => { const g = window.robotDisplay.geometry(); "
+        "return g && g.renderer === '3d' && g.centerX - g.noseX > 0.4 * g.scale; })()",
+    )

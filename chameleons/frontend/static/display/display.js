@@ -1,11 +1,15 @@
 /* The robot display: WebSocket client, frame interpolation, audio with lip-sync, telemetry.
    Protocol: chameleons/backend/display/protocol.py. Shows nothing but the face; add
-   ?debug=1 to the URL for an overlay with connection and timing figures. */
+   ?debug=1 to the URL for an overlay with connection and timing figures. The face is the
+   2D cartoon (face_renderer.js) or the 3D head (head3d/, see renderer.js), chosen by the
+   study's condition, else ?renderer= on the link, else the booth's default. */
 "use strict";
 
 (function () {
   const canvas = document.getElementById("face");
   const ctx = canvas.getContext("2d", { alpha: false });
+  const robotScreen = new RobotScreen(canvas, document.getElementById("face3d"), ctx,
+    document.getElementById("renderer-note"), (text) => note(text));
   const debugBox = document.getElementById("debug");
   const soundHint = document.getElementById("sound-hint");
   const debug = new URLSearchParams(location.search).get("debug") === "1";
@@ -73,14 +77,13 @@
   let geometry = null;
   let socket = null, connected = false, backoff = 500;
   const outbox = [];  // speech events wait here while disconnected
-  const stats = { painted: 0, framesIn: 0, latencies: [], relay: [], fps: 0, inRate: 0 };
+  const stats = { painted: 0, framesIn: 0, latencies: [], relay: [], fps: 0, inRate: 0,
+                  frameMs: [], intervals: [], dropped: 0, refreshMs: 1000 / 60 };
   let clockOffset = null, bestRtt = Infinity, pingId = 0;
   let playback = null;
 
   function resize() {
-    const dpr = window.devicePixelRatio || 1;
-    canvas.width = Math.round(window.innerWidth * dpr);
-    canvas.height = Math.round(window.innerHeight * dpr);
+    robotScreen.resize(window.innerWidth, window.innerHeight, window.devicePixelRatio || 1);
   }
 
   // ---- connection -------------------------------------------------------------------
@@ -134,6 +137,7 @@
     },
     set_face(m) {
       if (RobotFaces[m.face]) face = m.face;
+      robotScreen.follow(m.renderer);
     },
     play_audio(m, now) { play(m, now); },
     stop_audio() { if (playback) finish(playback, "stopped"); },
@@ -237,9 +241,17 @@
       for (const i of MOUTH_JAW) state.bs[i] = 0;  // the curves own the mouth while speaking
       LipSync.apply(playback.curves, audioTime(playback, now), state.bs);
     }
-    geometry = FaceRenderer.draw(ctx, canvas.width, canvas.height, state, RobotFaces[face]);
+    const started = performance.now();
+    geometry = robotScreen.draw(state, face);
     const painted = performance.now();
     stats.painted++;
+    stats.frameMs.push(painted - started);
+    if (stats.lastFrame !== undefined) {  // a frame interval of 2+ refreshes dropped frames
+      stats.intervals.push(now - stats.lastFrame);
+      const refreshes = Math.round((now - stats.lastFrame) / stats.refreshMs);
+      if (refreshes > 1) stats.dropped += refreshes - 1;
+    }
+    stats.lastFrame = now;
     for (const s of shown) {
       stats.latencies.push(painted - s.t);
       if (clockOffset !== null && s.ts) stats.relay.push(painted + clockOffset - s.ts);
@@ -259,6 +271,7 @@
 
   function report() {
     const lat = stats.latencies.sort((a, b) => a - b), relay = stats.relay.sort((a, b) => a - b);
+    const cost = stats.frameMs.sort((a, b) => a - b), gaps = stats.intervals.sort((a, b) => a - b);
     const round = (v) => (v === null ? null : Math.round(v * 10) / 10);
     stats.fps = stats.painted;
     stats.inRate = stats.framesIn;
@@ -268,8 +281,15 @@
                           max: round(lat.length ? lat[lat.length - 1] : null) },
       interp_delay_ms: round(faceTrack.delay), relay_to_paint_ms: round(percentile(relay, 0.5)),
       speaking: Boolean(playback && playback.started), face,
+      renderer: robotScreen.kind, frame_ms: { p50: round(percentile(cost, 0.5)), p95: round(percentile(cost, 0.95)) },
+      dropped_frames: stats.dropped,
+      interval_ms: { p50: round(percentile(gaps, 0.5)), p95: round(percentile(gaps, 0.95)) },
     };
-    stats.painted = 0; stats.framesIn = 0; stats.latencies = []; stats.relay = [];
+    if (robotScreen.missing) message.head_missing = robotScreen.missing;
+    if (robotScreen.fallback) message.renderer_note = robotScreen.fallback;
+    stats.painted = 0; stats.framesIn = 0; stats.latencies = []; stats.relay = []; stats.frameMs = [];
+    stats.intervals = [];
+    stats.dropped = 0;
     stats.last = message;
     send(message, false);
     if (debug) {
@@ -278,6 +298,10 @@
         + `face ${face} · ${message.fps} fps · in ${message.frames_in}/s\n`
         + `paint latency p50 ${message.paint_latency_ms.p50} p95 ${message.paint_latency_ms.p95} ms\n`
         + `relay->paint ${message.relay_to_paint_ms} ms · rtt ${round(bestRtt)} ms\n`
+        + `renderer ${robotScreen.kind} (${robotScreen.source}) · frame ${message.frame_ms.p50}/${message.frame_ms.p95} ms`
+        + ` every ${message.interval_ms.p50} ms`
+        + ` · dropped ${message.dropped_frames}/s\n`
+        + (robotScreen.missing && robotScreen.missing.length ? `head lacks ${robotScreen.missing.length}: ${robotScreen.missing.join(", ")}\n` : "")
         + (stats.note ? "note: " + stats.note : "");
     }
   }
@@ -303,6 +327,9 @@
     telemetry: () => stats.last || null,
     speaking: () => Boolean(playback && playback.started && !playback.done),
     audioUnlocked: () => audioUnlocked,
+    renderer: () => ({ kind: robotScreen.kind, source: robotScreen.source, wanted: robotScreen.wanted,
+                       fallback: robotScreen.fallback, missing: robotScreen.missing, ready: robotScreen.ready }),
+    head3d: () => robotScreen.head,  // test hook: stills(), screenPoints()
   });
 
   window.addEventListener("resize", resize);
