@@ -16,7 +16,7 @@ import subprocess
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,6 +40,7 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
+from chameleons.cli.interrupts import Interrupts
 from chameleons.cli.ports import free_port
 from chameleons.experiment.study import load_default_study, study_from_config
 from chameleons.rehearsal.runner import RehearsalError, Target
@@ -150,8 +151,14 @@ class ServerThread:
                 raise RehearsalError("The embedded server did not start.")
             self._thread.join(0.01)
 
-    def stop(self) -> None:
+    def request_stop(self, again: bool = False) -> None:
+        """Ask the server to shut down (from a signal handler too: it only sets flags)."""
+        if again:
+            self.server.force_exit = True
         self.server.should_exit = True
+
+    def stop(self) -> None:
+        self.request_stop()
         self._thread.join(timeout=30)
         self._sock.close()
 
@@ -179,10 +186,13 @@ def embedded_system(
     study_id: int | None = None,
     simulate_face: bool = True,
     booth: str | None = None,
+    stops: Interrupts | None = None,
 ) -> Iterator[Target]:
     """Start everything, yield where to rehearse, stop everything (also on Ctrl-C).
     ``booth``: the local worker's booth (default: the settings' embedded worker booth);
-    naming it lets the rehearsal use a booth with a real session open."""
+    naming it lets the rehearsal use a booth with a real session open. ``stops``: the
+    command's stop signals, which shut the server down at once (the rehearsal then ends
+    even when the signal's exception was lost on its way)."""
     sock = _bound_socket()
     settings = rehearsal_settings(base, sock.getsockname()[1])
     if booth is not None:
@@ -191,18 +201,22 @@ def embedded_system(
     app = create_app(settings)
     server = ServerThread(app, sock)
     simulator: subprocess.Popen[bytes] | None = None
-    try:
-        server.start()
-        wait_for_worker(app, settings.embedded_worker_booth)
-        if simulate_face:
-            simulator = start_face_simulator(settings, settings.livelink_port)
-        spec = study_from_config(prepared.config)
-        yield Target(settings.effective_public_url, BOT_USERNAME, prepared.password,
-                     prepared.study_id, settings.embedded_worker_booth,
-                     booth_chosen=booth is not None, local=True,
-                     studies=(spec,))  # fmt: skip
-    finally:
-        if simulator is not None:
-            stop_process(simulator)
-        server.stop()
-        retire_bot(settings)
+    stopping: AbstractContextManager[None] = (
+        stops.stopping(server.request_stop) if stops is not None else nullcontext()
+    )
+    with stopping:
+        try:
+            server.start()
+            wait_for_worker(app, settings.embedded_worker_booth)
+            if simulate_face:
+                simulator = start_face_simulator(settings, settings.livelink_port)
+            spec = study_from_config(prepared.config)
+            yield Target(settings.effective_public_url, BOT_USERNAME, prepared.password,
+                         prepared.study_id, settings.embedded_worker_booth,
+                         booth_chosen=booth is not None, local=True,
+                         studies=(spec,))  # fmt: skip
+        finally:
+            if simulator is not None:
+                stop_process(simulator)
+            server.stop()
+            retire_bot(settings)
