@@ -20,7 +20,6 @@ from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
-import uvicorn
 from fastapi import FastAPI
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
@@ -42,6 +41,7 @@ from chameleons.cli.embedded import (
 )
 from chameleons.cli.interrupts import Interrupts
 from chameleons.cli.ports import free_port
+from chameleons.cli.web_server import WebServer, web_config
 from chameleons.experiment.study import load_default_study, study_from_config
 from chameleons.rehearsal.runner import RehearsalError, Target
 from chameleons.settings import Settings
@@ -135,9 +135,9 @@ def retire_bot(settings: Settings) -> None:
 class ServerThread:
     """uvicorn serving ``app`` on an already bound socket, in a background thread."""
 
-    def __init__(self, app: FastAPI, sock: socket.socket) -> None:
-        config = uvicorn.Config(app, log_level="warning", lifespan="on")
-        self.server = uvicorn.Server(config)
+    def __init__(self, app: FastAPI, sock: socket.socket, settings: Settings) -> None:
+        config = web_config(app, settings, log_level="warning", lifespan="on")
+        self.server = WebServer(config)
         self._sock = sock
         self._thread = threading.Thread(
             target=self.server.run, kwargs={"sockets": [sock]}, name="rehearsal-server"
@@ -153,9 +153,7 @@ class ServerThread:
 
     def request_stop(self, again: bool = False) -> None:
         """Ask the server to shut down (from a signal handler too: it only sets flags)."""
-        if again:
-            self.server.force_exit = True
-        self.server.should_exit = True
+        self.server.stop(again)
 
     def stop(self) -> None:
         self.request_stop()
@@ -199,7 +197,7 @@ def embedded_system(
         settings = settings.model_copy(update={"embedded_worker_booth": booth})
     prepared = prepare(settings, study_id)
     app = create_app(settings)
-    server = ServerThread(app, sock)
+    server = ServerThread(app, sock, settings)
     simulator: subprocess.Popen[bytes] | None = None
     stopping: AbstractContextManager[None] = (
         stops.stopping(server.request_stop) if stops is not None else nullcontext()
