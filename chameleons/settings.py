@@ -69,6 +69,11 @@ class Settings(BaseSettings):
     ws_send_timeout_s: float = Field(default=10.0, gt=0)
     login_max_failures: int = Field(default=5, ge=1)
     login_lockout_seconds: float = Field(default=30.0, ge=0)
+    # Reverse proxies whose X-Forwarded-For / -Proto headers say who the client is
+    # (comma-separated addresses or networks, "*" for any; uvicorn's forwarded_allow_ips).
+    # Empty: none, the connection's own address counts (the login and join throttles key on
+    # it). Set it only for a proxy nothing else can reach the server around.
+    forwarded_allow_ips: str = ""
 
     # ZeroMQ endpoints between server and workers (loopback unless configured otherwise).
     worker_command_endpoint: str = "tcp://127.0.0.1:5555"

@@ -15,7 +15,10 @@ endless "connection is down" retry, since the phone retries only 5xx):
 - a lone surrogate (``"\\ud800"``) in a JSON string: valid JSON, but not Unicode text that
   UTF-8 (the databases', files') can encode (422);
 - ``NaN``/``Infinity`` in JSON bodies: Python's JSON parser accepts them, JSON does not,
-  PostgreSQL's JSON columns refuse them, and no measure of this study is one (422).
+  PostgreSQL's JSON columns refuse them, and no measure of this study is one (422); so is
+  a number beyond what a float holds (``1e400``), which the parser turns into infinity;
+- a JSON body nested deeper than ``MAX_JSON_DEPTH`` (no route takes more than a few
+  levels): 50,000 nested lists made the parser raise ``RecursionError`` (422).
 
 A pure ASGI middleware: it buffers only JSON and form bodies (which FastAPI reads whole
 anyway) and hands the same bytes on. Multipart bodies pass through (files may hold NULs).
@@ -28,6 +31,7 @@ own, as its page does. This runs before any route, so it reads no session.
 from __future__ import annotations
 
 import json
+import math
 import re
 from typing import Any
 from urllib.parse import parse_qsl
@@ -47,6 +51,9 @@ NOT_UNICODE = N_(
     "Text must be valid Unicode (it contains a lone surrogate escape such as \\ud800)."
 )
 NOT_FINITE = N_("Numbers must be finite: NaN and Infinity are not allowed.")
+TOO_LARGE_NUMBER = N_("A number in the request is too large (the limit is about 1.8e308).")
+MAX_JSON_DEPTH = 64
+TOO_DEEP = N_("The request is nested too deeply (the limit is 64 levels).")
 TOO_LARGE = N_("A whole number in the request is too large (the limit is 2^63 - 1).")
 TOO_LARGE_IN_ADDRESS = N_("A number in the address is too large (the limit is 2147483647).")
 NO_SUCH_THING = "Not Found"
@@ -78,11 +85,19 @@ def _reject_constant(name: str) -> float:
     raise _Refused(NOT_FINITE)
 
 
+def _parse_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):  # 1e400: beyond a double, not a number JSON allows
+        raise _Refused(TOO_LARGE_NUMBER)
+    return value
+
+
 def _check_strings(value: Any) -> None:
-    """Walk a decoded JSON value (keys too) for NUL characters and lone surrogates."""
-    stack = [value]
+    """Walk a decoded JSON value (keys too) for NUL characters, lone surrogates and
+    nesting deeper than ``MAX_JSON_DEPTH`` (iteratively: no recursion to run out of)."""
+    stack = [(value, 1)]
     while stack:
-        item = stack.pop()
+        item, depth = stack.pop()
         if isinstance(item, str):
             if "\x00" in item:
                 raise _Refused(NUL_IN_TEXT)
@@ -91,16 +106,20 @@ def _check_strings(value: Any) -> None:
                     item.encode("utf-8")
                 except UnicodeEncodeError:
                     raise _Refused(NOT_UNICODE) from None
-        elif isinstance(item, dict):
-            stack.extend(item.keys())
-            stack.extend(item.values())
-        elif isinstance(item, list):
-            stack.extend(item)
+        elif isinstance(item, dict | list):
+            if depth > MAX_JSON_DEPTH:
+                raise _Refused(TOO_DEEP)
+            values = [*item.keys(), *item.values()] if isinstance(item, dict) else item
+            stack.extend((inner, depth + 1) for inner in values)
 
 
 def check_json(body: bytes) -> None:
     try:
-        decoded = json.loads(body, parse_constant=_reject_constant, parse_int=_parse_int)
+        decoded = json.loads(
+            body, parse_constant=_reject_constant, parse_int=_parse_int, parse_float=_parse_float
+        )
+    except RecursionError:  # nested beyond the parser's own recursion limit
+        raise _Refused(TOO_DEEP) from None
     except ValueError:
         return  # malformed JSON: FastAPI answers it with its own 422
     _check_strings(decoded)

@@ -1,4 +1,5 @@
-"""Security headers on every HTTP response (pages, API, static files, errors).
+"""Security headers on every HTTP response (pages, API, static files, errors), and
+``Cache-Control: no-store`` on every one but static assets and prompt audio.
 
 A pure ASGI middleware rather than ``BaseHTTPMiddleware``: it only adds headers at
 ``http.response.start``, so streaming responses (exports, recordings) stay streaming and
@@ -49,6 +50,15 @@ SECURITY_HEADERS = {
 }
 
 
+# What a browser (or a proxy) may keep: the static assets and the prompts' recorded audio.
+# Every other response (staff pages and API, exports, participant pages, redirects, errors)
+# is personal or live and gets "Cache-Control: no-store" unless its route set its own: a
+# staff page is then not kept on disk nor shown again from the back/forward cache after
+# logging out on a shared lab PC.
+CACHEABLE_PREFIXES = ("/static/", "/media/prompts/", "/favicon.ico")
+NO_STORE = "no-store"
+
+
 class SecurityHeadersMiddleware:
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -58,12 +68,16 @@ class SecurityHeadersMiddleware:
             await self.app(scope, receive, send)
             return
 
+        cacheable = str(scope.get("path", "")).startswith(CACHEABLE_PREFIXES)
+
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
                 headers = MutableHeaders(scope=message)
                 for name, value in SECURITY_HEADERS.items():
                     if name not in headers:  # a route's own (stricter or specific) value wins
                         headers[name] = value
+                if not cacheable and "cache-control" not in headers:
+                    headers["Cache-Control"] = NO_STORE
             await send(message)
 
         await self.app(scope, receive, send_with_headers)

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import signal
 import subprocess
-import sys
 from typing import IO
 from urllib.parse import urlsplit
 
@@ -26,6 +24,7 @@ from chameleons.cli.embedded import (
     stop_process,
 )
 from chameleons.cli.heap import settle_startup_heap
+from chameleons.cli.interrupts import Interrupts, interrupts
 from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
 from chameleons.cli.startup import QuietStartup, StartupError, serve
 from chameleons.settings import Settings
@@ -101,41 +100,43 @@ def _loopback(base: str) -> bool:
 def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
     study and plan, a local worker driving the virtual robot, and a simulated face."""
+    # Ctrl-C and SIGTERM end it with 130 / 143 once the server, its worker and the face
+    # simulator have stopped, whenever they come (chameleons.cli.interrupts).
+    with interrupts() as stops:
+        _run(stops, host, port, simulate_face)
+
+
+def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: bool) -> None:
     # Everything that can fail is done before the welcome is printed, so a failure is the
     # first (and only) thing the user reads: the settings, the data directory, the ports,
     # the database, and the server's start-up (worker link, local worker) inside uvicorn.
     settings = demo_settings(load_settings(host=host, port=port))
     lock = _lock(settings)
-    ports = _ports(settings, web_port_given=port is not None)
-    settings = ports.settings
-    data = _prepare(settings)
-    app = _app(settings)
-    base = settings.effective_public_url
-    path = current_path(app, settings.embedded_worker_booth)
-    display_url = base + path if path else "(retired: issue a new link on /display)"
-    simulator: list[subprocess.Popen[bytes]] = []
-
-    def started() -> None:
-        _print_welcome(base, data, display_url, ports, simulate_face)
-        if simulate_face:
-            simulator.append(start_face_simulator(settings))
-
-    # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
-    # so the face simulator is stopped too (the worker stops with the app's lifespan).
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-    server = QuietStartup(
-        app, started, log_level="warning", ws_per_message_deflate=settings.ws_compression
-    )
-    settle_startup_heap()  # the start-up's objects out of the collector's full walks
     try:
-        serve(server, [ports.web])  # the socket bound above: no second bind to fail
-    except KeyboardInterrupt:  # uvicorn re-raises Ctrl-C after its graceful shutdown
-        pass
-    except StartupError as exc:
-        raise click.ClickException(str(exc)) from exc
+        ports = _ports(settings, web_port_given=port is not None)
+        settings = ports.settings
+        data = _prepare(settings)
+        app = _app(settings)
+        base = settings.effective_public_url
+        path = current_path(app, settings.embedded_worker_booth)
+        display_url = base + path if path else "(retired: issue a new link on /display)"
+        simulator: list[subprocess.Popen[bytes]] = []
+
+        def started() -> None:
+            _print_welcome(base, data, display_url, ports, simulate_face)
+            if simulate_face:
+                simulator.append(start_face_simulator(settings))
+
+        server = QuietStartup(app, started, settings, log_level="warning")
+        settle_startup_heap()  # the start-up's objects out of the collector's full walks
+        try:
+            serve(server, stops, [ports.web])  # the socket bound above: no second bind
+        except StartupError as exc:
+            raise click.ClickException(str(exc)) from exc
+        finally:
+            for process in simulator:
+                stop_process(process)
     finally:
-        for process in simulator:
-            stop_process(process)
         lock.close()
 
 

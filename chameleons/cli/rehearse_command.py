@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import signal
-import sys
-
 import click
 
 from chameleons.cli.common import load_settings
+from chameleons.cli.interrupts import Interrupts, interrupts
 from chameleons.rehearsal import runner
 from chameleons.rehearsal.patterns import PATTERNS
 from chameleons.rehearsal.runner import Options, RehearsalError, Summary, Target
@@ -117,29 +115,36 @@ def rehearse(
     options = Options(
         participants, seed, pattern, script, drop_out=drop_out, deviate=deviate, language=language
     )
-    try:
-        if server is not None:
-            if not username or not password:
-                raise click.UsageError("--server needs --username and --password.")
-            target = Target(server.rstrip("/"), username, password, study_id,
-                            booth or "booth-1", booth_chosen=booth is not None)  # fmt: skip
-            _report(rehearse_sessions(target, options))
-            return
-        from chameleons.rehearsal.embedded import embedded_system
+    # Ctrl-C and SIGTERM end it with 130 / 143 once everything it started has stopped, so a
+    # script that chains `rehearse` and `export` never exports a half-finished rehearsal.
+    with interrupts() as stops:
+        try:
+            if server is not None:
+                if not username or not password:
+                    raise click.UsageError("--server needs --username and --password.")
+                target = Target(server.rstrip("/"), username, password, study_id,
+                                booth or "booth-1", booth_chosen=booth is not None)  # fmt: skip
+                _report(rehearse_sessions(target, options, stops))
+                return
+            from chameleons.rehearsal.embedded import embedded_system
 
-        # A plain SIGTERM would end the process without stopping what it started: leave
-        # through SystemExit instead, so the embedded system's clean-up runs.
-        signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-        click.echo("Starting an embedded server, worker (virtual robot) and simulated face...")
-        with embedded_system(load_settings(), study_id, simulate_face, booth) as target:
-            click.echo(f"Server on {target.base_url}; rehearsing {participants} sessions.")
-            _report(rehearse_sessions(target, options))
-    except RehearsalError as error:
-        raise click.ClickException(str(error)) from error
+            click.echo("Starting an embedded server, worker (virtual robot) and simulated face...")
+            with embedded_system(
+                load_settings(), study_id, simulate_face, booth, stops=stops
+            ) as target:
+                click.echo(f"Server on {target.base_url}; rehearsing {participants} sessions.")
+                _report(rehearse_sessions(target, options, stops))
+        except RehearsalError as error:
+            raise click.ClickException(str(error)) from error
 
 
-def rehearse_sessions(target: Target, options: Options) -> Summary:
-    return runner.rehearse(target, options, progress=click.echo)
+def rehearse_sessions(target: Target, options: Options, stops: Interrupts | None = None) -> Summary:
+    def progress(line: str) -> None:
+        if stops is not None:
+            stops.check()  # a signal whose exception was lost ends the run here
+        click.echo(line)
+
+    return runner.rehearse(target, options, progress=progress)
 
 
 def _report(summary: Summary) -> None:

@@ -14,10 +14,12 @@ from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
 
-import uvicorn
 from fastapi import FastAPI
 
 from chameleons.backend.bridge.wiring import WorkerLinkError
+from chameleons.cli.interrupts import Interrupted, Interrupts
+from chameleons.cli.web_server import WebServer, run_until_stopped, web_config
+from chameleons.settings import Settings
 
 UVICORN_ERRORS = "uvicorn.error"
 
@@ -29,7 +31,7 @@ class StartupError(Exception):
 class _HoldBack(logging.Filter):
     """Keeps uvicorn's error records back until the server has started."""
 
-    def __init__(self, server: uvicorn.Server) -> None:
+    def __init__(self, server: WebServer) -> None:
         super().__init__()
         self.server = server
         self.held: list[logging.LogRecord] = []
@@ -41,9 +43,11 @@ class _HoldBack(logging.Filter):
         return False
 
 
-class QuietStartup(uvicorn.Server):
-    def __init__(self, app: FastAPI, on_started: Callable[[], None], **options: Any) -> None:
-        super().__init__(uvicorn.Config(app, **options))
+class QuietStartup(WebServer):
+    def __init__(
+        self, app: FastAPI, on_started: Callable[[], None], settings: Settings, **options: Any
+    ) -> None:
+        super().__init__(web_config(app, settings, **options))
         self.on_started = on_started
         self.failure: BaseException | None = None
         self._remember_failure(app)
@@ -72,13 +76,16 @@ class QuietStartup(uvicorn.Server):
             self.on_started()
 
 
-def serve(server: QuietStartup, sockets: list[socket.socket]) -> None:
-    """Run ``server`` until it stops; a start-up failure is :class:`StartupError`."""
+def serve(server: QuietStartup, stops: Interrupts, sockets: list[socket.socket]) -> None:
+    """Run ``server`` until it stops (a stop signal: :class:`Interrupted`); a start-up
+    failure is :class:`StartupError`."""
     held = _HoldBack(server)
     errors = logging.getLogger(UVICORN_ERRORS)
     errors.addFilter(held)
     try:
-        server.run(sockets=sockets)
+        run_until_stopped(server, stops, sockets)
+    except Interrupted:
+        raise
     except SystemExit as exc:
         if server.started:
             raise

@@ -9,7 +9,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from chameleons.backend.auth import repository, service, sessions
-from chameleons.backend.auth.schemas import StaffUserCreate
+from chameleons.backend.auth.schemas import StaffUserCreate, refusal
 from chameleons.backend.db import build_engine, build_sessionmaker, session_scope
 from chameleons.backend.events.pg_fanout import notify_on_commit
 from chameleons.backend.migrate import current_revision, head_revision
@@ -37,8 +37,7 @@ def user_add(name: str, role: str, password: str | None) -> None:
     try:
         data = StaffUserCreate(username=name, password=password, role=role)
     except ValidationError as exc:
-        problems = "; ".join(f"{e['loc'][0]}: {e['msg']}" for e in exc.errors())
-        raise click.ClickException(problems) from exc
+        raise click.ClickException(refusal(exc)) from exc
     with _database() as db:
         try:
             service.create_user(db, data)

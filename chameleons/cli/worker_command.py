@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from chameleons.cli.common import load_settings
+from chameleons.cli.interrupts import interrupts
 from chameleons.settings import Settings
 from chameleons.worker import curve
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
@@ -83,32 +84,37 @@ def worker(
     Runs standalone too: without a server it starts in the given behaviour and drives the
     robot, so a lab can test the robot chain on its own. Ctrl-C stops it cleanly.
     """
-    settings = load_settings()
-    logging.basicConfig(level=logging.DEBUG if verbose else settings.log_level.upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
-    config = build_config(
-        settings, booth=booth, driver=driver, robot_url=robot_url, furhat_faces=furhat_faces,
-        livelink_port=livelink_port, capture_sender=capture_sender, camera=camera,
-        facecapturex_port=facecapturex_port, behaviour=behaviour, copy_delay=copy_delay,
-        natural_path=natural_path, control=control, telemetry=telemetry, keys_dir=keys_dir,
-        tick_rate=tick_rate,
-        face_rate=face_rate,
-    )  # fmt: skip
-    if realtime or renderer_cpu is not None:
-        renderer_process = True  # both are about the renderer's own process
-    config = dataclasses.replace(config, renderer_process=renderer_process,
-                                 renderer_realtime=realtime, renderer_cpu=renderer_cpu)  # fmt: skip
-    if check:
-        report = run_check(config.robot_url, config.robot_key, config.furhat_faces)
-        for line in report.lines():
-            click.echo(line)
-        raise SystemExit(0 if report.ok else 1)
-    try:
-        code = run_worker(config, echo=click.echo)
-    except (OSError, RuntimeError, ValueError) as exc:
-        raise click.ClickException(str(exc)) from exc
-    if code:
-        raise SystemExit(code)
+    # Ctrl-C and SIGTERM: 130 / 143, also before the worker's own handlers are in place
+    # (run_worker's stop the stages in order and report the signal the same way).
+    with interrupts():
+        settings = load_settings()
+        logging.basicConfig(level=logging.DEBUG if verbose else settings.log_level.upper(),
+                            format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
+        config = build_config(
+            settings, booth=booth, driver=driver, robot_url=robot_url,
+            furhat_faces=furhat_faces, livelink_port=livelink_port,
+            capture_sender=capture_sender, camera=camera,
+            facecapturex_port=facecapturex_port,
+            behaviour=behaviour, copy_delay=copy_delay, natural_path=natural_path,
+            control=control, telemetry=telemetry, keys_dir=keys_dir, tick_rate=tick_rate,
+            face_rate=face_rate,
+        )  # fmt: skip
+        if realtime or renderer_cpu is not None:
+            renderer_process = True  # both are about the renderer's own process
+        config = dataclasses.replace(config, renderer_process=renderer_process,
+                                     renderer_realtime=realtime,
+                                     renderer_cpu=renderer_cpu)  # fmt: skip
+        if check:
+            report = run_check(config.robot_url, config.robot_key, config.furhat_faces)
+            for line in report.lines():
+                click.echo(line)
+            raise SystemExit(0 if report.ok else 1)
+        try:
+            code = run_worker(config, echo=click.echo)
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise click.ClickException(str(exc)) from exc
+        if code:
+            raise SystemExit(code)
 
 
 def build_config(settings: Settings, **options: Any) -> WorkerConfig:

@@ -25,6 +25,7 @@ from chameleons.experiment.model import Study
 from chameleons.experiment.procedure import procedure_config, read_procedure
 from chameleons.experiment.reader import SLUG, Reader
 from chameleons.experiment.wording import duplicate_wording
+from chameleons.experiment.yaml_limits import ExpansionError, expanded_size
 
 __all__ = [
     "Study",
@@ -150,9 +151,18 @@ def _parse_yaml(text: str, source: str) -> tuple[Any, list[str]]:
         raise StudyError([f"not valid YAML: {exc}"], source) from exc
     loader.duplicates = []
     try:
-        document = loader.get_single_data()
+        node = loader.get_single_node()
+        if node is None:
+            return None, []
+        expanded_size(node)  # before anything walks the aliases' repetitions (yaml_limits)
+        document = loader.construct_document(node)
     except yaml.YAMLError as exc:
         raise StudyError([f"not valid YAML: {exc}"], source) from exc
+    except ExpansionError as exc:
+        raise StudyError([f"too large: {exc}"], source) from exc
+    except RecursionError as exc:  # PyYAML composes nested collections recursively
+        raise StudyError(["nested too deeply: a study needs a few levels, not hundreds"],
+                         source) from exc  # fmt: skip
     finally:
         loader.dispose()
     return document, loader.duplicates

@@ -16,11 +16,10 @@ import subprocess
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
-import uvicorn
 from fastapi import FastAPI
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
@@ -40,7 +39,9 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
+from chameleons.cli.interrupts import Interrupts
 from chameleons.cli.ports import free_port
+from chameleons.cli.web_server import WebServer, web_config
 from chameleons.experiment.study import load_default_study, study_from_config
 from chameleons.rehearsal.runner import RehearsalError, Target
 from chameleons.settings import Settings
@@ -134,9 +135,9 @@ def retire_bot(settings: Settings) -> None:
 class ServerThread:
     """uvicorn serving ``app`` on an already bound socket, in a background thread."""
 
-    def __init__(self, app: FastAPI, sock: socket.socket) -> None:
-        config = uvicorn.Config(app, log_level="warning", lifespan="on")
-        self.server = uvicorn.Server(config)
+    def __init__(self, app: FastAPI, sock: socket.socket, settings: Settings) -> None:
+        config = web_config(app, settings, log_level="warning", lifespan="on")
+        self.server = WebServer(config)
         self._sock = sock
         self._thread = threading.Thread(
             target=self.server.run, kwargs={"sockets": [sock]}, name="rehearsal-server"
@@ -150,8 +151,12 @@ class ServerThread:
                 raise RehearsalError("The embedded server did not start.")
             self._thread.join(0.01)
 
+    def request_stop(self, again: bool = False) -> None:
+        """Ask the server to shut down (from a signal handler too: it only sets flags)."""
+        self.server.stop(again)
+
     def stop(self) -> None:
-        self.server.should_exit = True
+        self.request_stop()
         self._thread.join(timeout=30)
         self._sock.close()
 
@@ -179,30 +184,37 @@ def embedded_system(
     study_id: int | None = None,
     simulate_face: bool = True,
     booth: str | None = None,
+    stops: Interrupts | None = None,
 ) -> Iterator[Target]:
     """Start everything, yield where to rehearse, stop everything (also on Ctrl-C).
     ``booth``: the local worker's booth (default: the settings' embedded worker booth);
-    naming it lets the rehearsal use a booth with a real session open."""
+    naming it lets the rehearsal use a booth with a real session open. ``stops``: the
+    command's stop signals, which shut the server down at once (the rehearsal then ends
+    even when the signal's exception was lost on its way)."""
     sock = _bound_socket()
     settings = rehearsal_settings(base, sock.getsockname()[1])
     if booth is not None:
         settings = settings.model_copy(update={"embedded_worker_booth": booth})
     prepared = prepare(settings, study_id)
     app = create_app(settings)
-    server = ServerThread(app, sock)
+    server = ServerThread(app, sock, settings)
     simulator: subprocess.Popen[bytes] | None = None
-    try:
-        server.start()
-        wait_for_worker(app, settings.embedded_worker_booth)
-        if simulate_face:
-            simulator = start_face_simulator(settings, settings.livelink_port)
-        spec = study_from_config(prepared.config)
-        yield Target(settings.effective_public_url, BOT_USERNAME, prepared.password,
-                     prepared.study_id, settings.embedded_worker_booth,
-                     booth_chosen=booth is not None, local=True,
-                     studies=(spec,))  # fmt: skip
-    finally:
-        if simulator is not None:
-            stop_process(simulator)
-        server.stop()
-        retire_bot(settings)
+    stopping: AbstractContextManager[None] = (
+        stops.stopping(server.request_stop) if stops is not None else nullcontext()
+    )
+    with stopping:
+        try:
+            server.start()
+            wait_for_worker(app, settings.embedded_worker_booth)
+            if simulate_face:
+                simulator = start_face_simulator(settings, settings.livelink_port)
+            spec = study_from_config(prepared.config)
+            yield Target(settings.effective_public_url, BOT_USERNAME, prepared.password,
+                         prepared.study_id, settings.embedded_worker_booth,
+                         booth_chosen=booth is not None, local=True,
+                         studies=(spec,))  # fmt: skip
+        finally:
+            if simulator is not None:
+                stop_process(simulator)
+            server.stop()
+            retire_bot(settings)

@@ -20,6 +20,7 @@ import contextlib
 import logging
 import multiprocessing
 import os
+import signal
 import sys
 import tempfile
 import threading
@@ -136,6 +137,9 @@ class RendererProcess:
 def _child_main(
     config: WorkerConfig, endpoints: Endpoints, stop_reader: Connection, ready_writer: Connection
 ) -> None:
+    # A terminal's Ctrl-C reaches the whole process group: the worker stops this process
+    # through the pipe, in order, rather than have it die with a traceback first.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     for note in apply_scheduling(config.renderer_realtime, config.renderer_cpu):

@@ -279,14 +279,17 @@ class Worker:
 
 
 def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> int:
-    """Run until SIGINT/SIGTERM (or a stage crash); returns the process exit code."""
+    """Run until SIGINT/SIGTERM (or a stage crash); returns the process exit code: 128 + the
+    signal that stopped it (130, 143), else 1 after a stage crash."""
     # A thread that wakes for a tick must get the GIL quickly; Python's default hand-over
     # interval (5 ms) would show up directly as tick jitter. This process is the worker's own.
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     worker = Worker(config)
     previous: dict[int, Any] = {}
+    signals: list[int] = []
 
     def request_stop(signum: int, _frame: FrameType | None) -> None:
+        signals.append(signum)
         worker.stop_event.set()
 
     for signum in (signal.SIGINT, signal.SIGTERM):
@@ -312,8 +315,9 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
             faulthandler.unregister(dump_signal)
     if worker.failed.is_set():
         echo("worker stopped after a stage failure (see the log)")
-        return 1
-    return 0
+    if signals:  # stopped on request: the conventional 128 + signal (130 Ctrl-C, 143 TERM)
+        return 128 + signals[0]
+    return 1 if worker.failed.is_set() else 0
 
 
 if __name__ == "__main__":  # pragma: no cover - `python -m chameleons.worker.runtime`

@@ -67,6 +67,27 @@ def test_user_add_rejects_short_password(cli_env: dict[str, str]) -> None:
     assert "password" in result.stderr
 
 
+@pytest.mark.parametrize(
+    ("password", "why"),
+    [
+        ("password123", "This password is too common: choose one that is not on breach lists."),
+        ("wizard99x", "The password is too similar to the user name."),
+    ],
+)
+def test_user_add_with_a_refused_password_says_why_in_one_sentence(
+    cli_env: dict[str, str], password: str, why: str
+) -> None:
+    """The password check judges the whole account (a model check, no field): it crashed
+    the command with an IndexError traceback."""
+    run_cli("db", "upgrade", env=cli_env)
+    result = run_cli("user", "add", "wizard", "--role", "wizard", "--password", password,
+                     env=cli_env)  # fmt: skip
+    assert result.returncode == 1
+    assert result.stderr == f"Error: {why}\n"
+    listed = run_cli("user", "list", env=cli_env)
+    assert listed.stdout == ""  # nothing was created
+
+
 def test_serve_refuses_without_secret(cli_env: dict[str, str]) -> None:
     result = run_cli("serve", env=cli_env)
     assert result.returncode != 0

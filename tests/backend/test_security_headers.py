@@ -69,6 +69,32 @@ def test_logged_in_pages_and_api_carry_the_headers(client: TestClient, engine: o
         _assert_headers(response)
 
 
+STAFF_PATHS = ["/", "/pi", "/pi/staff", "/wizard", "/studies", "/api/studies",
+               "/api/staff/me", "/pi/sessions/999999", "/pi/no-such-page"]  # fmt: skip
+
+
+def test_staff_pages_api_and_errors_are_never_stored_but_assets_are_cacheable(
+    client: TestClient, engine: object
+) -> None:
+    """A staff page kept in the browser's cache (or its back/forward history) shows the
+    study's data to the next person at a shared lab PC after the PI logged out."""
+    add_staff(engine, "pia", "pi")  # type: ignore[arg-type]
+    before = client.get("/login")
+    assert before.headers["cache-control"] == "no-store"
+    assert client.get("/pi", follow_redirects=False).headers["cache-control"] == "no-store"
+    csrf = re.search(r'name="csrf_token" value="([^"]+)"', before.text)
+    assert csrf
+    data = {"username": "pia", "password": PASSWORD, "csrf_token": csrf.group(1)}
+    assert client.post("/login", data=data, follow_redirects=False).status_code == 303
+    for path in STAFF_PATHS:
+        response = client.get(path, follow_redirects=False)
+        assert response.headers.get("cache-control") == "no-store", (path, response.status_code)
+    for path in ("/static/css/app.css", "/favicon.ico"):
+        response = client.get(path)
+        assert response.status_code == 200
+        assert "no-store" not in response.headers.get("cache-control", ""), path
+
+
 def test_participant_pages_keep_no_referrer(client: TestClient) -> None:
     # The phone's own stricter value wins over the app-wide same-origin.
     response = client.get("/p/not-a-token")

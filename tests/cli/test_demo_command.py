@@ -194,14 +194,16 @@ def _check_logins(demo: Demo) -> None:
             assert http.get("/api/staff/me").json()["username"] == username
 
 
-def _stop(demo: Demo, expected_children: set[str]) -> None:
-    """Ctrl-C; afterwards neither the demo nor anything it started still runs."""
+def _stop(demo: Demo, expected_children: set[str], signum: int = signal.SIGINT) -> None:
+    """Ctrl-C (or ``signum``); afterwards neither the demo nor anything it started still
+    runs, and it ended with 128 + the signal."""
     children = _children(demo.process.pid)
     commands = {pid: _command_line(pid) for pid in children}
     started = {name for name in expected_children if any(name in c for c in commands.values())}
     assert started == expected_children, commands
-    demo.process.send_signal(signal.SIGINT)
-    assert demo.process.wait(timeout=30) == 0, "\n".join(demo.output)
+    demo.process.send_signal(signum)
+    # 130 / 143, not 0: the demo was stopped, it did not finish (a script can tell).
+    assert demo.process.wait(timeout=30) == 128 + signum, "\n".join(demo.output)
     still = {pid: commands[pid] for pid in children if _alive(pid)}
     assert not still, f"left running after Ctrl-C: {still}"
 
@@ -336,4 +338,4 @@ def test_livelink_port_zero_means_a_free_port_the_worker_and_the_simulated_face_
     assert f"--livelink-port {port} " in worker[0] + " "  # the worker listens there
     assert f"--target 127.0.0.1:{port}" in face[0]  # and the simulated face sends there
     assert "is not HOST:PORT" not in "\n".join(demo.output)
-    _stop(demo, {"chameleons.cli.worker_command", "simulate-face"})
+    _stop(demo, {"chameleons.cli.worker_command", "simulate-face"}, signal.SIGTERM)

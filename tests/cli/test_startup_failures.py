@@ -17,7 +17,11 @@ import pytest
 from fastapi import FastAPI
 
 from chameleons.cli.common import load_settings
+from chameleons.cli.interrupts import Interrupts
 from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.settings import Settings
+
+SETTINGS = Settings(_env_file=None)
 
 
 def _demo(tmp_path: Path, **env: str) -> subprocess.CompletedProcess[str]:
@@ -123,9 +127,11 @@ def test_a_failing_start_up_is_a_sentence_and_the_welcome_is_never_called(
     capfd: pytest.CaptureFixture[str],
 ) -> None:
     log: list[str] = []
-    server = QuietStartup(_app(True, log), lambda: log.append("welcome"), log_level="warning")
+    server = QuietStartup(
+        _app(True, log), lambda: log.append("welcome"), SETTINGS, log_level="warning"
+    )
     with socket.create_server(("127.0.0.1", 0)) as web, pytest.raises(StartupError) as failed:
-        serve(server, [web])
+        serve(server, Interrupts(), [web])
     assert str(failed.value) == "The server could not start: OSError: the database is on fire."
     assert log == ["lifespan started"]
     printed = capfd.readouterr()
@@ -139,7 +145,7 @@ def test_the_welcome_comes_once_the_start_up_is_done() -> None:
         log.append("welcome")
         server.should_exit = True  # the test is over once the welcome came
 
-    server = QuietStartup(_app(False, log), welcome, log_level="warning")
+    server = QuietStartup(_app(False, log), welcome, SETTINGS, log_level="warning")
     with socket.create_server(("127.0.0.1", 0)) as web:
-        serve(server, [web])
+        serve(server, Interrupts(), [web])
     assert log == ["lifespan started", "welcome"]

@@ -11,10 +11,11 @@ from typing import Any
 
 import click
 import pytest
-import uvicorn
 import yaml
+from fastapi import FastAPI
 
 from chameleons.cli.main import cli
+from chameleons.cli.web_server import web_config
 from chameleons.settings import InsecureSettingsError, Settings
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -63,7 +64,7 @@ def test_every_command_exists_in_the_cli(name: str) -> None:
 def test_every_environment_variable_is_a_setting(name: str) -> None:
     fields = {f"CHAMELEONS_{field.upper()}" for field in Settings.model_fields}
     for key in APP_SERVICES[name].get("environment", {}):
-        assert key in fields | DEPENDENCY_VARIABLES, f"{name}: {key} is not a setting"
+        assert key in fields, f"{name}: {key} is not a setting"
 
 
 def test_env_example_names_real_settings_and_is_refused() -> None:
@@ -118,8 +119,6 @@ def test_dockerfile_installs_the_package() -> None:
 # --- the scale profile: more server processes behind a proxy --------------------------------
 
 CADDYFILE = ROOT / "deploy" / "Caddyfile"
-# Variables a dependency reads itself (not settings): uvicorn's trust in X-Forwarded-For.
-DEPENDENCY_VARIABLES = {"FORWARDED_ALLOW_IPS"}
 
 
 def _phone_patterns() -> list[str]:
@@ -176,12 +175,11 @@ def test_the_scale_profile_runs_replicas_behind_the_proxy() -> None:
     assert "lb_policy cookie" in caddyfile  # a phone sticks to one replica
 
 
-def test_the_variables_that_are_not_settings_are_read_by_uvicorn(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    for service in APP_SERVICES.values():
-        for key in service.get("environment", {}):
-            assert key.startswith("CHAMELEONS_") or key in DEPENDENCY_VARIABLES, key
-    monkeypatch.setenv("FORWARDED_ALLOW_IPS", "*")
-    config = uvicorn.Config(app=lambda *_args: None)  # how `chameleons serve` runs it
-    assert config.forwarded_allow_ips == "*"
+def test_the_replicas_believe_the_proxys_forwarded_addresses_and_the_server_none() -> None:
+    trusted = SERVICES["server-phones"]["environment"]["CHAMELEONS_FORWARDED_ALLOW_IPS"]
+    config = web_config(FastAPI(), Settings(forwarded_allow_ips=trusted, _env_file=None))
+    assert (config.proxy_headers, config.forwarded_allow_ips) == (True, "*")
+    # The main server (its port is published) believes no forwarded header.
+    assert "CHAMELEONS_FORWARDED_ALLOW_IPS" not in SERVICES["server"].get("environment", {})
+    config = web_config(FastAPI(), Settings(_env_file=None))  # how `chameleons serve` runs
+    assert config.proxy_headers is False

@@ -58,3 +58,13 @@ def four_condition_document() -> dict[str, Any]:
         "params": {"delay": 1.0},
     }
     return document
+
+
+def laughs(levels: int, width: int = 9) -> str:
+    """``levels`` lists of ``width`` aliases of the list before: width**levels values from
+    a few hundred bytes."""
+    lines = [f"laugh0: &laugh0 [{', '.join(['lol'] * width)}]"]
+    for level in range(1, levels):
+        aliases = ", ".join([f"*laugh{level - 1}"] * width)
+        lines.append(f"laugh{level}: &laugh{level} [{aliases}]")
+    return "\n".join(lines) + "\n"

@@ -10,13 +10,16 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from chameleons.backend.input_guard import (
+    MAX_JSON_DEPTH,
     MAX_ROW_ID,
     NOT_FINITE,
     NOT_UNICODE,
     NUL_IN_ADDRESS,
     NUL_IN_TEXT,
+    TOO_DEEP,
     TOO_LARGE,
     TOO_LARGE_IN_ADDRESS,
+    TOO_LARGE_NUMBER,
 )
 from chameleons.i18n import gettext
 from tests.backend.sessions.conftest import phone, pi, study_id, wizard
@@ -81,6 +84,43 @@ def test_nan_and_infinity_in_a_json_body_are_a_422(
     raw = f'{{"kind": "worker.note", "payload": {{"x": {constant}}}, "worker_time": {constant}}}'
     status, detail = _post_raw(client, f"/api/sessions/{wizard.session_id}/events", raw, pi.csrf)
     assert (status, detail) == (422, NOT_FINITE)
+
+
+@pytest.mark.parametrize("number", ["1e400", "-1e400", "1.5e309", "123456789e999"])
+def test_a_number_beyond_what_a_float_holds_is_a_422_not_infinity(
+    client: TestClient, wizard: WizardBot, phone: ParticipantBot, number: str
+) -> None:
+    """Python's JSON parser turns 1e400 into infinity: it reached validation, whose error
+    (quoting the input) could not be written as JSON, and the phone got a 500."""
+    before = _answered(phone, wizard)
+    raw = (f'{{"client_id": "abcdefgh12345678", "position": {number},'
+           ' "questionnaire": "about_you", "answers": {}}')  # fmt: skip
+    status, detail = _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", raw)
+    assert (status, detail) == (422, TOO_LARGE_NUMBER)
+    assert _answered(phone, wizard) == before
+    # A large number that fits is an ordinary validation error of its field.
+    raw = raw.replace(number, "1e300")
+    assert _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", raw)[0] == 422
+
+
+@pytest.mark.parametrize("depth", [MAX_JSON_DEPTH + 1, 1000, 50_000])
+def test_a_json_body_nested_too_deeply_is_a_422_with_a_sentence(
+    client: TestClient, pi: StaffApi, wizard: WizardBot, depth: int
+) -> None:
+    """50,000 nested lists made Python's JSON parser raise RecursionError: a 500."""
+    nested = "[" * depth + "]" * depth
+    raw = f'{{"kind": "worker.note", "payload": {{"x": {nested}}}}}'
+    status, detail = _post_raw(client, f"/api/sessions/{wizard.session_id}/events", raw, pi.csrf)
+    assert (status, detail) == (422, TOO_DEEP)
+    assert _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", nested)[:2] == (
+        422, TOO_DEEP
+    )  # fmt: skip
+    # Objects nest the same way; a body within the limit is the route's to judge.
+    objects = '{"a":' * depth + "1" + "}" * depth
+    assert _post_raw(client, f"/api/phone/{wizard.token}/questionnaire", objects)[0] == 422
+    within = "[" * (MAX_JSON_DEPTH - 3) + "]" * (MAX_JSON_DEPTH - 3)
+    raw = f'{{"kind": "worker.note", "payload": {{"x": {within}}}}}'
+    assert _post_raw(client, f"/api/sessions/{wizard.session_id}/events", raw, pi.csrf)[0] == 201
 
 
 @pytest.mark.parametrize(

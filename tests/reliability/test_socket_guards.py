@@ -1,10 +1,12 @@
 """Every WebSocket (phone, console, live feed, robot display) refuses binary frames with
-1003 and closes a client that sends more than its burst with 1008, logging why; the
-display's outgoing queue stays bounded whatever a page fails to read."""
+1003 and closes a client that sends more than its burst with 1008, logging why, and drops a frame
+nested past the JSON parser without hanging up; the display's outgoing queue stays bounded
+whatever a page fails to read."""
 
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 from collections.abc import Callable
 
@@ -12,6 +14,8 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
 
 from chameleons.backend.display.channel import Subscription
 from chameleons.backend.display.protocol import face_message, play_audio_message
@@ -22,6 +26,7 @@ from tests.backend.display.test_channel_and_relay import run
 from tests.backend.sessions.conftest import phone, pi, study_id, wizard
 from tests.reliability.conftest import BURST
 from tests.support.bots import WizardBot
+from tests.support.live_server import LiveServer
 
 __all__ = ["phone", "pi", "study_id", "wizard"]
 
@@ -89,6 +94,30 @@ def test_pings_within_the_burst_are_answered(
         while pongs < BURST - 1:
             pongs += socket.receive_json()["type"] == "pong"
     assert app.state.socket_guard_counters["closed.1008"] == 0
+
+
+WAIT_S = 60.0  # generous: only a socket that never answers comes near it
+
+
+@pytest.mark.parametrize("socket", ["phone", "console", "feed", "display"])
+def test_a_frame_nested_past_the_parser_is_dropped_and_the_socket_goes_on(
+    app: FastAPI, wizard: WizardBot, socket: str
+) -> None:
+    """4,000 nested lists (8 kB, within every socket's size limit) made the JSON parser raise
+    RecursionError, a RuntimeError that ended the receive loop: the server hung up. Through
+    a real uvicorn server, so a socket the server leaves is seen closed."""
+    cookies = "; ".join(f"{k}={v}" for k, v in wizard.staff.http.cookies.items())
+    with LiveServer(app) as live, connect(
+        f"ws://127.0.0.1:{live.port}{_paths(app, wizard)[socket]}", open_timeout=WAIT_S,
+        additional_headers={"Origin": live.url, "Cookie": cookies},
+    ) as ws:  # fmt: skip
+        ws.send("[" * 4000 + "]" * 4000)
+        ws.send('{"type":"ping","id":1,"t":0}')
+        try:
+            while json.loads(ws.recv(timeout=WAIT_S))["type"] != "pong":
+                pass  # the greeting, state, health or face frames may come first
+        except ConnectionClosed as closed:
+            raise AssertionError(f"the server hung up ({closed})") from None
 
 
 def test_the_display_queue_stays_bounded_for_a_page_that_never_reads() -> None:

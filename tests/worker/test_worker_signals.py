@@ -1,6 +1,6 @@
 """A real ``chameleons worker`` process and its signals: ``kill -USR1`` prints every
-thread's stack to stderr (where a stuck worker waits) and it goes on; SIGTERM stops it
-cleanly."""
+thread's stack to stderr (where a stuck worker waits) and it goes on; SIGTERM and Ctrl-C
+stop it cleanly and it ends with the conventional 143 / 130."""
 
 from __future__ import annotations
 
@@ -76,10 +76,42 @@ def test_usr1_prints_every_threads_stack_and_the_worker_goes_on(tmp_path: Path) 
         assert 'File "' in stacks
         assert worker.poll() is None  # a dump, not a stop
         worker.send_signal(signal.SIGTERM)
-        assert worker.wait(timeout=DEADLINE_S) == 0
+        assert worker.wait(timeout=DEADLINE_S) == 128 + signal.SIGTERM  # stopped, not done
     finally:
         if worker.poll() is None:
             worker.kill()
         worker.wait()
         out.close()
         err.close()
+
+
+@pytest.mark.parametrize("renderer_process", [False, True])
+def test_ctrl_c_to_the_group_stops_the_worker_with_130(
+    tmp_path: Path, renderer_process: bool
+) -> None:
+    """A terminal's Ctrl-C reaches the worker and its renderer process alike; the worker
+    stops the renderer in order (no traceback from it) and ends with 130."""
+    command = [sys.executable, "-m", WORKER_MODULE, "--booth", "signals", "--driver", "null",
+               "--control", _free_tcp_endpoint(), "--telemetry", _free_tcp_endpoint(),
+               "--livelink-port", "0", "--facecapturex-port", "0",
+               *(["--renderer-process"] if renderer_process else [])]  # fmt: skip
+    env = {**os.environ, "CHAMELEONS_DATA_DIR": str(tmp_path)}
+    worker = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, start_new_session=True)  # fmt: skip
+    assert worker.stdout is not None
+    assert worker.stderr is not None
+    out, err = Lines(worker.stdout), Lines(worker.stderr)
+    try:
+        out.until("Ctrl-C stops")  # started: the signal handlers are in place
+        os.killpg(worker.pid, signal.SIGINT)
+        assert worker.wait(timeout=DEADLINE_S) == 128 + signal.SIGINT
+    finally:
+        if worker.poll() is None:
+            worker.kill()
+        worker.wait()
+        out.close()
+        err.close()
+    logged = []
+    while not err.queue.empty():
+        logged.append(err.queue.get())
+    assert not [line for line in logged if "Traceback" in line], "".join(logged)

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from chameleons.backend.auth.passwords import MIN_PASSWORD_LENGTH, password_problem
 
@@ -20,6 +20,19 @@ class StaffUserCreate(BaseModel):
         if problem:
             raise ValueError(problem)
         return self
+
+
+def refusal(exc: ValidationError) -> str:
+    """Why a new account was refused, as a person reads it: ``password: String should have
+    at least 8 characters``, or the password check's own sentence (it judges the whole
+    account, so it names no field and carries no "Value error," prefix)."""
+    sentences = []
+    for error in exc.errors():
+        cause = (error.get("ctx") or {}).get("error")
+        message = str(cause) if isinstance(cause, ValueError) else str(error["msg"])
+        field = ".".join(str(part) for part in error["loc"])
+        sentences.append(f"{field}: {message}" if field else message)
+    return "; ".join(sentences)
 
 
 class StaffUserRead(BaseModel):

@@ -13,7 +13,7 @@ from sqlalchemy import select
 from chameleons.backend.auth import service, sessions
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentPI
-from chameleons.backend.auth.schemas import StaffUserCreate
+from chameleons.backend.auth.schemas import StaffUserCreate, refusal
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.models import StaffUser
 from chameleons.backend.routing import make_router
@@ -95,8 +95,7 @@ def add_account(
         )
         service.create_user(db, data)
     except ValidationError as exc:
-        problems = "; ".join(str(e["msg"]) for e in exc.errors())
-        return _page(request, user, db, templates, error=problems)
+        return _page(request, user, db, templates, error=refusal(exc))
     except service.UserExistsError as exc:
         return _page(request, user, db, templates, error=str(exc))
     return _page(request, user, db, templates, notice=f"Created {role} account {username}.")

@@ -5,7 +5,10 @@ Recordings are written by the worker to ``<data dir>/recordings/study-<id>/sessi
 (absolute on the wire). The embedded worker shares the server's disk; a remote worker must
 see the same directory under the same path — production mounts one shared volume at the
 data directory of both (the ``recordings`` volume in docker-compose.yml). A file the server
-cannot see is still indexed, from the worker's own frame count, with size 0.
+cannot see is still indexed, from the worker's own frame count, with size 0. A reported
+path outside ``<data dir>/recordings`` (symlinks resolved) or not named for its interaction
+is never indexed, whatever the message says: the worker link may run unauthenticated on
+loopback, and what is indexed is what a withdrawal deletes.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.booth import repository
 from chameleons.backend.models import Recording
-from chameleons.backend.withdrawal.files import RECORDINGS_DIR, recording_file
+from chameleons.backend.withdrawal.files import RECORDINGS_DIR, in_recordings, recording_file
 from chameleons.worker.recording import (
     RecordingError,
     journal_path,
@@ -98,6 +101,13 @@ def files_in(
     return found
 
 
+def _worker_file(data_dir: Path, path: Path, interaction_id: int) -> bool:
+    """A file the worker can have written for this interaction: named for it, and inside
+    the recordings folder with symlinks resolved (files.in_recordings)."""
+    named = _interaction_files(interaction_id).match(path.name) is not None
+    return named and in_recordings(data_dir, path)
+
+
 def _tell(problems: list[str] | None, sentence: str, path: Path) -> None:
     log.warning("recording %s not indexed: %s", path, sentence)
     if problems is not None and sentence not in problems:
@@ -142,6 +152,10 @@ def index_recordings(
             candidates.setdefault(path, stream)
             count = (reported.get("frames") or {}).get(stream)
             worker_frames[str(path)] = int(count) if isinstance(count, int) else 0
+    for path in [p for p in candidates if not _worker_file(data_dir, p, interaction_id)]:
+        del candidates[path]  # whatever the message said: never indexed, so never deleted
+        _tell(problems, f"A recording was reported at {path}, outside the data folder's "
+              "recordings or not named for its interaction: not indexed.", path)  # fmt: skip
     known = repository.indexed_paths(db, interaction_id)
     added: list[Recording] = []
     for path, stream in sorted(candidates.items()):

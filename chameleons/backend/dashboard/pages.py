@@ -19,7 +19,7 @@ from chameleons.backend.export.preview import preview as export_preview
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.routing import make_router
-from chameleons.backend.withdrawal.files import recording_file
+from chameleons.backend.withdrawal.files import in_recordings, recording_file
 from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.study import study_from_config
 
@@ -130,6 +130,8 @@ def recording_download(
     if recording is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"There is no recording {recording_id}.")
     path = recording_file(settings.data_dir, recording.path)
+    if not in_recordings(settings.data_dir, path):  # a row indexed from a forged message
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "The recording is not in the data folder.")
     if not path.is_file():
         raise HTTPException(status.HTTP_404_NOT_FOUND, "The recording's file is missing.")
     name = f"recording-{recording.id}-{recording.stream}{path.suffix}"

@@ -152,7 +152,7 @@ def parse_inbound(text: str) -> Message:
         raise ProtocolError("too_large")
     try:
         message = json.loads(text, parse_constant=_reject_constant)
-    except ValueError as exc:
+    except (ValueError, RecursionError) as exc:  # RecursionError: nested past the parser
         raise ProtocolError("bad_json") from exc
     if not isinstance(message, dict) or message.get("type") not in INBOUND_TYPES:
         raise ProtocolError("unknown_type")

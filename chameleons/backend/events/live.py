@@ -33,7 +33,7 @@ async def _answer_incoming(websocket: WebSocket) -> None:
             text = await inbound.text()
             try:
                 message = json.loads(text)
-            except ValueError:
+            except (ValueError, RecursionError):  # not JSON, or nested past the parser
                 continue
             if isinstance(message, dict) and message.get("type") == "ping":
                 await send_json(websocket, {"type": "pong"})

@@ -56,7 +56,7 @@ def withdraw_and_scrub(
     result = withdraw_participant(db, study_id, code, confirmation, data_dir)
     db.commit()
     removed, kept = scrub_database(db.get_bind())  # type: ignore[arg-type]
-    return replace(result, removed=result.removed + tuple(removed), kept=tuple(kept))
+    return replace(result, removed=result.removed + tuple(removed), kept=result.kept + tuple(kept))
 
 
 def _recording_count(db: DbSession, participant_id: int) -> int:

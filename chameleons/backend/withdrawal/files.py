@@ -4,7 +4,8 @@ Indexed recordings are absolute paths as workers wrote them, or relative to the 
 directory. Workers may also leave files the index does not know: the crash-safe journal
 next to a recording (``<name>.parquet.journal``) and a recording whose indexing a crash
 prevented. Those follow the worker's naming, ``interaction-<id>[-partN]-<stream>.parquet``,
-and are looked for beside the indexed files and under ``<data dir>/recordings``.
+and are looked for beside the indexed files and under ``<data dir>/recordings``. Nothing
+outside that folder is ever deleted (:func:`in_recordings`), whatever the index says.
 """
 
 from __future__ import annotations
@@ -20,6 +21,19 @@ RECORDINGS_DIR = "recordings"
 def recording_file(data_dir: Path, stored: str) -> Path:
     path = Path(stored)
     return path if path.is_absolute() else data_dir / path
+
+
+def in_recordings(data_dir: Path, path: Path) -> bool:
+    """Whether ``path`` lies inside ``<data dir>/recordings`` once symlinks (and ``..``) are
+    resolved on both sides. Recordings are only ever written there (the server names the
+    folder); a path elsewhere came from a forged or broken message (the worker link runs
+    without authentication on loopback by default) and is never indexed nor deleted."""
+    root = (data_dir / RECORDINGS_DIR).resolve()
+    try:
+        resolved = path.resolve()
+    except (OSError, RuntimeError):  # a symlink loop
+        return False
+    return resolved != root and resolved.is_relative_to(root)
 
 
 def _worker_name(interaction_ids: Iterable[int]) -> re.Pattern[str]:
@@ -42,20 +56,27 @@ def files_of(indexed: list[Path], interaction_ids: list[int], data_dir: Path) ->
     return sorted(found)
 
 
-def delete_files(paths: list[Path], data_dir: Path) -> int:
+def delete_files(paths: list[Path], data_dir: Path) -> tuple[int, list[Path]]:
     """Delete the files (a missing one is fine: a rerun after a crash finds some gone), then
-    any directory left empty inside the data directory. Returns how many files existed."""
+    any directory left empty inside the data directory. A path outside the recordings
+    folder (:func:`in_recordings`) is not touched. Returns how many files existed and were
+    deleted, and the existing files refused."""
+    outside = [path for path in paths if not in_recordings(data_dir, path)]
+    refused = [path for path in outside if path.exists()]
     deleted = 0
     for path in paths:
+        if path in outside:
+            continue
         try:
             path.unlink()
             deleted += 1
         except FileNotFoundError:
             continue
     root = data_dir.resolve()
-    for directory in sorted({p.parent.resolve() for p in paths}, key=lambda d: -len(d.parts)):
+    inside = {p.parent.resolve() for p in paths if p not in outside}
+    for directory in sorted(inside, key=lambda d: -len(d.parts)):
         _remove_empty_dirs(directory, root)
-    return deleted
+    return deleted, refused
 
 
 def _remove_empty_dirs(directory: Path, root: Path) -> None:

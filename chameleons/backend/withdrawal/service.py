@@ -108,8 +108,8 @@ def withdraw_participant(
     redacted = redact_events(db, study_id, withdrawn)
     if row is not None:
         row.withdrawals += 1
-    deleted = delete_files(files, data_dir)
-    replayed = delete_files(replay_files, data_dir)
+    deleted, refused = delete_files(files, data_dir)
+    replayed, refused_replays = delete_files(replay_files, data_dir)
     analyses.clear()  # cached analyses were computed from their rows
     db.add(
         Event(
@@ -128,8 +128,21 @@ def withdraw_participant(
             "(each keeps its kind and time, not its content)"
         )
     removed.append("the analysis page's cached results")
+    kept = _outside(refused + refused_replays)
     return WithdrawalResult(
-        row.row_number if row else None, len(session_ids), deleted, tuple(removed)
+        row.row_number if row else None, len(session_ids), deleted, tuple(removed), kept
+    )
+
+
+def _outside(paths: list[Path]) -> tuple[str, ...]:
+    """The files the index named outside the recordings folder: not deleted from here."""
+    if not paths:
+        return ()
+    named = ", ".join(str(p) for p in paths[:5]) + (", ..." if len(paths) > 5 else "")
+    return (
+        f"{len(paths)} file{_s(len(paths))} the index named outside the data folder's "
+        f"recordings ({named}): not deleted, since no recording is ever written there. "
+        "Check whether they are this participant's and delete them by hand if so.",
     )
 
 

@@ -164,7 +164,7 @@ async def _answer_pings(websocket: WebSocket, sender: Sender) -> None:
         while True:
             try:
                 message = json.loads(await inbound.text())
-            except ValueError:
+            except (ValueError, RecursionError):  # not JSON, or nested past the parser
                 continue
             if isinstance(message, dict) and message.get("type") == "ping":
                 await sender.send({"type": "pong"})

@@ -83,13 +83,17 @@ def test_a_file_the_server_cannot_see_is_indexed_from_the_worker_s_report(
     app: FastAPI, interaction: int
 ) -> None:
     data_dir = Path(app.state.settings.data_dir)
-    remote = "/srv/booth-2/recordings/interaction-7-participant.parquet"
-    reported = {"files": {"participant": remote, "agent": "/x/y.parquet.journal"},
+    # A remote worker writes where the server told it (the server's recording folder) on a
+    # disk the server may not share: the file is not there for the server.
+    directory = service.recording_directory(data_dir, 1, 1)
+    remote = directory / f"interaction-{interaction}-participant.parquet"
+    reported = {"files": {"participant": str(remote), "agent": "/x/y.parquet.journal"},
                 "frames": {"participant": 1234}}  # fmt: skip
     with write_session(app.state.sessionmaker, app.state.live_hub) as db:
         rows = service.index_recordings(db, interaction, data_dir, reported)
+        stored = str(remote.relative_to(data_dir.resolve()))
         assert [(r.stream, r.path, r.frames, r.size_bytes) for r in rows] == [
-            ("participant", remote, 1234, 0)
+            ("participant", stored, 1234, 0)
         ]  # a journal (the worker failed to close it) is not a recording to index
         assert db.query(Recording).count() == 1
 

@@ -11,7 +11,7 @@ from chameleons.backend.models import Event, Participant
 from chameleons.backend.studies import service
 from chameleons.experiment.study import default_study_path, load_default_study
 from tests.backend.sessions.conftest import refused
-from tests.experiment.study_files import default_document, study_yaml, with_german
+from tests.experiment.study_files import default_document, laughs, study_yaml, with_german
 from tests.support.bots import ApiError, StaffApi, WizardBot, staff_api
 from tests.support.catalogues import MakeCatalogues, filler
 
@@ -37,6 +37,26 @@ def test_a_study_yaml_with_problems_is_refused_with_every_problem(pi: StaffApi) 
     assert "expert rank" in detail or "problems" in detail
     other = default_study_path().read_text().replace("name: Mechanical Chameleons", "name: Pilot")
     assert pi.post("/api/studies", {"yaml": other})["name"] == "Pilot"
+
+
+@pytest.mark.parametrize(
+    ("extra", "problem"),
+    [
+        (laughs(9), "too large: the document stands for more than"),  # 387,420,489 values
+        ("loop: &loop [1, *loop]\n", "too large: an alias refers to a node that contains it"),
+        ("deep: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),  # was a 500
+    ],
+)
+def test_a_study_yaml_that_expands_without_bound_is_a_422_at_once(
+    pi: StaffApi, extra: str, problem: str
+) -> None:
+    text = default_study_path().read_text() + extra
+    with pytest.raises(ApiError) as refusal:
+        pi.post("/api/studies", {"yaml": text})
+    assert refusal.value.status == 422
+    [found] = refusal.value.detail["problems"]
+    assert found.startswith(problem), found
+    assert pi.get("/api/studies") == []
 
 
 def test_the_plan_is_generated_then_extended_keeping_its_rows(pi: StaffApi) -> None:
