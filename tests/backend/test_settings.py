@@ -69,7 +69,10 @@ def test_random_128_bit_hex_keys_are_accepted() -> None:
         Settings(secret_key=key, _env_file=None).require_secure()
 
 
-@pytest.mark.parametrize("secret", [*HEXSPEAK, secrets.token_hex(15)])
+# A fixed id for the random key: pytest-xdist workers must collect the same test names.
+@pytest.mark.parametrize(
+    "secret", [*HEXSPEAK, pytest.param(secrets.token_hex(15), id="random-120-bits")]
+)
 def test_hex_keys_people_make_or_under_128_bits_are_refused(secret: str) -> None:
     assert estimated_bits(secret) < 128
     with pytest.raises(InsecureSettingsError, match="CHAMELEONS_SECRET_KEY"):
