@@ -78,7 +78,8 @@ def test_copy_default_delay_is_four_seconds() -> None:
 
 
 def test_copy_is_neutral_until_the_delay_has_elapsed() -> None:
-    router = BehaviourRouter(build_context(), 0.0, initial="copy", params={"delay": 1.0})
+    context = build_context(recentre_head=False)  # the head exactly as captured
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": 1.0})
     for k in range(120):
         router.on_participant(_frame(10 + k / 60, 0.8))
     out = _out()
@@ -99,8 +100,10 @@ def test_copy_is_neutral_until_the_delay_has_elapsed() -> None:
 def test_copy_output_at_t_is_input_interpolated_at_t_minus_delay(
     delay: float, offset: float, rate: float, values: list[float], query: float
 ) -> None:
-    """The property: output(t) == lerp(input, t - delay) on the mapped capture clock."""
-    router = BehaviourRouter(build_context(), 0.0, initial="copy", params={"delay": delay})
+    """The property: output(t) == lerp(input, t - delay) on the mapped capture clock (the
+    head as captured: without re-centring on the participant's neutral pose)."""
+    context = build_context(recentre_head=False)
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": delay})
     captures = 100 + np.arange(len(values)) / rate  # the sender's clock
     for capture, value in zip(captures, values, strict=True):
         router.on_participant(_frame(capture, value, receive_offset=offset))
@@ -178,8 +181,9 @@ def test_natural_loads_npz_clips(tmp_path) -> None:
 @pytest.mark.parametrize("crossfade", [0.1, 0.3])
 def test_switching_behaviour_never_jumps(crossfade: float) -> None:
     """Still (neutral) -> copy of a far-from-neutral face -> still, switching mid-fade too:
-    the per-tick change stays within |difference| * tick / crossfade."""
-    router = BehaviourRouter(build_context(), crossfade, initial="still")
+    the per-tick change stays within |difference| * tick / crossfade (the head as captured,
+    not re-centred on the participant's neutral pose)."""
+    router = BehaviourRouter(build_context(recentre_head=False), crossfade, initial="still")
     for k in range(60 * 6):
         router.on_participant(_frame(k / 60, 1.0))  # a constant, extreme face
     tick = 1 / 125
