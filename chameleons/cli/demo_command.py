@@ -19,6 +19,7 @@ from chameleons.cli.common import load_settings
 from chameleons.cli.embedded import (
     DataDirInUseError,
     DemoData,
+    FaceSimulatorCues,
     demo_settings,
     lock_data_dir,
     prepare_demo,
@@ -117,8 +118,10 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
 
     def started() -> None:
         _print_welcome(base, data, display_url, ports, simulate_face)
-        if simulate_face:
-            simulator.append(start_face_simulator(settings))
+        if simulate_face:  # it follows the booth check's moves (the check passes on the demo)
+            simulator.append(start_face_simulator(settings, follow_cues=True))
+            app.state.face_cues = FaceSimulatorCues(simulator[-1],
+                                                    settings.embedded_worker_booth)  # fmt: skip
 
     # uvicorn re-raises SIGTERM after its graceful shutdown; exit through `finally` then,
     # so the face simulator is stopped too (the worker stops with the app's lifespan).
