@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx
 from playwright.sync_api import BrowserContext, expect
@@ -29,7 +30,9 @@ def wait_for_the_booth(demo: Demo, timeout: float = 90.0) -> None:
         pi = StaffApi(http).login("pi", demo.accounts["pi"])
         while True:
             booths = pi.get("/api/pi/monitor")["booths"]
-            checks = next((b["health"]["checks"] for b in booths if b["booth"] == BOOTH), [])
+            checks: list[dict[str, Any]] = next(
+                (b["health"]["checks"] for b in booths if b["booth"] == BOOTH), []
+            )
             if {c["id"] for c in checks if c["ok"]} >= READY:
                 return
             assert time.monotonic() < deadline, f"the demo's booth never came up: {checks}"
