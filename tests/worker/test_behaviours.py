@@ -217,3 +217,28 @@ def test_natural_without_a_recording_plays_a_synthetic_face() -> None:
         values.append(out.copy())
     assert behaviour.describe()["source"] == "synthetic:3"
     assert np.ptp(np.array(values)[:, HEAD_YAW]) > 0.1  # it moves
+
+
+def test_copy_undoes_the_neutral_pose_as_a_rotation_not_angle_by_angle() -> None:
+    """A phone 14.7 degrees below the face reads a 40 degree turn as yaw 40.9, pitch 11.2,
+    roll 9.6. Re-centred on the resting pose the copy shows the turn alone: no roll the
+    participant never made (subtracting per angle would leave 9.6 degrees of it)."""
+    from chameleons.worker.ingest.rotation import rotation_matrix, yaw_pitch_roll
+
+    phone = rotation_matrix(0.0, 14.7, 0.0)  # the camera's tilt, applied to every reading
+    context = build_context(head_calibration_s=1.0)
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": 0.5})
+    for k in range(120):  # 2 s at rest: the neutral freezes after 1 s
+        frame = FaceFrame(k / 60, k / 60)
+        frame.head[:] = yaw_pitch_roll(phone @ rotation_matrix(0.0, 0.0, 0.0))
+        router.on_participant(frame)
+    turned = FaceFrame(2.0, 2.0)
+    turned.head[:] = yaw_pitch_roll(phone @ rotation_matrix(40.0, 0.0, 0.0))
+    router.on_participant(turned)
+    assert turned.head[2] == pytest.approx(9.6, abs=0.1)  # what the phone reads
+    out = _out()
+    router.sample(2.5, out)
+    np.testing.assert_allclose(out[HEAD_YAW : HEAD_YAW + 3], [40.0, 0.0, 0.0], atol=0.01)
+    router.sample(1.9, out)  # at rest: straight ahead
+    np.testing.assert_allclose(out[HEAD_YAW : HEAD_YAW + 3], [0.0, 0.0, 0.0], atol=0.01)
+    assert context.head_neutral.describe()["pose"] == {"yaw": 0.0, "pitch": 14.7, "roll": 0.0}

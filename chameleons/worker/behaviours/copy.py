@@ -61,8 +61,8 @@ class CopyBehaviour(Behaviour):
         used = context.history.sample(t - self.delay, out)
         if math.isnan(used):
             out[:] = context.neutral
-        elif context.recentre_head and context.head_neutral.value is not None:
-            out[HEAD_SLICE] -= context.head_neutral.value
+        elif context.recentre_head:
+            context.head_neutral.relative(out[HEAD_SLICE])
         return used
 
     @property

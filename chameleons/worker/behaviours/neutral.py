@@ -19,10 +19,18 @@ asked to hold still for it, so the neutral here is their **mean pose**:
 - :meth:`HeadNeutral.capture` (the booth check, after its "hold still" phase): the mean of
   the frames of the last ``seconds``, frozen at once.
 
+The neutral is undone as a rotation (:meth:`HeadNeutral.relative`: ``Rn^T @ R``, as the
+mounting rotation is applied), not angle by angle: a phone 14.7 degrees below the face
+reads a 40 degree turn as yaw 40.9, pitch 11.2, roll 9.6; subtracting the neutral's pitch
+per angle (as the Face AR Sample re-zeroes each curve) leaves a 9.6 degree roll the
+participant never made, undoing the rotation gives the turn alone (40, 0, 0).
+
 Cost: :meth:`add` is three additions per participant frame while calibrating (nothing once
-frozen), in the behaviour stage; the renderer's 125 Hz tick does nothing new. Each change of
-the neutral is reported (:meth:`describe`: the pose, how it was measured, over how many
-frames) and logged with the running session.
+frozen); :meth:`relative` is one 3x3 product and two small trigonometric conversions per
+sampled keyframe, in the behaviour stage, which publishes keyframes ahead of the renderer:
+the renderer's 125 Hz tick does nothing new. Each change of the neutral is reported
+(:meth:`describe`: the pose, how it was measured, over how many frames) and logged with the
+running session.
 """
 
 from __future__ import annotations
@@ -34,6 +42,7 @@ import numpy as np
 
 from chameleons.worker.behaviours.history import FrameHistory
 from chameleons.worker.frames import N_BLENDSHAPES, F32Array
+from chameleons.worker.ingest.rotation import F64Array, rotation_matrix, yaw_pitch_roll
 
 DEFAULT_CALIBRATION_S = 20.0
 HEAD = slice(N_BLENDSHAPES, N_BLENDSHAPES + 3)
@@ -56,10 +65,13 @@ class HeadNeutral:
         self._frames = 0
         self._first = math.nan
         self._last = math.nan
+        self._version = 0  # counts changes of ``value``; the inverse is made per version
+        self._inverse: tuple[int, F64Array] | None = None
 
     def restart(self) -> None:
         """Measure afresh: the mean of the next ``calibration_s`` seconds of frames."""
         self.value, self.how, self.frozen = None, CALIBRATING, False
+        self._version += 1
         self._sums, self._frames = [0.0, 0.0, 0.0], 0
         self._first = self._last = math.nan
         self.restarts += 1
@@ -80,6 +92,7 @@ class HeadNeutral:
         assert self.value is not None
         n = self._frames
         self.value[0], self.value[1], self.value[2] = sums[0] / n, sums[1] / n, sums[2] / n
+        self._version += 1
         if t - self._first >= self.calibration_s:
             self.frozen, self.how, self.changed = True, CALIBRATED, True
 
@@ -92,9 +105,21 @@ class HeadNeutral:
             return False
         self.value = recent[:, HEAD].astype(np.float64).mean(axis=0).astype(np.float32)
         self.how, self.frozen, self.changed = CAPTURED, True, True
+        self._version += 1
         self._frames = len(recent)
         self._first, self._last = float(times[times >= now - seconds][0]), now
         return True
+
+    def relative(self, head: F32Array) -> None:
+        """Re-centre ``head`` (yaw, pitch, roll in degrees, in place) on the neutral: the
+        neutral's rotation undone, ``Rn^T @ R``. Nothing while there is no neutral."""
+        if self.value is None:
+            return
+        if self._inverse is None or self._inverse[0] != self._version:
+            neutral = rotation_matrix(*(float(v) for v in self.value))
+            self._inverse = (self._version, neutral.T.copy())
+        pose = rotation_matrix(float(head[0]), float(head[1]), float(head[2]))
+        head[0], head[1], head[2] = yaw_pitch_roll(self._inverse[1] @ pose)
 
     def describe(self) -> dict[str, Any]:
         """The neutral as reported in telemetry, acks and the session's events."""
