@@ -70,4 +70,4 @@ class CopyBehaviour(Behaviour):
         return self.delay
 
     def describe(self) -> dict[str, Any]:
-        return {"delay": self.delay, "recentre_head": self.context.recentre_head}
+        return {"delay": self.delay}
