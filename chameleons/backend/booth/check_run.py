@@ -10,9 +10,10 @@ a step fails or the request is cancelled.
 When the "hold still" is over the worker is told to take the resting pose (the mean of that
 time, ``mark_head_rest``): the movement is judged from it, not from zero (a phone below the
 face rests at +15 degrees of pitch, which is no nod), and the copied head is re-centred on
-it (``recentre_head``). The copy-delay probe is reset then too, so the measured delay is the
-delay of this movement only. A simulated face (the demo's: ``state.face_cues``) is told
-each move as it is asked for, so it does it.
+it (``recentre_head``); at the end the neutral is measured afresh from the next frames, so
+a participant is never copied on the technician's pose. The copy-delay probe is reset when
+the rest is taken, so the measured delay is the delay of this movement only. A simulated
+face (the demo's: ``state.face_cues``) is told each move as it is asked for, so it does it.
 
 - The delay is the study's: with a session, its study's first ``copy`` condition still to
   come in the session's plan (else the study's first ``copy`` condition); without one, the
@@ -213,6 +214,10 @@ def _started_with(bridge: Any | None, booth: str) -> str:
 
 
 async def _restore(state: Any, booth: str, previous: dict[str, Any] | None) -> None:
+    # The copied head was re-centred on the technician's rest: measure the neutral afresh
+    # from the next frames (a participant between interactions is not copied on the
+    # technician's pose; a session start re-measures it anyway).
+    await worker_link.send_command(worker_link.bridge_of(state), booth, RECENTRE_HEAD, {})
     slot = await run_in_threadpool(read, state, running_slot, booth)
     if slot is not None:  # an interaction started meanwhile: its set-up, not the old one
         find = partial(running_target, interaction_id=slot.interaction_id)

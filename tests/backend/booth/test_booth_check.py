@@ -231,6 +231,10 @@ def test_the_check_through_a_real_worker_in_still_runs_the_robot_in_copy_and_res
         # Restored: the worker runs still again, as before the check.
         assert acknowledged_behaviour(bridge) == {"name": "still"}
         until(lambda: running_behaviour(bridge) == "still", what="still restored")
+        # The copied head was re-centred on the rest held still during the check, and is
+        # measured afresh after it (a participant is never copied on the technician's pose).
+        neutral = worker.behaviour.router.context.head_neutral
+        assert (neutral.how, neutral.restarts) == ("calibrating", 1)
     steps = {s["id"]: s for s in answer["steps"]}
     head = steps["head"]
     assert head["status"] == "pass", head
