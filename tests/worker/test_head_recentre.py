@@ -10,17 +10,13 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-import zmq
 
 from chameleons.worker.control import RECENTRE_HEAD, SET_BEHAVIOUR, START_RECORDING, STOP_RECORDING
 from chameleons.worker.recording import read_recording_table, recording_metadata
-from chameleons.worker.runtime import Worker, WorkerConfig
-from tests.worker.control_peer import ControlPeer
-from tests.worker.furhat_peer import FurhatPeer
+from tests.worker.copy_booth import CopyBooth, copy_booth
 from tests.worker.head_stream import Pose, stream
 
 pytestmark = pytest.mark.slow
@@ -29,53 +25,27 @@ PHONE_BELOW = 15.0  # degrees of pitch at rest: the phone sits below the face
 CALIBRATION_S = 1.0
 
 
-@dataclass
-class Booth:
-    worker: Worker
-    robot: FurhatPeer
-    server: ControlPeer
-
-    @property
-    def port(self) -> int:
-        return self.worker.receivers["livelink"].port
-
-    def pitches(self, since: float) -> list[float]:
-        return [float(r.message["pitch"]) for r in self.robot.of_type("request.face.headpose")
-                if r.time >= since]  # fmt: skip
-
-
 @pytest.fixture(params=[True, False], ids=["recentre", "as-captured"])
-def booth(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Booth]:
-    context: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    server = ControlPeer(context)
-    with FurhatPeer() as robot:
-        config = WorkerConfig(
-            booth=BOOTH, driver="furhat", robot_url=robot.url, behaviour="copy", copy_delay=0.3,
-            mirror=False, head_recentre=request.param, head_calibration_s=CALIBRATION_S,
-            livelink_port=0, facecapturex_port=None, capture_host="127.0.0.1",
-            data_dir=tmp_path, command_endpoint=server.command_endpoint,
-            telemetry_endpoint=server.telemetry_endpoint,
-        )  # fmt: skip
-        worker = Worker(config, context=context).start()
-        try:
-            robot.wait_for(lambda p: bool(p.of_type("request.face.config")), timeout=10)
-            yield Booth(worker, robot, server)
-        finally:
-            worker.stop()
-            server.close()
-    context.term()
+def booth(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[CopyBooth]:
+    with copy_booth(BOOTH, copy_delay=0.3, head_recentre=request.param,
+                    head_calibration_s=CALIBRATION_S, data_dir=tmp_path) as running:  # fmt: skip
+        yield running
 
 
-def test_a_phone_below_the_face_does_not_make_the_robot_look_down(booth: Booth) -> None:
+def pitches(booth: CopyBooth, since: float) -> list[float]:
+    return booth.heads(since, "pitch")
+
+
+def test_a_phone_below_the_face_does_not_make_the_robot_look_down(booth: CopyBooth) -> None:
     recentre = booth.worker.config.head_recentre
     ack = booth.server.command(BOOTH, SET_BEHAVIOUR, {"name": "copy", "params": {"delay": 0.3}})
     assert ack.ok
     assert ack.result["head"]["recentre"] is recentre
     pose = Pose(rest_pitch=PHONE_BELOW, nod_at=3.0, nod_deg=15.0, nod_s=1.0)
     sent = stream(booth.port, pose, 4.5)
-    booth.robot.wait_for(lambda p: bool(booth.pitches(sent.start + 4.5 + 0.3)), timeout=10)
-    rest = booth.pitches(sent.start + CALIBRATION_S + 1.0)[:50]  # before the nod, after 1 s
-    nod = max(booth.pitches(sent.start + 3.0))
+    booth.robot.wait_for(lambda p: bool(pitches(booth, sent.start + 4.5 + 0.3)), timeout=10)
+    rest = pitches(booth, sent.start + CALIBRATION_S + 1.0)[:50]  # before the nod, after 1 s
+    nod = max(pitches(booth, sent.start + 3.0))
     if recentre:  # the robot rests looking ahead and nods as far as the participant did
         assert max(abs(p) for p in rest) < 1.0, rest
         assert 13.0 <= nod <= 15.5
@@ -95,7 +65,7 @@ def test_a_phone_below_the_face_does_not_make_the_robot_look_down(booth: Booth) 
     assert beat["head"] == {"recentre": recentre, "neutral": neutral}
 
 
-def test_recentre_head_measures_afresh_or_takes_the_rest_just_held(booth: Booth) -> None:
+def test_recentre_head_measures_afresh_or_takes_the_rest_just_held(booth: CopyBooth) -> None:
     """A new participant: measured afresh from the next frames; the booth check's "hold
     still": the mean of the last seconds, at once."""
     sender = threading.Thread(target=stream, args=(booth.port, Pose(rest_yaw=-20.0), 2.0))
@@ -113,7 +83,7 @@ def test_recentre_head_measures_afresh_or_takes_the_rest_just_held(booth: Booth)
     assert (refused.ok, refused.error) == (False, "bad_field")
 
 
-def test_every_recording_says_how_the_head_was_processed(booth: Booth, tmp_path: Path) -> None:
+def test_every_recording_says_how_the_head_was_processed(booth: CopyBooth, tmp_path: Path) -> None:
     body = {"interaction_id": 7, "directory": str(tmp_path)}
     started = booth.server.command(BOOTH, START_RECORDING, body)
     assert started.ok

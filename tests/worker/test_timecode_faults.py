@@ -10,16 +10,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
-from typing import Any
 
 import pytest
-import zmq
 
 from chameleons.backend.wizard import health
-from chameleons.worker.runtime import Worker, WorkerConfig
-from tests.worker.control_peer import ControlPeer
-from tests.worker.furhat_peer import FurhatPeer
+from tests.worker.copy_booth import CopyBooth, copy_booth
 from tests.worker.head_stream import (
     Pose,
     Timecode,
@@ -37,49 +32,13 @@ DELAY = 0.5  # the copy's delay (short, so the tests are)
 TOLERANCE = 0.1  # the robot's turn against the phone's, beyond the delay (s)
 
 
-@dataclass
-class Booth:
-    worker: Worker
-    robot: FurhatPeer
-    server: ControlPeer
-
-    @property
-    def port(self) -> int:
-        return self.worker.receivers["livelink"].port
-
-    def heartbeat(self, condition: Any = lambda body: True) -> dict[str, Any]:
-        """The newest heartbeat the server peer received that meets ``condition``."""
-
-        def found() -> dict[str, Any] | None:
-            beats = [m.body for m in self.server.of_type("heartbeat") if condition(m.body)]
-            return beats[-1] if beats else None
-
-        body: dict[str, Any] = self.server.wait(found, timeout=10)
-        return body
-
-
 @pytest.fixture
-def booth() -> Iterator[Booth]:
-    context: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    server = ControlPeer(context)
-    with FurhatPeer() as robot:
-        config = WorkerConfig(
-            booth=BOOTH, driver="furhat", robot_url=robot.url, behaviour="copy",
-            copy_delay=DELAY, mirror=False, head_recentre=False, livelink_port=0,
-            facecapturex_port=None, capture_host="127.0.0.1",
-            command_endpoint=server.command_endpoint, telemetry_endpoint=server.telemetry_endpoint,
-        )  # fmt: skip
-        worker = Worker(config, context=context).start()
-        try:
-            robot.wait_for(lambda p: bool(p.of_type("request.face.config")), timeout=10)
-            yield Booth(worker, robot, server)
-        finally:
-            worker.stop()
-            server.close()
-    context.term()
+def booth() -> Iterator[CopyBooth]:
+    with copy_booth(BOOTH, copy_delay=DELAY, head_recentre=False) as running:
+        yield running
 
 
-def copied_after(booth: Booth, pose: Pose, start: float) -> float:
+def copied_after(booth: CopyBooth, pose: Pose, start: float) -> float:
     """Seconds from the phone's head passing half its turn to the robot's doing so."""
     assert pose.turn_at is not None
     phone = start + pose.turn_at + pose.turn_s / 6  # the half sine passes 0.5 at 1/6
@@ -98,7 +57,7 @@ def copied_after(booth: Booth, pose: Pose, start: float) -> float:
      (jumping_timecode, 2.0, "keeps jumping"), (drifting_timecode, 4.0, "drifts")],
 )  # fmt: skip
 def test_a_bad_timecode_falls_back_to_arrival_time_and_the_copy_keeps_its_delay(
-    booth: Booth, timecode: Timecode, turn_at: float, problem: str | None
+    booth: CopyBooth, timecode: Timecode, turn_at: float, problem: str | None
 ) -> None:
     pose = Pose(turn_at=turn_at, turn_deg=30.0)
     sent = stream(booth.port, pose, turn_at + 2.0, timecode=timecode)
@@ -119,7 +78,7 @@ def test_a_bad_timecode_falls_back_to_arrival_time_and_the_copy_keeps_its_delay(
         assert beat["ingest"]["receivers"]["livelink"]["timecode"]["trusted"] is False
 
 
-def test_datagrams_reordered_by_network_jitter_are_put_back_in_order(booth: Booth) -> None:
+def test_datagrams_reordered_by_network_jitter_are_put_back_in_order(booth: CopyBooth) -> None:
     """0-40 ms of random delay per datagram: about a sixth arrive after a later one. All
     are put back in capture order within the 50 ms window; none is dropped."""
     pose = Pose(turn_at=2.0, turn_deg=30.0)
