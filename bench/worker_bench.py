@@ -141,9 +141,12 @@ def pyzmq_hop(count: int) -> Row:
 
 def copy_latency(duration: float, delay: float) -> Row:
     """Realised delay minus ``delay`` for every head pose and face frame sent."""
+    # The head as captured (not re-centred on the participant's mean pose): its timing is
+    # measured against the phone's triangle wave.
     config = WorkerConfig(booth="probe", driver="null", behaviour="copy", copy_delay=delay,
-                          mirror=False, livelink_port=0, facecapturex_port=None,
-                          capture_host="127.0.0.1", command_endpoint=NO_SERVER,
+                          mirror=False, head_recentre=False, livelink_port=0,
+                          facecapturex_port=None, capture_host="127.0.0.1",
+                          command_endpoint=NO_SERVER,
                           telemetry_endpoint=NO_SERVER)  # fmt: skip
     worker = ProbeWorker(config)
     worker.start()

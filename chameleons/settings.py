@@ -118,6 +118,11 @@ class Settings(BaseSettings):
     mounting_rotation_deg: float = Field(default=0.0, ge=-360, le=360)
     # Mirror the participant (swap left/right, negate yaw and roll) rather than same side.
     mirror: bool = True
+    # The copy behaviour re-centres the copied head on the participant's mean pose (measured
+    # over head_calibration_s of frames from each session's start), so a phone below or
+    # beside the face does not make the robot look down or aside at rest (docs/livelink.md).
+    head_recentre: bool = True
+    head_calibration_s: float = Field(default=20.0, gt=0, le=600)
 
     # The realtime worker of a booth (`chameleons worker`; options on its command line win).
     worker_booth: str = "booth-1"
@@ -151,8 +156,10 @@ class Settings(BaseSettings):
     session_length_minutes: float = Field(default=60.0, gt=0)
     # The actor whose first recorded prompt the booth check plays (None: the first actor).
     booth_check_actor: str | None = None
-    # How long the booth check asks for each head movement (turn left, then nod) while the
-    # robot runs the copy behaviour; the copy is then waited for (the study's delay).
+    # How long the booth check asks to hold still (the resting pose the movement is judged
+    # against), then for each head movement (turn left, then nod) while the robot runs the
+    # copy behaviour; the copy is then waited for (the study's delay).
+    booth_check_rest_seconds: float = Field(default=2.0, gt=0, le=10)
     booth_check_turn_seconds: float = Field(default=4.0, gt=0, le=30)
     booth_check_nod_seconds: float = Field(default=4.0, gt=0, le=30)
 

@@ -1,7 +1,7 @@
 """``chameleons booth-check BOOTH``: the booth check from a terminal (the same check as the
 page ``/booths/<booth>/check``, run and stored by the server). While the server runs the
-robot in copy and measures, the prompts it plans (turn the head left, nod, hold still) are
-printed in time."""
+robot in copy and measures, the prompts it plans (hold still, turn the head left, nod, hold
+still) are printed in time."""
 
 from __future__ import annotations
 

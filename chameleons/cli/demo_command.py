@@ -17,6 +17,7 @@ from chameleons.cli.common import load_settings
 from chameleons.cli.embedded import (
     DataDirInUseError,
     DemoData,
+    FaceSimulatorCues,
     demo_settings,
     lock_data_dir,
     prepare_demo,
@@ -124,8 +125,10 @@ def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: b
 
         def started() -> None:
             _print_welcome(base, data, display_url, ports, simulate_face)
-            if simulate_face:
-                simulator.append(start_face_simulator(settings))
+            if simulate_face:  # it follows the booth check's moves (the check passes on the demo)
+                simulator.append(start_face_simulator(settings, follow_cues=True))
+                app.state.face_cues = FaceSimulatorCues(simulator[-1],
+                                                        settings.embedded_worker_booth)  # fmt: skip
 
         server = QuietStartup(app, started, settings, log_level="warning")
         settle_startup_heap()  # the start-up's objects out of the collector's full walks

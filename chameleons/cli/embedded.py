@@ -161,12 +161,37 @@ def _open_session(db: Session, study: StudyRow, booth: str) -> SessionRow:
     return sessions.create_session(db, study, participant, booth=booth).session
 
 
-def start_face_simulator(settings: Settings, port: int | None = None) -> subprocess.Popen[bytes]:
-    """A synthetic face sent as Live Link Face UDP to the local worker (the iPhone's part)."""
+def start_face_simulator(
+    settings: Settings, port: int | None = None, *, follow_cues: bool = False
+) -> subprocess.Popen[bytes]:
+    """A synthetic face sent as Live Link Face UDP to the local worker (the iPhone's part);
+    with ``follow_cues`` it reads the booth check's moves on its standard input
+    (:class:`FaceSimulatorCues` writes them)."""
     target = f"127.0.0.1:{port or settings.livelink_port}"
     command = [sys.executable, "-m", "chameleons", "simulate-face", "--target", target]
+    command += ["--follow-cues"] if follow_cues else []
     # It ends with this process, even on kill -9 (lifeline.die_with_parent in the child).
-    return subprocess.Popen(command, stdin=subprocess.DEVNULL, env=child_env())
+    stdin = subprocess.PIPE if follow_cues else subprocess.DEVNULL
+    return subprocess.Popen(command, stdin=stdin, env=child_env())
+
+
+class FaceSimulatorCues:
+    """The booth check's moves to a face simulator that follows cues (``state.face_cues``):
+    the demo's simulated participant turns and nods when the check asks. Only its booth."""
+
+    def __init__(self, process: subprocess.Popen[bytes], booth: str) -> None:
+        self.process, self.booth = process, booth
+
+    def __call__(self, booth: str, move: str, seconds: float) -> None:
+        stdin = self.process.stdin
+        if booth != self.booth or stdin is None or self.process.poll() is not None:
+            return
+        line = json.dumps({"move": move, "seconds": seconds}) + "\n"
+        try:  # a short line into a pipe the simulator drains: does not block
+            stdin.write(line.encode())
+            stdin.flush()
+        except OSError:  # the simulator ended: the check then sees no movement, and says so
+            pass
 
 
 def stop_process(process: subprocess.Popen[bytes], timeout: float = 5.0) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,9 +14,11 @@ from chameleons.cli.common import load_settings
 from chameleons.cli.lifeline import die_with_parent
 from chameleons.worker.ingest.livelink import rotation_factor
 from chameleons.worker.simulate import (
+    CuedMoves,
     FaceSample,
     Protocol_,
     SyntheticFace,
+    cued_samples,
     open_sender,
     run_simulation,
     take_samples,
@@ -83,8 +86,15 @@ def parse_target(target: str | None, default_port: int) -> tuple[str, int]:
     show_default=True,
     help="FaceCaptureX: include the 1220 mesh vertices (~40 KB a frame).",
 )
+@click.option(
+    "--follow-cues",
+    is_flag=True,
+    help='Do the booth check\'s moves as they are cued: JSON lines {"move": "rest"|"turn"|'
+    '"nod"|"copy", "seconds": S} on standard input (how `chameleons demo` drives it).',
+)
 def simulate_face(protocol: str, target: str | None, fps: float, duration: float | None,
-                  csv_path: Path | None, seed: int, mesh: bool) -> None:  # fmt: skip
+                  csv_path: Path | None, seed: int, mesh: bool,
+                  follow_cues: bool) -> None:  # fmt: skip
     """Send a plausible synthetic face (blinks, head sway, smiles, talking) or a Live Link
     Face take to a worker, as a phone would. Rotations use the livelink_rotation_scale
     setting, so the worker reads back the degrees that were sent."""
@@ -116,6 +126,11 @@ def simulate_face(protocol: str, target: str | None, fps: float, duration: float
     click.echo(
         f"sending {what} as {protocol} to {host}:{port}" + ("" if duration else " (Ctrl-C stops)")
     )
+    if follow_cues:  # the simulated participant does what the booth check asks
+        moves = CuedMoves()
+        threading.Thread(target=moves.follow, args=(sys.stdin,), name="face-cues",
+                         daemon=True).start()  # fmt: skip
+        samples = cued_samples(samples, moves)
     stop = threading.Event()
     try:
         sent = run_simulation(sender, samples, stop=stop)

@@ -159,6 +159,8 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         livelink_rotation_scale=_setting(settings, "livelink_rotation_scale", "radians"),
         mounting_rotation_deg=_setting(settings, "mounting_rotation_deg", 0.0),
         mirror=_setting(settings, "mirror", True),
+        head_recentre=_setting(settings, "head_recentre", True),
+        head_calibration_s=float(_setting(settings, "head_calibration_s", 20.0)),
         behaviour=options["behaviour"], behaviour_params=params, copy_delay=delay,
         render=render,
         crossfade_seconds=float(_setting(settings, "worker_crossfade_seconds", 0.3)),

@@ -7,6 +7,12 @@ makes the renderer's output independent of this stage's scheduling and of the so
 at tick ``k`` the keyframe for exactly that time is already there. The head channels are
 sampled ``head_lead`` seconds later than the face (the renderer's FIR group delay), so after
 the filter the head is exactly as late as the face.
+
+Each keyframe also carries ``lag``: the seconds the behaviour means its output to trail its
+input (``copy``: its delay), which the renderer leaves out of its capture-to-send latency.
+The participant's neutral head pose (``copy`` re-centres on it) is measured here from the
+participant frames; ``recentre_head`` measures it afresh, and each new neutral is published
+as an ``event.behaviour`` ``head_neutral`` event (logged by the server with the session).
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ import zmq
 
 from chameleons.worker.behaviours.base import HEAD_SLICE, VECTOR_SIZE, BehaviourError
 from chameleons.worker.behaviours.router import BehaviourRouter, build_context
-from chameleons.worker.control import SET_BEHAVIOUR, STATUS, CommandError
+from chameleons.worker.control import RECENTRE_HEAD, SET_BEHAVIOUR, STATUS, CommandError
 from chameleons.worker.envelope import EnvelopeError, Message, message_frame
 from chameleons.worker.stage import (
     AGENT_TOPIC,
@@ -51,6 +57,8 @@ class BehaviourStageConfig:
     initial_params: Mapping[str, Any] = field(default_factory=dict)
     locations: Any = None  # this machine's data_dir/prompts_dir, for marked clip paths
     rotation_factor: float | None = None  # of Live Link take CSVs replayed as clips
+    recentre_head: bool = True  # the booth's head_recentre setting (copy re-centres the head)
+    head_calibration_s: float = 20.0  # the neutral head pose: mean of this many seconds
 
 
 class BehaviourStage:
@@ -65,7 +73,9 @@ class BehaviourStage:
         self.clock = clock
         self.period = 1.0 / self.config.tick_rate
         behaviours = build_context(self.config.history_seconds, locations=self.config.locations,
-                               rotation_factor=self.config.rotation_factor)  # fmt: skip
+                                   rotation_factor=self.config.rotation_factor,
+                                   recentre_head=self.config.recentre_head,
+                                   head_calibration_s=self.config.head_calibration_s)  # fmt: skip
         self.router = BehaviourRouter(
             behaviours,
             self.config.crossfade_seconds,
@@ -89,7 +99,8 @@ class BehaviourStage:
         pub.setsockopt(zmq.LINGER, 0)
         pub.bind(self.endpoints.agent)
         port = CommandPort(self.context, self.endpoints.stage_control, self.name,
-                           {SET_BEHAVIOUR: self._set_behaviour, STATUS: self._status})  # fmt: skip
+                           {SET_BEHAVIOUR: self._set_behaviour, STATUS: self._status,
+                            RECENTRE_HEAD: self._recentre_head})  # fmt: skip
         poller = zmq.Poller()
         poller.register(sub, zmq.POLLIN)
         poller.register(port.socket, zmq.POLLIN)
@@ -104,6 +115,8 @@ class BehaviourStage:
                     self._take_frames(receive_messages(sub, self.errors))
                 if port.socket in events:
                     port.handle_pending()
+                if self.router.context.head_neutral.changed:
+                    send_message(pub, self._neutral_message())
                 self._publish_due(pub)
                 if self.clock() >= next_stats:
                     next_stats += STATS_INTERVAL
@@ -144,7 +157,9 @@ class BehaviourStage:
         self.router.advance(t)
         self._seq += 1
         self.keyframes_out += 1
-        body = {"t": t, "input_time": input_time if math.isfinite(input_time) else None}
+        body: dict[str, Any] = {"t": t, "input_time": None}
+        if math.isfinite(input_time):
+            body.update(input_time=input_time, lag=self.router.current.lag)
         return Message(AGENT_TOPIC, "keyframe", self._seq, self.name, self.clock(), body,
                        self._vector.astype("<f4").tobytes())  # fmt: skip
 
@@ -156,7 +171,33 @@ class BehaviourStage:
         except BehaviourError as exc:
             raise CommandError("bad_behaviour", str(exc)) from exc
         return {"behaviour": self.router.current_name, "params": params, "switch_at": switch_at,
-                "crossfade": self.router.crossfade_seconds}  # fmt: skip
+                "crossfade": self.router.crossfade_seconds, "head": self._head()}  # fmt: skip
+
+    def _recentre_head(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
+        """A new participant (no ``seconds``): measure the neutral afresh over the next
+        frames. The booth check (``seconds``): the mean of the last ``seconds`` of frames."""
+        context = self.router.context
+        seconds = body.get("seconds")
+        if seconds is None:
+            context.head_neutral.restart()
+        elif not (isinstance(seconds, int | float) and 0 < seconds <= context.history_seconds):
+            raise CommandError("bad_field", f"seconds must be within 0..{context.history_seconds}")
+        elif not context.head_neutral.capture(context.history, self.clock(), float(seconds)):
+            raise CommandError("no_frames", f"no participant frames in the last {seconds:g} s")
+        return self._head()
+
+    def _head(self) -> dict[str, Any]:
+        """How the copied head is processed: re-centred or not, and on which pose."""
+        context = self.router.context
+        return {"recentre": context.recentre_head, "neutral": context.head_neutral.describe()}
+
+    def _neutral_message(self) -> Message:
+        """The neutral head pose froze: tell the server (it logs it with the session)."""
+        self.router.context.head_neutral.changed = False
+        now = self.clock()
+        body = {"worker_time": now, "wall_time": time.time() - (time.monotonic() - now),
+                **self._head()}  # fmt: skip
+        return Message("event.behaviour", "head_neutral", 0, self.name, now, body)
 
     def _status(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
         return self._stats_body()
@@ -167,7 +208,7 @@ class BehaviourStage:
                 "input_fps": self._input_fps, "frames_in": self.frames.count,
                 "keyframes_out": self.keyframes_out, "errors": dict(self.errors),
                 "history_frames": len(history), "out_of_order": history.out_of_order,
-                "history_underruns": history.underruns}  # fmt: skip
+                "history_underruns": history.underruns, "head": self._head()}  # fmt: skip
 
     def _stats_message(self) -> Message:
         self._input_fps = self.frames.rate(self.clock())

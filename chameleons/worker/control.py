@@ -45,6 +45,13 @@ RETRY_ROBOT: Final = "retry_robot"  # try the robot again after a refused login
 RESET_PAIRING: Final = "reset_pairing"  # the capture pairs with the next phone that sends
 # The booth check: the copy-delay probe forgets what it saw (measures only from now on).
 RESET_DELAY_PROBE: Final = "reset_delay_probe"
+# The copied head's neutral pose (chameleons.worker.behaviours.neutral): without ``seconds``
+# measured afresh over the next frames (a new participant), with it the mean of the last
+# ``seconds`` (the booth check's "hold still").
+RECENTRE_HEAD: Final = "recentre_head"
+# The booth check: the resting head pose is the mean of the last ``rest_seconds``; the head's
+# movement from now on is reported against it (the capture's ``head_range``).
+MARK_HEAD_REST: Final = "mark_head_rest"
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -71,6 +78,8 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     RETRY_ROBOT: {},
     RESET_PAIRING: {},
     RESET_DELAY_PROBE: {},
+    RECENTRE_HEAD: {"seconds": (_NUMBER, False)},
+    MARK_HEAD_REST: {"rest_seconds": (_NUMBER, True)},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
                    "play_id": ((str, type(None)), False), "time": (_NUMBER, False)},
 }  # fmt: skip

@@ -29,6 +29,7 @@ import zmq
 from chameleons import __version__
 from chameleons.worker.control import (
     PLAY_PROMPT,
+    RECENTRE_HEAD,
     RESET_DELAY_PROBE,
     RETRY_ROBOT,
     SET_BEHAVIOUR,
@@ -65,6 +66,7 @@ ROUTES: dict[str, str] = {
     SET_BEHAVIOUR: "behaviour", PLAY_PROMPT: "playback", STOP_PROMPT: "playback",
     SET_FACE: "playback", SPEECH_EVENT: "playback", START_RECORDING: "recorder",
     STOP_RECORDING: "recorder", RETRY_ROBOT: "playback", RESET_DELAY_PROBE: "recorder",
+    RECENTRE_HEAD: "behaviour",
 }  # fmt: skip
 ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
 StatsSource = Callable[[], Mapping[str, Any]]
@@ -267,6 +269,8 @@ class ControlHub:
             "booth": self.config.booth, "instance": self.instance,
             "uptime_s": now - self.started,
             "behaviour": behaviour.get("behaviour"), "behaviour_params": behaviour.get("params"),
+            # The copied head: re-centred or not, on which neutral pose (booth check, events).
+            "head": behaviour.get("head"),
             "tick_rate_hz": renderer.get("tick_rate_hz"),
             "jitter_ms": {k: renderer.get(f"jitter_{k}_ms") for k in ("p50", "p99", "max")},
             "missed_ticks": renderer.get("missed_ticks"), "input_fps": input_fps,

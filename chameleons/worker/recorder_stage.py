@@ -89,8 +89,12 @@ class RecorderStage:
     name = "recorder"
 
     def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints,
-                 *, booth: str = "") -> None:  # fmt: skip
+                 *, booth: str = "",
+                 processing: Mapping[str, Any] | None = None) -> None:  # fmt: skip
         self.context, self.endpoints, self.booth = context, endpoints, booth
+        # How the booth processes the head (unit, mounting, mirror, re-centring): in every
+        # recording's metadata, so a recorded frame traces back to it.
+        self.processing = dict(processing or {})
         self.errors: Counter[str] = Counter()
         self.interaction: str | None = None
         self.recorders: dict[str, FrameRecorder] = {}
@@ -207,7 +211,8 @@ class RecorderStage:
             directory.mkdir(parents=True, exist_ok=True)
             paths = recording_paths(directory, interaction)
             for stream, path in paths.items():
-                metadata = {"interaction_id": interaction, "stream": stream, "booth": self.booth}
+                metadata = {"interaction_id": interaction, "stream": stream, "booth": self.booth,
+                            "head_processing": self.processing}  # fmt: skip
                 self.recorders[stream] = FrameRecorder(path, metadata=metadata)
         except OSError as exc:
             self._close_all()

@@ -131,9 +131,10 @@ class RendererStage:
             if message.topic == AGENT_TOPIC:
                 vector = message.array()
                 t, used = float(message.body["t"]), message.body.get("input_time")
+                lag = float(message.body.get("lag") or 0.0)
                 if vector.shape != (VECTOR_SIZE,) or not np.all(np.isfinite(vector)):
                     raise ValueError("bad keyframe vector")
-                self.core.push_keyframe(t, vector, math.nan if used is None else float(used))
+                self.core.push_keyframe(t, vector, math.nan if used is None else float(used), lag)
             elif message.topic == "playback.prompt":
                 body = message.body
                 self._requests.put(("prompt", str(body["prompt_id"]), str(body["audio_url"]),
@@ -172,7 +173,10 @@ class RendererStage:
             self._speech_event(SPEECH_END, core.lipsync.end, self.speaking)
         sent = time.monotonic()
         if math.isfinite(input_time):
-            self._latency[self._latency_count % _LATENCY_RING] = sent - input_time
+            # The pipeline's own latency: a copy's intended delay is not latency. (An output
+            # interpolated towards a newer frame than its schedule reports is not early.)
+            late = max(0.0, sent - input_time - core.lag)
+            self._latency[self._latency_count % _LATENCY_RING] = late
             self._latency_count += 1
         self._publish_sent(due, input_time)
         if sent >= self._next_stats:

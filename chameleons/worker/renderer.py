@@ -30,6 +30,7 @@ from chameleons.worker.lipsync import LipSync
 F64Array = npt.NDArray[np.float64]
 # Mouth and jaw are one contiguous block of the canonical order: a slice, no fancy indexing.
 MOUTH_JAW = slice(MOUTH_JAW_INDICES[0], MOUTH_JAW_INDICES[-1] + 1)
+KEYFRAME_WIDTH = VECTOR_SIZE + 2  # the face, then (t - input time) and the intended lag
 assert list(range(MOUTH_JAW.start, MOUTH_JAW.stop)) == list(MOUTH_JAW_INDICES)
 
 
@@ -148,27 +149,33 @@ class RenderCore:
         self.filter = HeadFilter(self.config.fir_taps, self.config.fir_cutoff_hz,
                                  self.config.tick_rate)  # fmt: skip
         self.lipsync = LipsyncTrack(self.config.lipsync_fade)
-        # Column 61 holds (keyframe time - input time): small, so float32 keeps it exact.
-        self._keyframes = FrameHistory(32, width=VECTOR_SIZE + 1, max_gap=0.25)
+        # Column 61 holds (keyframe time - input time), column 62 the behaviour's intended
+        # lag (copy: its delay): both small, so float32 keeps them exact.
+        self._keyframes = FrameHistory(32, width=KEYFRAME_WIDTH, max_gap=0.25)
         self._lock = threading.Lock()
-        self._sample = np.zeros(VECTOR_SIZE + 1, dtype=np.float32)
+        self._sample = np.zeros(KEYFRAME_WIDTH, dtype=np.float32)
         self.agent = self._sample[:VECTOR_SIZE]
+        self.lag = 0.0  # the behaviour's intended lag at the last tick (seconds)
         self._face_step = self.config.face_rate / self.config.tick_rate
         self._face_phase = 1.0 - self._face_step  # the first tick sends the face
         self.keyframes_in = 0
         self.keyframe_resets = 0
         self.underruns = 0  # ticks past the newest keyframe (the behaviour stage fell behind)
         self._last_tick: float | None = None
-        self._scratch = np.zeros(VECTOR_SIZE + 1, dtype=np.float32)
+        self._scratch = np.zeros(KEYFRAME_WIDTH, dtype=np.float32)
 
-    def push_keyframe(self, t: float, vector: F32Array, input_time: float) -> None:
-        """Store the agent face for local time ``t`` (any thread)."""
+    def push_keyframe(
+        self, t: float, vector: F32Array, input_time: float, lag: float = 0.0
+    ) -> None:
+        """Store the agent face for local time ``t`` (any thread); ``lag`` is how long the
+        behaviour means it to trail ``input_time`` (copy: its delay)."""
         with self._lock:
-            row = np.empty(VECTOR_SIZE + 1, dtype=np.float32)
+            row = np.empty(KEYFRAME_WIDTH, dtype=np.float32)
             row[:VECTOR_SIZE] = vector
             row[VECTOR_SIZE] = t - input_time
+            row[VECTOR_SIZE + 1] = lag
             if t < self._keyframes.last_time:  # the behaviour side restarted on a new grid
-                self._keyframes = FrameHistory(32, width=VECTOR_SIZE + 1, max_gap=0.25)
+                self._keyframes = FrameHistory(32, width=KEYFRAME_WIDTH, max_gap=0.25)
                 self.keyframe_resets += 1
             if self._keyframes.append(t, row):
                 self.keyframes_in += 1
@@ -188,6 +195,7 @@ class RenderCore:
             self._sample[VECTOR_SIZE] = math.nan
         elif t > newest:
             self.underruns += 1
+        self.lag = float(self._sample[VECTOR_SIZE + 1])
         agent = self.agent
         self.lipsync.apply(t, agent)
         head = self.filter.push(agent[HEAD_SLICE])

@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import zmq
 
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
-from chameleons.worker.control import RESET_PAIRING
+from chameleons.worker.control import MARK_HEAD_REST, RESET_PAIRING
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DEFAULT_URL, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
@@ -83,6 +83,8 @@ class WorkerConfig:
     livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
+    head_recentre: bool = True  # copy re-centres the head on the participant's neutral pose
+    head_calibration_s: float = 20.0  # that neutral: the mean of this many seconds of frames
     behaviour: str = "still"
     behaviour_params: Mapping[str, Any] = field(default_factory=dict)
     copy_delay: float = 4.0
@@ -102,6 +104,14 @@ class WorkerConfig:
         if self.behaviour == "copy":
             return {"delay": self.copy_delay, **self.behaviour_params}
         return dict(self.behaviour_params)
+
+    def head_processing(self) -> dict[str, Any]:
+        """How this booth turns the phone's head pose into the robot's: with the recordings
+        and the worker's hello, so recorded data traces back to it."""
+        return {"rotation_scale": self.livelink_rotation_scale,
+                "mounting_rotation_deg": self.mounting_rotation_deg, "mirror": self.mirror,
+                "recentre": self.head_recentre,
+                "calibration_s": self.head_calibration_s}  # fmt: skip
 
     @property
     def head_lead(self) -> float:
@@ -146,6 +156,7 @@ class Worker:
             head_lead=config.head_lead, initial=config.behaviour,
             initial_params=config.initial_params(), locations=config,
             rotation_factor=rotation_factor(config.livelink_rotation_scale),
+            recentre_head=config.head_recentre, head_calibration_s=config.head_calibration_s,
         ))  # fmt: skip
         self.playback = PlaybackStage(
             self.context, self.endpoints, speaks_text=speaks_text(config.driver)
@@ -162,12 +173,15 @@ class Worker:
                 driver_factory or partial(make_driver, config),
                 config.render,
             )
-        self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth)
+        self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth,
+                                      processing=config.head_processing())  # fmt: skip
         self.hub = ControlHub(self.context, self.endpoints, HubConfig(
             config.booth, config.command_endpoint, config.telemetry_endpoint,
-            info={"driver": config.driver, "behaviour": config.behaviour}, curve=config.curve,
+            info={"driver": config.driver, "behaviour": config.behaviour,
+                  "head": config.head_processing()}, curve=config.curve,
         ), ingest_stats=self.ingest_stats,
-            local={RESET_PAIRING: lambda _body: self.pairing.reset()})  # fmt: skip
+            local={RESET_PAIRING: lambda _body: self.pairing.reset(),
+                   MARK_HEAD_REST: self.mark_head_rest})  # fmt: skip
         self._renderer_ready = renderer.ready
         self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
@@ -244,9 +258,21 @@ class Worker:
         busiest = max(snapshots, key=lambda n: snapshots[n].get("input_fps", 0.0), default=None)
         active = busiest if busiest and snapshots[busiest].get("input_fps") else (
             "webcam" if "webcam" in snapshots else None)  # fmt: skip
+        timecodes = [s["timecode"] for s in snapshots.values() if s.get("timecode")]
+        untrusted = next((t for t in timecodes if t.get("problem")), None)
         return {"input_fps": fps, "drops": drops, "receivers": snapshots,
                 "no_face": no_face, "problem": problem, "head_range": head_range,
-                "pairing": self.pairing.snapshot(), "source": active}  # fmt: skip
+                "pairing": self.pairing.snapshot(), "source": active,
+                # Why the capture runs on arrival times (None: the sender's clock is used).
+                "timecode_problem": untrusted["detail"] if untrusted else None}  # fmt: skip
+
+    def mark_head_rest(self, body: Mapping[str, Any]) -> dict[str, Any]:
+        """The booth check: the resting head pose is the mean of the last ``rest_seconds``
+        (per input; the one with the most frames answers)."""
+        seconds = float(body["rest_seconds"])
+        rests = [r.stats.mark_rest(seconds) for r in self.receivers.values()]
+        measured = [rest for rest in rests if rest is not None]
+        return {"rest": max(measured, key=lambda r: r["frames"]) if measured else None}
 
     def stop(self, timeout: float = 5.0) -> None:
         """Stop every stage (the hub last) and free the sockets; a second call does nothing."""

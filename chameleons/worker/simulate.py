@@ -5,16 +5,22 @@
 mouth, brow raises, and a wandering gaze. :func:`run_simulation` paces frames at ``fps`` (or
 at a take's own timecodes) and sends them as Live Link Face v6 UDP packets or FaceCaptureX
 TCP text frames, built by :mod:`chameleons.worker.ingest.wire`.
+
+:class:`CuedMoves` makes the simulated participant follow the booth check: the demo tells
+the simulator each move the check asks for (``{"move": "turn", "seconds": 4}`` lines on its
+standard input, ``simulate-face --follow-cues``), and the head holds still, turns left and
+back, or nods within that time, its idle sway damped while the check runs.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import socket
 import threading
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field, replace
 from datetime import datetime
 from typing import Literal, Protocol
 
@@ -142,6 +148,77 @@ def take_samples(take: Take, duration: float | None) -> Iterator[FaceSample]:
         loop += 1
         if duration is None:
             return
+
+
+TURN_DEG, NOD_DEG = 40.0, 15.0  # a cued turn to the participant's left (yaw > 0), a nod
+CHECK_SWAY = 0.15  # the idle head sway while the check runs (the participant holds still)
+SWAY_RAMP_S = 0.3
+MOVES = ("rest", "turn", "nod", "copy")
+
+
+class CuedMoves:
+    """The booth check's moves, cued as they are asked for (any thread), as head offsets on
+    the clock the simulation runs on."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self.clock = clock
+        self._lock = threading.Lock()
+        self._moves: list[tuple[str, float, float]] = []  # (move, start, end) on ``clock``
+        self.cued = 0
+        self.refused = 0
+
+    def cue(self, move: str, seconds: float, at: float | None = None) -> bool:
+        """Start ``move`` now (or at ``at``) for ``seconds``; an unknown one is refused."""
+        if move not in MOVES or not (isinstance(seconds, int | float) and 0 < seconds <= 60):
+            self.refused += 1
+            return False
+        start = self.clock() if at is None else at
+        with self._lock:
+            self._moves = [m for m in self._moves if m[2] > start - 5.0] + [
+                (move, start, start + float(seconds))]  # fmt: skip
+            self.cued += 1
+        return True
+
+    def follow(self, lines: Iterable[str]) -> None:
+        """Cue each JSON line ``{"move", "seconds"}`` (the simulator's standard input)."""
+        for line in lines:
+            try:
+                cue = json.loads(line)
+                self.cue(str(cue["move"]), float(cue["seconds"]))
+            except (ValueError, KeyError, TypeError):
+                self.refused += 1
+
+    def head(self, now: float, sway: F32Array) -> F32Array:
+        """The head at ``now``: the idle ``sway`` (damped while the check runs) plus the
+        current move."""
+        with self._lock:
+            moves = list(self._moves)
+        if not moves:
+            return sway
+        first, last = min(m[1] for m in moves), max(m[2] for m in moves)
+        inside = min(now - first, last - now) / SWAY_RAMP_S
+        damp = 1.0 - (1.0 - CHECK_SWAY) * min(1.0, max(0.0, inside))
+        head = sway * np.float32(damp)
+        for move, start, end in moves:
+            if start <= now < end and move in ("turn", "nod"):
+                # out and back within the middle 80 % of the time asked for
+                u = (now - start) / (end - start)
+                amount = math.sin(math.pi * min(1.0, max(0.0, (u - 0.1) / 0.8)))
+                if move == "turn":
+                    head[0] += TURN_DEG * amount
+                else:
+                    head[1] += NOD_DEG * amount
+        return head
+
+
+def cued_samples(samples: Iterator[FaceSample], moves: CuedMoves) -> Iterator[FaceSample]:
+    """``samples`` with the cued moves on the head; sample times are mapped onto the moves'
+    clock from when the first sample is taken (when :func:`run_simulation` starts)."""
+    start: float | None = None
+    for sample in samples:
+        if start is None:
+            start = moves.clock() - sample.time
+        yield replace(sample, head=moves.head(start + sample.time, sample.head.copy()))
 
 
 class FaceSender(Protocol):

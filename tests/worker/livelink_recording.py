@@ -39,11 +39,14 @@ def _header(frame: int) -> bytes:
             + struct.pack(">ifii", START_FRAME + frame, 0.0, FPS, 1))  # fmt: skip
 
 
-def _packet(frame: int, yaw: float, pitch: float, jaw: float) -> bytes:
+def pose_packet(frame: int, yaw: float, pitch: float, jaw: float = 0.2) -> bytes:
+    """One packet of the app: timecode ``frame`` frames after 14:03:59:00, head in degrees
+    (sent as radians)."""
     values = np.zeros(61, dtype=">f4")
     values[BLENDSHAPE_INDEX["jawOpen"]] = jaw
     values[N_BLENDSHAPES : N_BLENDSHAPES + 3] = [math.radians(yaw), math.radians(pitch), 0.0]
     return _header(frame) + struct.pack(">B", 61) + values.tobytes()
+
 
 
 def head_turn_then_nod(turn_deg: float = 40.0, nod_deg: float = 15.0) -> Recording:
@@ -57,7 +60,7 @@ def head_turn_then_nod(turn_deg: float = 40.0, nod_deg: float = 15.0) -> Recordi
 
     def add(yaw: float, pitch: float) -> None:
         nonlocal frame
-        packets.append(_packet(frame, yaw, pitch, 0.2))
+        packets.append(pose_packet(frame, yaw, pitch))
         yaws.append(yaw)
         pitches.append(pitch)
         frame += 1

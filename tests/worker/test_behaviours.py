@@ -78,7 +78,8 @@ def test_copy_default_delay_is_four_seconds() -> None:
 
 
 def test_copy_is_neutral_until_the_delay_has_elapsed() -> None:
-    router = BehaviourRouter(build_context(), 0.0, initial="copy", params={"delay": 1.0})
+    context = build_context(recentre_head=False)  # the head exactly as captured
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": 1.0})
     for k in range(120):
         router.on_participant(_frame(10 + k / 60, 0.8))
     out = _out()
@@ -99,8 +100,10 @@ def test_copy_is_neutral_until_the_delay_has_elapsed() -> None:
 def test_copy_output_at_t_is_input_interpolated_at_t_minus_delay(
     delay: float, offset: float, rate: float, values: list[float], query: float
 ) -> None:
-    """The property: output(t) == lerp(input, t - delay) on the mapped capture clock."""
-    router = BehaviourRouter(build_context(), 0.0, initial="copy", params={"delay": delay})
+    """The property: output(t) == lerp(input, t - delay) on the mapped capture clock (the
+    head as captured: without re-centring on the participant's neutral pose)."""
+    context = build_context(recentre_head=False)
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": delay})
     captures = 100 + np.arange(len(values)) / rate  # the sender's clock
     for capture, value in zip(captures, values, strict=True):
         router.on_participant(_frame(capture, value, receive_offset=offset))
@@ -178,8 +181,9 @@ def test_natural_loads_npz_clips(tmp_path) -> None:
 @pytest.mark.parametrize("crossfade", [0.1, 0.3])
 def test_switching_behaviour_never_jumps(crossfade: float) -> None:
     """Still (neutral) -> copy of a far-from-neutral face -> still, switching mid-fade too:
-    the per-tick change stays within |difference| * tick / crossfade."""
-    router = BehaviourRouter(build_context(), crossfade, initial="still")
+    the per-tick change stays within |difference| * tick / crossfade (the head as captured,
+    not re-centred on the participant's neutral pose)."""
+    router = BehaviourRouter(build_context(recentre_head=False), crossfade, initial="still")
     for k in range(60 * 6):
         router.on_participant(_frame(k / 60, 1.0))  # a constant, extreme face
     tick = 1 / 125
@@ -213,3 +217,28 @@ def test_natural_without_a_recording_plays_a_synthetic_face() -> None:
         values.append(out.copy())
     assert behaviour.describe()["source"] == "synthetic:3"
     assert np.ptp(np.array(values)[:, HEAD_YAW]) > 0.1  # it moves
+
+
+def test_copy_undoes_the_neutral_pose_as_a_rotation_not_angle_by_angle() -> None:
+    """A phone 14.7 degrees below the face reads a 40 degree turn as yaw 40.9, pitch 11.2,
+    roll 9.6. Re-centred on the resting pose the copy shows the turn alone: no roll the
+    participant never made (subtracting per angle would leave 9.6 degrees of it)."""
+    from chameleons.worker.ingest.rotation import rotation_matrix, yaw_pitch_roll
+
+    phone = rotation_matrix(0.0, 14.7, 0.0)  # the camera's tilt, applied to every reading
+    context = build_context(head_calibration_s=1.0)
+    router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": 0.5})
+    for k in range(120):  # 2 s at rest: the neutral freezes after 1 s
+        frame = FaceFrame(k / 60, k / 60)
+        frame.head[:] = yaw_pitch_roll(phone @ rotation_matrix(0.0, 0.0, 0.0))
+        router.on_participant(frame)
+    turned = FaceFrame(2.0, 2.0)
+    turned.head[:] = yaw_pitch_roll(phone @ rotation_matrix(40.0, 0.0, 0.0))
+    router.on_participant(turned)
+    assert turned.head[2] == pytest.approx(9.6, abs=0.1)  # what the phone reads
+    out = _out()
+    router.sample(2.5, out)
+    np.testing.assert_allclose(out[HEAD_YAW : HEAD_YAW + 3], [40.0, 0.0, 0.0], atol=0.01)
+    router.sample(1.9, out)  # at rest: straight ahead
+    np.testing.assert_allclose(out[HEAD_YAW : HEAD_YAW + 3], [0.0, 0.0, 0.0], atol=0.01)
+    assert context.head_neutral.describe()["pose"] == {"yaw": 0.0, "pitch": 14.7, "roll": 0.0}

@@ -37,6 +37,8 @@ VALID = {
     "retry_robot": {},
     "reset_pairing": {},
     "reset_delay_probe": {},
+    "recentre_head": {"seconds": 2.0},
+    "mark_head_rest": {"rest_seconds": 2.0},
 }
 
 

@@ -52,6 +52,7 @@ def test_the_robot_copies_the_face_delay_seconds_later(
     control = ControlPeer(zmq_context)
     config = WorkerConfig(
         booth="e2e", driver="furhat", behaviour="copy", copy_delay=DELAY, mirror=False,
+        head_recentre=False,  # the head as captured: its exact size and delay are tested
         livelink_port=0, facecapturex_port=None, capture_host="127.0.0.1",
         command_endpoint=control.command_endpoint, telemetry_endpoint=control.telemetry_endpoint,
     )  # fmt: skip

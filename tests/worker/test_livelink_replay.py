@@ -34,6 +34,7 @@ def test_a_head_turn_and_nod_from_the_app_reach_the_robot_at_their_real_size() -
     recording = head_turn_then_nod(turn_deg=40.0, nod_deg=15.0)
     config = WorkerConfig(
         booth="replay", driver="furhat", behaviour="copy", copy_delay=DELAY, mirror=False,
+        head_recentre=False,  # the head as captured: its size in degrees is tested
         livelink_port=0, facecapturex_port=None, capture_host="127.0.0.1",
         command_endpoint="tcp://127.0.0.1:1", telemetry_endpoint="tcp://127.0.0.1:1",
     )  # fmt: skip

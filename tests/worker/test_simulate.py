@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import socket
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -22,6 +24,10 @@ from chameleons.worker.ingest.wire import (
     livelink_values,
 )
 from chameleons.worker.simulate import (
+    CHECK_SWAY,
+    NOD_DEG,
+    TURN_DEG,
+    CuedMoves,
     FaceSample,
     LiveLinkSender,
     SyntheticFace,
@@ -204,3 +210,54 @@ def test_help_lists_the_options() -> None:
     assert result.exit_code == 0
     for option in ("--protocol", "--target", "--fps", "--duration", "--csv", "--seed"):
         assert option in result.output
+
+
+def test_cued_moves_turn_and_nod_within_the_time_asked_and_damp_the_sway() -> None:
+    """The booth check's moves: a turn to the participant's left (yaw > 0) and back, a nod
+    (pitch > 0), each inside the seconds asked for; meanwhile the idle sway is damped."""
+    clock = [100.0]
+    moves = CuedMoves(clock=lambda: clock[0])
+    sway = np.array([8.0, -4.0, 2.0], dtype=np.float32)
+    assert np.array_equal(moves.head(100.0, sway.copy()), sway)  # nothing cued: the sway
+    assert moves.cue("rest", 2.0)
+    assert moves.cue("turn", 4.0, at=102.0)
+    assert moves.cue("nod", 4.0, at=106.0)
+    assert not moves.cue("dance", 1.0)
+    assert not moves.cue("turn", -1.0)
+    moves.follow(['{"move": "copy", "seconds": 6.5}\n', "{not json\n", '{"move": 3}\n'])
+    turn = [float(moves.head(102.0 + u * 4.0, sway.copy())[0]) for u in np.linspace(0, 1, 81)]
+    nod = [float(moves.head(106.0 + u * 4.0, sway.copy())[1]) for u in np.linspace(0, 1, 81)]
+    assert max(turn) == pytest.approx(TURN_DEG + 8.0 * CHECK_SWAY, abs=0.05)
+    assert turn[0] == turn[-1] == pytest.approx(8.0 * CHECK_SWAY)  # out and back in the time
+    assert max(nod) == pytest.approx(NOD_DEG - 4.0 * CHECK_SWAY, abs=0.05)
+    assert (moves.cued, moves.refused) == (4, 4)
+    quiet = moves.head(101.0, sway.copy())  # holding still: the sway damped
+    np.testing.assert_allclose(quiet, sway * CHECK_SWAY, atol=1e-5)
+
+
+def test_cli_follows_the_booth_checks_cues_on_its_standard_input(
+    subscriber: FaceSubscriber,
+) -> None:
+    """``simulate-face --follow-cues`` (what ``chameleons demo`` runs): a turn cue written to
+    its standard input turns the simulated head 40 degrees to the left and back."""
+    receiver = LiveLinkReceiver(host=HOST, port=0, publish_endpoint=subscriber.endpoint,
+                                context=subscriber.context)  # fmt: skip
+    receiver.start()
+    command = [sys.executable, "-m", "chameleons", "simulate-face", "--follow-cues",
+               "--target", f"{HOST}:{receiver.port}", "--duration", "20"]  # fmt: skip
+    process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL)
+    try:
+        subscriber.receive(30, timeout=30)  # the simulator is sending
+        assert process.stdin is not None
+        process.stdin.write(b'{"move": "turn", "seconds": 1.5}\n')
+        process.stdin.flush()
+        yaws = [float(f.head[0]) for f in subscriber.receive(150, timeout=30)]
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+        if process.stdin is not None:
+            process.stdin.close()
+        receiver.stop()
+    # The idle sway alone stays within 13 degrees; during the check it is damped.
+    assert max(yaws) > TURN_DEG - 13.0 * CHECK_SWAY - 0.5
+    assert max(yaws[:5]) < 15.0

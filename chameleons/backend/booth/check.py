@@ -6,14 +6,18 @@ logged as a ``booth.checked`` event, with the session when one is given, so it i
 with the session's events.
 
 - **Face stream**: the phone's frames arrive (rate) and reach the robot quickly (capture to
-  send latency).
-- **Turn your head left, then nod**: the head's yaw and pitch extremes over the last
-  seconds, against the expected sign and size. A turn of 20-90 degrees to the left is yaw >
-  0 (nose to the camera's right), a nod of 8-60 degrees is pitch > 0 (chin down). A turn the
-  wrong way is a sign or mirror error; one far beyond 90 degrees a unit error (radians read
-  as degrees/180 copies a head turn about three times too large). A movement too small to
-  count that would be the right size times pi (degrees/180 read as radians) or 180/pi
-  (radians read as degrees) says so: the unit is the likely cause, not the technician.
+  send latency: the pipeline's own, without the copy's intended delay). A phone timecode
+  the worker does not trust (frozen, jumping, drifting: it falls back to arrival times) is
+  a warning with the reason.
+- **Turn your head left, then nod**: the head's movement from its resting pose, which the
+  worker measures while the check asks to hold still (a phone below or beside the face is
+  a resting pose of +15 degrees pitch or 25 degrees yaw, not a nod or a turn). A turn of
+  20-90 degrees to the left is yaw > 0 (nose to the camera's right), a nod of 8-60 degrees
+  is pitch > 0 (chin down). A turn the wrong way is a sign or mirror error; one far beyond
+  90 degrees a unit error (radians read as degrees/180 copies a head turn about three times
+  too large).
+  A movement too small to count that would be the right size times pi (degrees/180 read
+  as radians) or 180/pi (radians read as degrees) says so: the unit is the likely cause.
 - **Robot copies**: also fails when the robot is not logged in (a refused or unanswered
   Furhat login), with that reason: the worker measures the copy on what it sends, and a
   robot that refused the login receives none of it.
@@ -69,6 +73,12 @@ def face_stream(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
     slow = latency is not None and latency > MAX_LATENCY_MS
     value = f"{fps:.0f} fps, {latency:.0f} ms to the robot" if latency is not None else (
         f"{fps:.0f} fps")  # fmt: skip
+    ingest = telemetry.get("ingest")
+    timecode = ingest.get("timecode_problem") if isinstance(ingest, Mapping) else None
+    if timecode:
+        return step("face", label, WARN, f"{value}; {timecode}: the copy runs on arrival times "
+                    "(check the phone app's timecode source)", fps=fps, latency_ms=latency,
+                    timecode=str(timecode))  # fmt: skip
     return step("face", label, WARN if slow else PASS, value, fps=fps, latency_ms=latency)
 
 
@@ -78,38 +88,52 @@ def expected_head() -> str:
             f"+{MIN_NOD_DEG:g}..+{MAX_NOD_DEG:g}° (a nod, chin down)")  # fmt: skip
 
 
-def _head_value(yaw: float, pitch: float) -> str:
-    """The measured yaw and pitch, each against its expected sign and size."""
-    return (f"yaw {yaw:+.0f}° (expected +{MIN_TURN_DEG:g}..+{MAX_TURN_DEG:g}: turn left), "
-            f"pitch {pitch:+.0f}° (expected +{MIN_NOD_DEG:g}..+{MAX_NOD_DEG:g}: nod)")  # fmt: skip
+def _head_value(turn: float, nod: float, rest: Mapping[str, Any]) -> str:
+    """The measured turn and nod, each against its expected sign and size, and the resting
+    pose they are measured from."""
+    return (f"turn {turn:+.0f}° (expected +{MIN_TURN_DEG:g}..+{MAX_TURN_DEG:g}: turn left), "
+            f"nod {nod:+.0f}° (expected +{MIN_NOD_DEG:g}..+{MAX_NOD_DEG:g}), from a resting "
+            f"pose of yaw {float(rest['yaw']):+.0f}°, "
+            f"pitch {float(rest['pitch']):+.0f}°")  # fmt: skip
 
 
 def head_turn(telemetry: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The head's movement from the resting pose the worker measured at the movement's start
+    (``head_range.rest``): extremes minus rest, so a phone mounted off-centre moves nothing."""
     label = "Turn your head left, then nod"
     ingest = (telemetry or {}).get("ingest")
     heads = ingest.get("head_range") if isinstance(ingest, Mapping) else None
     if not isinstance(heads, Mapping):
-        return step("head", label, FAIL, f"no head movement received (expected {expected_head()})")
+        return step("head", label, FAIL,
+                    f"no head movement received (expected {expected_head()})")  # fmt: skip
+    rest = heads.get("rest")
+    if not isinstance(rest, Mapping):
+        return step("head", label, FAIL, "no resting pose measured, so no movement can be "
+                    f"judged (expected {expected_head()} from the pose held still "
+                    "first)")  # fmt: skip
     yaw_max, yaw_min = float(heads["yaw_max"]), float(heads["yaw_min"])
-    pitch_max = float(heads["pitch_max"])
-    figures = {"yaw_max": yaw_max, "yaw_min": yaw_min, "pitch_max": pitch_max,
-               "expected_yaw": f"+{MIN_TURN_DEG:g}..{MAX_TURN_DEG:g}",
+    rest_yaw, rest_pitch = float(rest["yaw"]), float(rest["pitch"])
+    left, right = yaw_max - rest_yaw, rest_yaw - yaw_min
+    # The larger excursion either way: a turn read the wrong way shows as a negative turn.
+    turn = left if left >= right else -right
+    nod = float(heads["pitch_max"]) - rest_pitch
+    figures = {"yaw_max": yaw_max, "yaw_min": yaw_min, "pitch_max": float(heads["pitch_max"]),
+               "rest_yaw": rest_yaw, "rest_pitch": rest_pitch, "turn_deg": round(turn, 1),
+               "nod_deg": round(nod, 1), "expected_yaw": f"+{MIN_TURN_DEG:g}..{MAX_TURN_DEG:g}",
                "expected_pitch": f"+{MIN_NOD_DEG:g}..{MAX_NOD_DEG:g}"}  # fmt: skip
-    # The larger excursion either way: a turn read the wrong way shows as a negative yaw.
-    yaw = yaw_max if yaw_max >= -yaw_min else yaw_min
-    measured = _head_value(yaw, pitch_max)
-    if max(yaw_max, -yaw_min) > MAX_TURN_DEG:
+    measured = _head_value(turn, nod, rest)
+    if max(left, right) > MAX_TURN_DEG:
         return step("head", label, FAIL, f"{measured}: far too large, check the rotation unit "
                     "(CHAMELEONS_LIVELINK_ROTATION_SCALE)", **figures)  # fmt: skip
-    if yaw_max < MIN_TURN_DEG and -yaw_min >= MIN_TURN_DEG:
+    if left < MIN_TURN_DEG and right >= MIN_TURN_DEG:
         return step("head", label, FAIL, f"{measured}: the turn reads the wrong way, "
                     "check the mirror and mounting settings", **figures)  # fmt: skip
-    if yaw_max < MIN_TURN_DEG:
-        hint = unit_hint(yaw_max, MIN_TURN_DEG, MAX_TURN_DEG, "turn")
+    if left < MIN_TURN_DEG:
+        hint = unit_hint(left, MIN_TURN_DEG, MAX_TURN_DEG, "turn")
         return step("head", label, FAIL, f"{measured}: no turn to the left seen{hint}",
                     **figures)  # fmt: skip
-    if pitch_max < MIN_NOD_DEG or pitch_max > MAX_NOD_DEG:
-        hint = unit_hint(pitch_max, MIN_NOD_DEG, MAX_NOD_DEG, "nod")
+    if nod < MIN_NOD_DEG or nod > MAX_NOD_DEG:
+        hint = unit_hint(nod, MIN_NOD_DEG, MAX_NOD_DEG, "nod")
         return step("head", label, FAIL, f"{measured}: no nod seen{hint}", **figures)
     return step("head", label, PASS, measured, **figures)
 

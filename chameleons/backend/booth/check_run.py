@@ -2,11 +2,18 @@
 
 Between participants the worker idles in whatever it ran last (``still`` at start), so the
 check itself puts the robot into ``copy`` with the study's configured delay, asks the
-technician to turn the head left and then nod (the page and ``chameleons booth-check``
-show the prompts of :meth:`Plan.prompts`), waits for the robot's copy of the movement, and
-restores the behaviour that ran before: always, also when a step fails or the request is
-cancelled. The copy-delay probe is reset when the copy starts, so the measured delay is
-the delay of this movement only.
+technician to hold still facing the robot, then to turn the head left and to nod (the page
+and ``chameleons booth-check`` show the prompts of :meth:`Plan.prompts`), waits for the
+robot's copy of the movement, and restores the behaviour that ran before: always, also when
+a step fails or the request is cancelled.
+
+When the "hold still" is over the worker is told to take the resting pose (the mean of that
+time, ``mark_head_rest``): the movement is judged from it, not from zero (a phone below the
+face rests at +15 degrees of pitch, which is no nod), and the copied head is re-centred on
+it (``recentre_head``); at the end the neutral is measured afresh from the next frames, so
+a participant is never copied on the technician's pose. The copy-delay probe is reset when
+the rest is taken, so the measured delay is the delay of this movement only. A simulated
+face (the demo's: ``state.face_cues``) is told each move as it is asked for, so it does it.
 
 - The delay is the study's: with a session, its study's first ``copy`` condition still to
   come in the session's plan (else the study's first ``copy`` condition); without one, the
@@ -40,7 +47,12 @@ from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import robot, worker_link
 from chameleons.backend.wizard.playback import read
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
-from chameleons.worker.control import RESET_DELAY_PROBE, SET_BEHAVIOUR
+from chameleons.worker.control import (
+    MARK_HEAD_REST,
+    RECENTRE_HEAD,
+    RESET_DELAY_PROBE,
+    SET_BEHAVIOUR,
+)
 
 COPY = "copy"
 STILL = "still"  # a worker's start behaviour when its hello does not say
@@ -63,6 +75,7 @@ class Plan:
     delay_s: float
     condition: str | None  # the study's copy condition (None: the worker's default delay)
     study_id: int | None
+    rest_s: float = 2.0
 
     @property
     def movement_s(self) -> float:
@@ -71,6 +84,7 @@ class Plan:
     def prompts(self) -> list[dict[str, Any]]:
         """What the technician is asked to do, in order, and for how long (seconds)."""
         return [
+            {"id": "rest", "text": "Face the robot and hold still", "seconds": self.rest_s},
             {"id": "turn", "text": "Turn your head left (and back)", "seconds": self.turn_s},
             {"id": "nod", "text": "Nod (chin down and up)", "seconds": self.nod_s},
             {"id": "copy", "seconds": self.delay_s + COPY_MARGIN_S,
@@ -92,7 +106,8 @@ def plan_for(db: DbSession, booth: str, session: SessionRow | None, settings: An
             condition = order[0]
             delay = float(conditions[condition].params.get("delay", DEFAULT_DELAY))
     return Plan(float(settings.booth_check_turn_seconds), float(settings.booth_check_nod_seconds),
-                delay, condition, study.id if study else None)  # fmt: skip
+                delay, condition, study.id if study else None,
+                float(settings.booth_check_rest_seconds))  # fmt: skip
 
 
 def _study_and_order(
@@ -148,14 +163,31 @@ async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, A
     try:
         if not switched.sent:
             return Movement(plan.delay_s, plan.condition, problem=switched.detail)
-        await worker_link.send_command(bridge, booth, RESET_DELAY_PROBE, {})  # old workers: no
+        _cue(state, booth, "rest", plan.rest_s)
+        await asyncio.sleep(plan.rest_s)
+        rest = {"rest_seconds": plan.rest_s}
+        await worker_link.send_command(bridge, booth, MARK_HEAD_REST, rest)
+        await worker_link.send_command(bridge, booth, RECENTRE_HEAD, {"seconds": plan.rest_s})
+        await worker_link.send_command(bridge, booth, RESET_DELAY_PROBE, {})
         started = time.monotonic()
+        _cue(state, booth, "turn", plan.turn_s)
+        await asyncio.sleep(max(0.0, started + plan.turn_s - time.monotonic()))
+        _cue(state, booth, "nod", plan.nod_s)
         head = await _heartbeat_after(bridge, booth, started + plan.movement_s)
+        _cue(state, booth, "copy", plan.delay_s + COPY_MARGIN_S)
         copy = await _copy_measured(bridge, booth, started + plan.movement_s + plan.delay_s)
         movement = Movement(plan.delay_s, plan.condition, head=head, copy=copy)
     finally:
         await asyncio.shield(_restore(state, booth, previous))
     return movement
+
+
+def _cue(state: Any, booth: str, move: str, seconds: float) -> None:
+    """Tell a simulated face on ``booth`` what the check asks for now (the demo's face
+    simulator follows it); nothing without one."""
+    cues = getattr(state, "face_cues", None)
+    if callable(cues):
+        cues(booth, move, seconds)
 
 
 def _running_behaviour(
@@ -182,6 +214,10 @@ def _started_with(bridge: Any | None, booth: str) -> str:
 
 
 async def _restore(state: Any, booth: str, previous: dict[str, Any] | None) -> None:
+    # The copied head was re-centred on the technician's rest: measure the neutral afresh
+    # from the next frames (a participant between interactions is not copied on the
+    # technician's pose; a session start re-measures it anyway).
+    await worker_link.send_command(worker_link.bridge_of(state), booth, RECENTRE_HEAD, {})
     slot = await run_in_threadpool(read, state, running_slot, booth)
     if slot is not None:  # an interaction started meanwhile: its set-up, not the old one
         find = partial(running_target, interaction_id=slot.interaction_id)

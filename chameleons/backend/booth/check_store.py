@@ -33,8 +33,9 @@ def store(
         steps=list(result["steps"]),
         face_fps=_figure(steps, "face", "fps"),
         capture_to_send_ms=_figure(steps, "face", "latency_ms"),
-        head_yaw_deg=_figure(steps, "head", "yaw_max"),
-        head_pitch_deg=_figure(steps, "head", "pitch_max"),
+        # The movement from the resting pose (the rest itself is in the step's figures).
+        head_yaw_deg=_figure(steps, "head", "turn_deg"),
+        head_pitch_deg=_figure(steps, "head", "nod_deg"),
         copy_delay_s=_figure(steps, "copy", "delay_s"),
         measured_delay_s=_figure(steps, "copy", "measured_s"),
         speech_start_ms=_figure(steps, "speech", "start_ms"),

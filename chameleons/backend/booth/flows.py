@@ -20,6 +20,8 @@
   outage flags see them;
 - ``session.started``: the booth's face capture is told to pair with the next phone that
   sends (``capture.pairing_reset``, :mod:`chameleons.backend.wizard.capture`);
+- the worker's ``head_neutral`` event (the neutral pose the copied head is re-centred on)
+  becomes ``robot.head_neutral`` of the session running on that booth;
 - a booth's worker connecting (``worker_connected``, ``worker_restarted``) while an
   interaction runs there: whatever the worker has not acknowledged of that interaction's
   set-up and recording is sent now (an interaction started before the worker came up would
@@ -77,6 +79,7 @@ AUTH_STATES = frozenset({"auth_refused", "auth_timeout"})
 # (sent before the server's subscription took: ZeroMQ drops a PUB's messages until then).
 HEARTBEAT_STATES = AUTH_STATES | {"connected"}
 RECORDING_FAILED = "recording.failed"
+HEAD_NEUTRAL = "robot.head_neutral"
 SESSION_STARTED = "session.started"
 
 
@@ -200,6 +203,12 @@ class BoothFlow:
             self._enqueue(f"booth:{booth}", partial(self._route_reported, dict(body)))
         elif message.type == "recording_failed":
             self._enqueue(f"booth:{booth}", partial(self._route_failed, dict(body)))
+        elif message.type == "head_neutral":  # the copied head's new neutral pose
+            payload = {"booth": booth, **{k: v for k, v in body.items() if k != "wall_time"}}
+            when = body.get("worker_time")
+            when = float(when) if isinstance(when, int | float) else None
+            job = partial(self._log_outage, booth, HEAD_NEUTRAL, payload, when)
+            self._enqueue(f"booth:{booth}", job)
 
     def _on_telemetry(self, message: Message) -> None:
         """A refused login or a connection is reported once, possibly before the server's

@@ -489,9 +489,12 @@ def booth_checks_table(spec: StudySpec) -> TableSpec:
             Column("passed", "boolean", "No step failed (warnings allowed)."),
             *(Column(f"{step}_status", "string", f"{what}.", status) for step, what in steps),
             Column("face_fps", "number", "Face frames per second arriving from the phone."),
-            Column("capture_to_send_ms", "number", "Capture to send latency (ms)."),
-            Column("head_yaw_deg", "number", "Largest head yaw measured (degrees, left > 0)."),
-            Column("head_pitch_deg", "number", "Largest head pitch measured (degrees, down > 0)."),
+            Column("capture_to_send_ms", "number", "Capture to send latency of the pipeline "
+                   "(ms), without the copy's intended delay."),
+            Column("head_yaw_deg", "number", "Largest head turn measured from the resting pose "
+                   "(degrees, left > 0)."),
+            Column("head_pitch_deg", "number", "Largest nod measured from the resting pose "
+                   "(degrees, down > 0)."),
             Column(
                 "copy_delay_s",
                 "number",

@@ -2,7 +2,11 @@
 sender only (:mod:`chameleons.worker.ingest.pairing`). The booth flow resets the pairing when
 a session starts on the booth; the wizard resets it from the console (a phone was replaced,
 or the wrong one paired first). Logged as ``capture.pairing_reset`` with what the worker
-said: the previously paired sender, or why the reset was not sent."""
+said: the previously paired sender, or why the reset was not sent.
+
+A new phone or participant also gets a new neutral head pose: the worker measures it afresh
+(``recentre_head``; the copied head is re-centred on it, see
+:mod:`chameleons.worker.behaviours.neutral`), and the event says so (``head``)."""
 
 from __future__ import annotations
 
@@ -15,7 +19,7 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import repository, worker_link
 from chameleons.backend.wizard.playback import write
-from chameleons.worker.control import RESET_PAIRING
+from chameleons.worker.control import RECENTRE_HEAD, RESET_PAIRING
 
 PAIRING_RESET = "capture.pairing_reset"
 
@@ -41,6 +45,9 @@ async def reset_pairing(
     if outcome.sent and outcome.result is not None:
         result["previous_sender"] = outcome.result.get("previous")
         result["mode"] = outcome.result.get("mode")
+        head = await worker_link.send_command(worker_link.bridge_of(state), booth,
+                                              RECENTRE_HEAD, {})  # fmt: skip
+        result["head"] = head.result if head.sent else {"sent": False, "detail": head.detail}
 
     def log(db: Session) -> Any:
         return events.record(db, PAIRING_RESET, source=source, study_id=view.session.study_id,

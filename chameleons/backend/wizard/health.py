@@ -54,6 +54,7 @@ LABELS = {
     "recording": "Recording",
     "speaking": "Speaking",
     "face": "Robot face",
+    "timecode": "Phone timecode",
 }
 ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
@@ -145,6 +146,7 @@ def evaluate(
         **_recording_check(telemetry),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
+        **_timecode_check(telemetry),
     }
 
 
@@ -244,6 +246,16 @@ def _face_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:
     return {"face": Check("face", False, "; ".join(problems))}
 
 
+def _timecode_check(telemetry: Mapping[str, Any]) -> dict[str, Check]:
+    """A chip only while the capture does not trust the phone's timecode (frozen, jumping,
+    drifting): the copy then runs on arrival times, with the network's jitter in them."""
+    ingest = telemetry.get("ingest")
+    problem = ingest.get("timecode_problem") if isinstance(ingest, Mapping) else None
+    if not problem:
+        return {}
+    return {"timecode": Check("timecode", False, f"{problem}: copying on arrival times")}
+
+
 def _fmt(value: float | None, unit: str, digits: int = 1) -> str:
     return "unknown" if value is None else f"{value:.{digits}f} {unit}"
 
@@ -280,7 +292,7 @@ class HealthTracker:
             "alarm_after_s": self.limits.alarm_after_s,
             "checks": [
                 checks[name].as_dict()
-                for name in (*CHECKS, "recording", "speaking", "face")
+                for name in (*CHECKS, "recording", "speaking", "face", "timecode")
                 if name in checks
             ],
             "telemetry": dict(telemetry) if telemetry is not None else None,

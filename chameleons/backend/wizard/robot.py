@@ -130,6 +130,9 @@ def record(
     }
     if target.params:
         payload["params"] = dict(target.params)
+    head = (behaviour.result or {}).get("head")
+    if isinstance(head, dict):  # how the worker processes the copied head (re-centring)
+        payload["head"] = head
     if target.natural_source is not None:
         payload["natural_source"] = dict(target.natural_source)
     return events.record(

@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from chameleons.worker.behaviours.history import FrameHistory
+from chameleons.worker.behaviours.neutral import HeadNeutral
 from chameleons.worker.behaviours.params import Param
 from chameleons.worker.frames import N_BLENDSHAPES, F32Array, FaceFrame
 
@@ -49,6 +50,10 @@ class BehaviourContext:
     # Degrees per unit of a Live Link take CSV's rotations (the livelink_rotation_scale
     # setting), for clips read from takes; None: the take reader's default.
     rotation_factor: float | None = None
+    # The participant's neutral head pose and whether ``copy`` re-centres the head on it
+    # (the booth's ``head_recentre`` setting; :mod:`chameleons.worker.behaviours.neutral`).
+    head_neutral: HeadNeutral = field(default_factory=HeadNeutral)
+    recentre_head: bool = True
 
 
 class Behaviour(ABC):
@@ -84,6 +89,12 @@ class Behaviour(ABC):
     def describe(self) -> dict[str, Any]:
         """Parameters for status reports."""
         return {}
+
+    @property
+    def lag(self) -> float:
+        """Seconds by which this behaviour means its output to trail the input it used
+        (``copy``: its delay). The worker's capture-to-send latency leaves it out."""
+        return 0.0
 
 
 def number_param(

@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from chameleons.worker.behaviours.base import (
+    HEAD_SLICE,
     Behaviour,
     BehaviourContext,
     BehaviourError,
@@ -56,10 +57,17 @@ class CopyBehaviour(Behaviour):
         )
 
     def sample(self, t: float, out: F32Array) -> float:
-        used = self.context.history.sample(t - self.delay, out)
+        context = self.context
+        used = context.history.sample(t - self.delay, out)
         if math.isnan(used):
-            out[:] = self.context.neutral
+            out[:] = context.neutral
+        elif context.recentre_head:
+            context.head_neutral.relative(out[HEAD_SLICE])
         return used
+
+    @property
+    def lag(self) -> float:
+        return self.delay
 
     def describe(self) -> dict[str, Any]:
         return {"delay": self.delay}

@@ -87,7 +87,8 @@ class FrameHistory:
         self._written += 1
         return True
 
-    def _window(self) -> tuple[F64Array, F32Array]:
+    def window(self) -> tuple[F64Array, F32Array]:
+        """The retained frames, oldest first: times and vectors (views, do not modify)."""
         count = len(self)
         start = (self._written - count) % self.capacity
         return self._times[start : start + count], self._values[start : start + count]
@@ -97,7 +98,7 @@ class FrameHistory:
         newest frame used, or NaN (``out`` untouched) before the first frame."""
         if not self._written or t < self.first_time:
             return math.nan
-        times, values = self._window()
+        times, values = self.window()
         i = int(np.searchsorted(times, t, side="right"))
         if i == 0:  # older than anything still retained
             self.underruns += 1

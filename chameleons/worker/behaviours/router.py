@@ -15,6 +15,7 @@ from chameleons.worker.behaviours.base import (
     BehaviourContext,
 )
 from chameleons.worker.behaviours.history import ClockMapper, FrameHistory
+from chameleons.worker.behaviours.neutral import DEFAULT_CALIBRATION_S, HeadNeutral
 from chameleons.worker.behaviours.registry import create_behaviour
 from chameleons.worker.frames import F32Array, FaceFrame
 
@@ -55,16 +56,24 @@ class Crossfade(Behaviour):
         out += self._other
         return max(used_old, used_new) if not math.isnan(used_old + used_new) else used_new
 
+    @property
+    def lag(self) -> float:
+        return self.new.lag
+
 
 def build_context(
     history_seconds: float = DEFAULT_HISTORY_SECONDS,
     max_input_rate: float = DEFAULT_MAX_INPUT_RATE,
     locations: Any = None,
     rotation_factor: float | None = None,
+    recentre_head: bool = True,
+    head_calibration_s: float = DEFAULT_CALIBRATION_S,
 ) -> BehaviourContext:
     capacity = math.ceil(history_seconds * max_input_rate)
     return BehaviourContext(FrameHistory(capacity), history_seconds=history_seconds,
-                            locations=locations, rotation_factor=rotation_factor)  # fmt: skip
+                            locations=locations, rotation_factor=rotation_factor,
+                            head_neutral=HeadNeutral(head_calibration_s),
+                            recentre_head=recentre_head)  # fmt: skip
 
 
 class BehaviourRouter:
@@ -88,6 +97,7 @@ class BehaviourRouter:
         t = self.clock.to_local(frame.capture_time, frame.receive_time)
         if self.context.history.append(t, frame.to_vector()):
             self.frames_in += 1
+            self.context.head_neutral.add(t, frame.head)
             self.current.on_participant(frame, t)
         return t
 

@@ -11,6 +11,11 @@ several receivers can feed one consumer; ``bind_publisher=True`` binds it instea
 
 With a :class:`SenderLock` (``pairing=``), input from any other address than the paired
 phone is dropped and counted there (see :mod:`.pairing`).
+
+The sender's clock is trusted only while it behaves (:class:`TimecodeGuard`: a frozen,
+jumping or drifting timecode falls back to the arrival time, and the stats say why), and
+Live Link frames, which UDP may deliver out of order, are put back in capture order within
+:data:`REORDER_WINDOW_S` before they are published (:class:`ReorderBuffer`).
 """
 
 from __future__ import annotations
@@ -43,7 +48,8 @@ from chameleons.worker.ingest.livelink import (
     parse_livelink_packet,
 )
 from chameleons.worker.ingest.pairing import SenderLock
-from chameleons.worker.ingest.stats import CaptureStats, ClockAligner
+from chameleons.worker.ingest.stats import CaptureStats
+from chameleons.worker.ingest.timecode import REORDER_WINDOW_S, ReorderBuffer, TimecodeGuard
 from chameleons.worker.ingest.transform import FrameTransform
 
 log = logging.getLogger(__name__)
@@ -84,6 +90,7 @@ class _Receiver:
     """Shared thread, stop and publish machinery; subclasses own the capture sockets."""
 
     kind = "capture"
+    reorder_window_s = 0.0  # a stream that may arrive out of order holds frames this long
     # Made by start(), owned by the receiver thread afterwards.
     _selector: selectors.BaseSelector
     _wake_r: socket.socket
@@ -102,7 +109,10 @@ class _Receiver:
         self.transform = transform or FrameTransform()
         self.stats = CaptureStats(clock)
         self._clock = clock
-        self._aligner = ClockAligner() if align_clock else None
+        self._guard = TimecodeGuard() if align_clock else None
+        window = self.reorder_window_s
+        self._reorder = ReorderBuffer(window) if window > 0 else None
+        self.stats.timecode = self._timecode
         self._publisher_args = (
             context or zmq.Context.instance(),
             publish_endpoint,
@@ -160,9 +170,12 @@ class _Receiver:
     def _run(self) -> None:
         try:
             while not self._stopping.is_set():
-                for key, _ in self._selector.select():
+                held = self._reorder.wait(self._clock()) if self._reorder is not None else None
+                for key, _ in self._selector.select(held):
                     if key.data is not None:
                         self._guarded(key.data)
+                if self._reorder is not None:
+                    self._guarded(self._release_due)
         finally:
             self._close()
             self._release()
@@ -185,15 +198,35 @@ class _Receiver:
 
     # -- frames ------------------------------------------------------------------------
     def _emit(self, frame: FaceFrame) -> None:
-        if self._aligner is not None:
-            frame.capture_time = self._aligner.align(frame.capture_time, frame.receive_time)
+        # A frame without the sender's time (capture = receive) has nothing to check.
+        if self._guard is not None and frame.capture_time != frame.receive_time:
+            frame.capture_time = self._guard.capture_time(frame.capture_time, frame.receive_time)
         frame = self.transform.apply(frame)
         # The participant's own head turn (mirroring undone) for the booth check.
         yaw = -float(frame.head[0]) if self.transform.mirror else float(frame.head[0])
         self.stats.note_head(frame.receive_time, yaw, float(frame.head[1]))
+        if self._reorder is None:
+            self._publish(frame)
+        elif not self._reorder.push(frame):
+            self.stats.count_drop("late")  # after a later frame was published already
+
+    def _release_due(self) -> None:
+        assert self._reorder is not None
+        for frame in self._reorder.due(self._clock()):
+            self._publish(frame)
+
+    def _publish(self, frame: FaceFrame) -> None:
         assert self._publisher is not None
         self._publisher.publish(frame)
         self.stats.count_frame(frame.receive_time)
+
+    def _timecode(self) -> dict[str, Any]:
+        """The sender's timecode as the guard judges it, and the reordering (any thread)."""
+        guard = self._guard.snapshot() if self._guard is not None else {"trusted": None}
+        reorder = self._reorder
+        return {**guard, "reorder_window_ms": round(self.reorder_window_s * 1000),
+                "reordered": reorder.reordered if reorder is not None else 0,
+                "late": reorder.late if reorder is not None else 0}  # fmt: skip
 
     def _drop(self, error: IngestError) -> None:
         if error.reason == NO_FACE:  # the phone is fine, it sees nobody: not an error
@@ -216,6 +249,7 @@ class LiveLinkReceiver(_Receiver):
     """Live Link Face UDP packets (v6) on ``host:port``."""
 
     kind = "livelink"
+    reorder_window_s = REORDER_WINDOW_S
 
     def __init__(self, *, rotation_factor: float = DEFAULT_ROTATION_FACTOR, **kwargs: Any) -> None:
         super().__init__(**kwargs)

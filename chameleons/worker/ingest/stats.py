@@ -8,7 +8,9 @@ from collections import Counter, deque
 from collections.abc import Callable
 from typing import Any
 
-HEAD_WINDOW_SECONDS = 15.0  # covers the booth check's 12 s wait
+HEAD_WINDOW_SECONDS = 15.0  # without a resting pose: the extremes of the last 15 s
+MAX_MOVEMENT_SECONDS = 60.0  # a resting pose older than this is forgotten (the check's turn
+# and nod take at most 30 s each)
 
 
 class CaptureStats:
@@ -22,7 +24,12 @@ class CaptureStats:
         self._no_face: deque[float] = deque(maxlen=1024)
         # (receive time, yaw, pitch) of the participant's head, for the booth check's
         # "turn your head left, then nod" step (degrees, the participant's own frame).
-        self._heads: deque[tuple[float, float, float]] = deque(maxlen=1024)
+        self._heads: deque[tuple[float, float, float]] = deque(maxlen=4096)
+        # The resting pose the booth check measured (yaw, pitch, frames, seconds) and when:
+        # the head's movement since then is judged against it, not against zero.
+        self._rest: tuple[float, float, int, float] | None = None
+        self._rest_at = -1e18
+        self.timecode: Callable[[], dict[str, Any]] | None = None  # the receiver's guard
         self.no_face = 0  # "the phone sees no face" packets (not errors)
         self.problem: str | None = None  # what the lab must change (e.g. the app's mode)
         self._problem_at = -1e18
@@ -46,17 +53,47 @@ class CaptureStats:
         with self._lock:
             self._heads.append((receive_time, yaw, pitch))
 
-    def head_range(self, seconds: float = HEAD_WINDOW_SECONDS) -> dict[str, float] | None:
-        """Extremes of yaw and pitch over the last ``seconds`` (None: no frames)."""
+    def mark_rest(self, seconds: float) -> dict[str, Any] | None:
+        """The booth check's "hold still" is over: the resting pose is the mean of the last
+        ``seconds``, and :meth:`head_range` reports the movement from now on (None: no
+        frames to measure it from)."""
         now = self._clock()
         with self._lock:
-            recent = [(y, p) for t, y, p in self._heads if now - t <= seconds]
+            still = [(y, p) for t, y, p in self._heads if now - seconds <= t <= now]
+            self._rest_at = now
+            self._rest = None if not still else (
+                sum(y for y, _ in still) / len(still), sum(p for _, p in still) / len(still),
+                len(still), seconds)  # fmt: skip
+        return self._rest_dict()
+
+    @property
+    def rest_marked_at(self) -> float | None:
+        """When the booth check last took the resting pose (this stats' clock), or None."""
+        return None if self._rest_at < -1e17 else self._rest_at
+
+    def _rest_dict(self) -> dict[str, Any] | None:
+        if self._rest is None:
+            return None
+        yaw, pitch, frames, seconds = self._rest
+        return {"yaw": round(yaw, 1), "pitch": round(pitch, 1), "frames": frames,
+                "seconds": seconds}  # fmt: skip
+
+    def head_range(self, seconds: float = HEAD_WINDOW_SECONDS) -> dict[str, Any] | None:
+        """Extremes of yaw and pitch (None: no frames): since the resting pose was measured
+        (``rest``, when it was within :data:`MAX_MOVEMENT_SECONDS`), else over the last
+        ``seconds`` (``rest`` None)."""
+        now = self._clock()
+        with self._lock:
+            marked = now - self._rest_at <= MAX_MOVEMENT_SECONDS
+            since = self._rest_at if marked else now - seconds
+            recent = [(y, p) for t, y, p in self._heads if t >= since]
+            rest = self._rest_dict() if marked else None
         if not recent:
             return None
         yaws, pitches = [y for y, _ in recent], [p for _, p in recent]
         return {"yaw_min": round(min(yaws), 1), "yaw_max": round(max(yaws), 1),
                 "pitch_min": round(min(pitches), 1), "pitch_max": round(max(pitches), 1),
-                "frames": len(recent)}  # fmt: skip
+                "frames": len(recent), "rest": rest}  # fmt: skip
 
     def set_problem(self, text: str) -> None:
         with self._lock:
@@ -113,6 +150,7 @@ class CaptureStats:
                 "no_face_recent": no_face_recent,  # the phone sees no face right now
                 "problem": self.problem if problem_recent else None,
                 "head_range": heads,
+                "timecode": self.timecode() if self.timecode is not None else None,
             }
 
 
@@ -130,14 +168,16 @@ class ClockAligner:
     def __init__(self, jump_s: float = 1.0, max_drift: float = 1e-3) -> None:
         self.jump_s, self.max_drift = jump_s, max_drift
         self.offset: float | None = None
+        self.restarted = False  # the last frame (re)started the mapping
         self._last_receive = 0.0
 
     def align(self, sender_time: float, receive_time: float) -> float:
-        delay = receive_time - sender_time
-        if self.offset is None or abs(delay - self.offset) > self.jump_s:
-            self.offset = delay
+        delay, offset = receive_time - sender_time, self.offset
+        self.restarted = offset is None or abs(delay - offset) > self.jump_s
+        if offset is None or self.restarted:
+            offset = delay
         else:
-            allowed = self.offset + self.max_drift * max(0.0, receive_time - self._last_receive)
-            self.offset = min(delay, allowed)
-        self._last_receive = receive_time
-        return min(sender_time + self.offset, receive_time)  # exact even after rounding
+            allowed = offset + self.max_drift * max(0.0, receive_time - self._last_receive)
+            offset = min(delay, allowed)
+        self.offset, self._last_receive = offset, receive_time
+        return min(sender_time + offset, receive_time)  # exact even after rounding

@@ -25,6 +25,7 @@ from tests.backend.booth.conftest import (
     worker_config,
 )
 from tests.support.bots import StaffApi
+from tests.worker.head_stream import Pose, stream
 
 pytestmark = pytest.mark.usefixtures("flow")
 PHONE, INTRUDER = "127.0.0.2", "127.0.0.3"
@@ -103,3 +104,28 @@ def test_a_configured_phone_is_the_only_one_ever_accepted(
         until(lambda: pairing(bridge).get("other_packets") == 5, what="refused after the reset")
     assert pairing(bridge)["mode"] == "configured"
     assert pairing(bridge)["sender"] == PHONE
+
+
+def test_a_new_participant_gets_a_neutral_head_pose_of_their_own_logged_with_the_session(
+    pi: StaffApi, study_id: int, bridge: Bridge, tmp_path: Path
+) -> None:
+    """The copied head is re-centred on the participant's mean pose: a session start has the
+    worker measure it afresh (the technician's from before is dropped), and the session's
+    timeline has the pose it measured and how the robot's head is set up."""
+    wizard, _ = new_session(pi, study_id)
+    config = worker_config(bridge, tmp_path, head_calibration_s=0.5)
+    with running_worker(bridge, config) as worker:
+        port = worker.receivers["livelink"].port
+        stream(port, Pose(rest_pitch=-10.0), 1.0)  # someone else, before the session
+        wizard.start()
+        reset = wait_for_event(wizard, "capture.pairing_reset")
+        stream(port, Pose(rest_pitch=14.7), 1.0)  # the participant: the phone below the face
+        logged = wait_for_event(wizard, "robot.head_neutral")
+        wizard.advance(1, "discussion")  # the interaction starts: the robot is set up
+        applied = wait_for_event(wizard, "robot.applied")
+    assert reset["payload"]["head"]["neutral"]["how"] == "calibrating"
+    assert logged["payload"]["recentre"] is True
+    neutral = logged["payload"]["neutral"]
+    assert (neutral["how"], neutral["frozen"]) == ("mean_of_first_frames", True)
+    assert neutral["pose"]["pitch"] == pytest.approx(14.7, abs=0.2)
+    assert applied["payload"]["head"] == {"recentre": True, "neutral": neutral}

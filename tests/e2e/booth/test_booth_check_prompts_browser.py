@@ -1,8 +1,9 @@
 """The booth check guides the technician, in Chromium and on the command line: while the
-server runs the robot in copy and measures, the page shows "Turn your head left", then
-"Nod", then "Hold still" (not one silent wait), and the head step shows the measured yaw
-and pitch against the expected sign and size. A real worker (null driver) is fed the
-head turn and nod over Live Link UDP when the page asks for it."""
+server runs the robot in copy and measures, the page shows "Face the robot and hold still",
+"Turn your head left", then "Nod", then "Hold still" (not one silent wait), and the head
+step shows the measured turn and nod, from the pose held still, against the expected sign
+and size. A real worker (null driver) is fed the resting pose and then the head turn and
+nod over Live Link UDP when the check asks for them."""
 
 from __future__ import annotations
 
@@ -23,14 +24,15 @@ from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.backend.test_auth import add_user
 from tests.support.bots import WizardBot, staff_api, study_with_plan
 from tests.support.live_server import LiveServer
-from tests.worker.livelink_recording import head_turn_then_nod
-from tests.worker.test_livelink_replay import _replay
+from tests.worker.head_stream import Pose, stream_after
 
 pytestmark = pytest.mark.browser
 BOOTH = "booth-5"
 ANY_PORT = "tcp://127.0.0.1:*"
 EXPECTED_YAW = "(expected +20..+90: turn left)"
-EXPECTED_PITCH = "(expected +8..+60: nod)"
+EXPECTED_PITCH = "(expected +8..+60)"
+TURN_AND_NOD = Pose(turn_at=0.3, turn_deg=40.0, turn_s=1.5, nod_at=2.0, nod_deg=15.0,
+                    nod_s=1.0)  # fmt: skip
 
 
 @pytest.fixture
@@ -60,9 +62,12 @@ def worker(live_server: LiveServer, app: FastAPI, tmp_path: Path) -> Iterator[Wo
 
 
 def turn_and_nod(worker: Worker) -> threading.Thread:
-    """The technician's head turn and nod, as the phone streams it, in the background."""
-    packets = head_turn_then_nod(40.0, 15.0).packets
-    thread = threading.Thread(target=_replay, args=(worker.receivers["livelink"].port, packets))
+    """The technician, as the phone streams it, in the background: still until the check
+    has taken the resting pose, then the head turn and nod."""
+    stats = worker.receivers["livelink"].stats
+    thread = threading.Thread(target=stream_after, args=(
+        worker.receivers["livelink"].port, TURN_AND_NOD, 3.5,
+        lambda: stats.rest_marked_at is not None))  # fmt: skip
     thread.start()
     return thread
 
@@ -80,14 +85,17 @@ def test_the_page_prompts_turn_then_nod_and_shows_yaw_and_pitch_against_the_expe
     page.get_by_label("Password").fill("correct horse battery")
     page.get_by_role("button", name="Log in").click()
     root = page.locator("#booth-check")
-    expect(root).to_contain_text("Expected: yaw +20..+90° (a turn to the left) and pitch +8..+60°")
+    expect(root).to_contain_text("Expected, measured from the pose you held still: yaw "
+                                 "+20..+90° (a turn to the left) and pitch +8..+60°")  # fmt: skip
     expect(root).to_contain_text("The robot copies you 4.0 s later (the study's condition copy)")
 
+    moving = turn_and_nod(worker)
     page.get_by_role("button", name="Run the check").click()
     prompt = page.locator("#check-prompt")
+    expect(prompt).to_have_text("Face the robot and hold still")
+    expect(prompt).to_have_attribute("data-phase", "rest")
     expect(prompt).to_have_text("Turn your head left (and back)")
     expect(prompt).to_have_attribute("data-phase", "turn")
-    moving = turn_and_nod(worker)
     expect(prompt).to_have_text("Nod (chin down and up)")
     expect(prompt).to_have_attribute("data-phase", "nod")
     expect(prompt).to_have_text("Hold still: the robot copies you 4 s later")
@@ -99,7 +107,8 @@ def test_the_page_prompts_turn_then_nod_and_shows_yaw_and_pitch_against_the_expe
     expect(head).to_have_attribute("data-status", "pass")
     expect(head).to_contain_text(EXPECTED_YAW)
     expect(head).to_contain_text(EXPECTED_PITCH)
-    expect(head).to_contain_text("yaw +4")  # the 40 degree turn, measured
+    expect(head).to_contain_text("turn +4")  # the 40 degree turn, measured
+    expect(head).to_contain_text("from a resting pose of yaw +0°, pitch +0°")
     expect(page.locator("tr[data-step='copy']")).to_contain_text("delay 4.00 s configured (copy)")
 
 
@@ -111,15 +120,7 @@ def test_the_command_prints_the_prompts_in_time_and_the_expected_ranges(
     add_user(engine, "tech", "correct horse battery", "wizard")
     bridge = app.state.bridge
 
-    def technician() -> None:  # turns the head once the robot runs copy for the check
-        deadline = time.monotonic() + 30
-        while (bridge.state(BOOTH).behaviour or {}).get("name") != "copy":
-            assert time.monotonic() < deadline, "the check never ran the robot in copy"
-            time.sleep(0.02)
-        _replay(worker.receivers["livelink"].port, head_turn_then_nod(40.0, 15.0).packets)
-
-    moving = threading.Thread(target=technician)
-    moving.start()
+    moving = turn_and_nod(worker)  # turns the head once the check took the resting pose
     result = CliRunner().invoke(
         booth_check, ["booth-5", "--server", live_server.url, "--user", "tech"],
         input="correct horse battery\n",
@@ -127,7 +128,8 @@ def test_the_command_prints_the_prompts_in_time_and_the_expected_ranges(
     moving.join()
     lines = result.output.splitlines()
     prompts = [line for line in lines if line.startswith(">>> ")]
-    assert prompts[:3] == [
+    assert prompts[:4] == [
+        ">>> Face the robot and hold still (2 s)",
         ">>> Turn your head left (and back) (2.5 s)",
         ">>> Nod (chin down and up) (2 s)",
         ">>> Hold still: the robot copies you 4 s later (6.5 s)",

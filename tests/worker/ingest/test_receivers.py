@@ -90,25 +90,37 @@ def test_livelink_frames_arrive_normalised_after_garbage(zmq_context, face_sub) 
     assert stats["frames"] >= 2
 
 
-def test_capture_times_keep_the_sender_spacing_despite_arrival_jitter(
+def test_capture_times_keep_the_sender_spacing_and_order_despite_arrival_jitter(
     zmq_context, face_sub
 ) -> None:
+    """UDP delivered a later frame first: within the reorder window the frames are
+    published in capture order with the sender's spacing; one later than the window is
+    dropped and counted (``late``), never published out of order."""
     with udp_receiver(zmq_context, face_sub) as (receiver, send):
         sync_livelink(face_sub, send)
         values = livelink_values(smile(0.25))
-        # the newest frame arrives first; the 29 before it were held up in the network
-        send(build_livelink_packet(values, frame_number=60_029))
-        for i in range(29):
+        # a fresh timecode: the two frames before it were held up in the network (33 ms)
+        start = time.monotonic()
+        send(build_livelink_packet(values, frame_number=60_002))
+        for i in range(2):
             send(build_livelink_packet(values, frame_number=60_000 + i))
-        frames = face_sub.receive(30, accept=not_sync)
-        fps = receiver.stats.input_fps
+        frames = face_sub.receive(3, accept=not_sync)
+        time.sleep(2 * receiver.reorder_window_s)  # the three are out: the next is too late
+        send(build_livelink_packet(values, frame_number=59_990))
+        for i in range(3, 30):  # the rest at the app's rate (no earlier than real time)
+            time.sleep(max(0.0, start + (i - 2) / 60 - time.monotonic()))
+            send(build_livelink_packet(values, frame_number=60_000 + i))
+        frames += face_sub.receive(27, accept=not_sync)
+        stats = receiver.stats.snapshot()
     captures = np.array([f.capture_time for f in frames])
     # the offset may creep by 1 ms per second of clock drift over the burst's arrival span
     creep = 1e-3 * (frames[-1].receive_time - frames[0].receive_time) + 1e-6
-    np.testing.assert_allclose(np.diff(captures[1:]), 1 / 60, atol=creep)
-    assert captures[0] == pytest.approx(captures[-1] + 1 / 60, abs=creep)
+    np.testing.assert_allclose(np.diff(captures), 1 / 60, atol=creep)
     assert all(f.capture_time <= f.receive_time for f in frames)
-    assert fps > 0
+    timecode = stats["timecode"]
+    assert (timecode["reordered"], timecode["late"], timecode["trusted"]) == (2, 1, True)
+    assert stats["drops"] == {"late": 1}
+    assert receiver.stats.input_fps > 0
 
 
 def test_receiver_survives_fuzzed_datagrams(zmq_context, face_sub) -> None:
