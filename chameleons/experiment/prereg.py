@@ -18,6 +18,7 @@ from chameleons.experiment.blocks import balance_period
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES
 from chameleons.experiment.stats.power_render import power_markdown
+from chameleons.experiment.suggestions import FALLBACK_WORDS
 
 MEASURE_WORDS = {
     "accepted": "the number of robot suggestions the participant accepts in an interaction",
@@ -25,6 +26,9 @@ MEASURE_WORDS = {
 
 # How each suggestion rule picks its move, in the words of the study YAML's comments.
 SUGGESTION_RULE_WORDS = {
+    "expert_place": "each moving one item the participant has not declined from outside its "
+    "place in the expert order to its place (preferring a move that lowers the ranking's "
+    "error, then a move up, then the most important item)",
     "best_move": "each the single move of one item (up or down) that most lowers the "
     "ranking's error against the expert order",
     "up_only": "each moving the most important item below its expert position up to it",
@@ -108,8 +112,8 @@ def _design(study: Study, plan: PlanFacts, labels: dict[str, str]) -> str:
             f"Per interaction the participant ranks {study.item_sets.set_size} survival-task "
             f"items; the robot then makes {study.suggestions_per_interaction} suggestions, "
             f"{SUGGESTION_RULE_WORDS[study.suggestion_rule]}, each recorded as accepted or "
-            "declined and as *optimal* or *random* (a random upward move, made only when no "
-            "move lowers the error).",
+            "declined and as *optimal* or *random* (a random upward move, made only "
+            f"{FALLBACK_WORDS[study.suggestion_rule]}).",
             "",
             "Counterbalancing (the software's planner, verified independently): condition "
             "orders from a Williams design (each condition equally often in each position, "
