@@ -34,7 +34,10 @@ def test_analyze_json(tmp_path: Path) -> None:
     data = json.loads(out)
     assert set(data["measures"]) == {"accepted", "credibility", "likeability", "trust"}
     assert round(data["measures"]["accepted"]["friedman"]["chi2"], 2) == 0.25
-    assert data["measures"]["accepted"]["friedman"]["permutation"] is None
+    # The exact permutation p is there without asking (12 participants, 3 conditions).
+    permutation = data["measures"]["accepted"]["friedman"]["permutation"]
+    assert permutation["method"] == "exact"
+    assert data["measures"]["accepted"]["friedman"]["primary"]["p"] == permutation["p"]
 
 
 def test_analyze_text_latex_and_permutations(tmp_path: Path) -> None:
@@ -42,7 +45,7 @@ def test_analyze_text_latex_and_permutations(tmp_path: Path) -> None:
     code, out, _ = run("analyze", "--scores", str(scores), "--permutations", "200")
     assert code == 0
     assert "Friedman tests" in out
-    assert "permutation p (exact)" in out
+    assert "exact permutation p = 0.8981" in out
     code, out, _ = run("analyze", "--scores", str(scores), "--format", "latex")
     assert code == 0
     assert r"\multirow{3}*{Credibility}" in out

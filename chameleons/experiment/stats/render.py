@@ -13,6 +13,7 @@ from chameleons.experiment.stats.render_models import (
     effect_sizes_text,
     models_latex,
     models_text,
+    suggestion_mix_text,
 )
 from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
 
@@ -46,7 +47,7 @@ def render_text(
         name = f"{names.get(measure, measure)} ({ranges.get(measure, '')})"
         cells = "".join(f"{result.conditions[c].cell():<22}" for c in conditions)
         lines.append(f"{name.replace(' ()', ''):<34}{cells}")
-    lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
+    lines += ["", "Friedman tests (permutation p, exact where feasible; Kendall's W):"]
     lines += [f"  {m:<12} {_friedman_text(r)}" for m, r in analysis.measures.items()]
     lines += ["", "Post-hoc pairwise tests:"]
     for measure, result in analysis.measures.items():
@@ -54,7 +55,8 @@ def render_text(
             lines.append(f"  {measure:<12} {result.posthoc_note}")
         for test in result.posthoc:
             lines.append(f"  {measure:<12} {posthoc_text(test)}")
-    lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
+    lines += effect_sizes_text(analysis, labels) + suggestion_mix_text(analysis, labels)
+    lines += models_text(analysis, labels)
     lines += reliability_text(analysis, names)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     notes.append(f"Numbers are {RULE}.")
@@ -153,25 +155,22 @@ def posthoc_text(test: PairwiseTest) -> str:
 
 
 def _friedman_text(result: MeasureAnalysis) -> str:
+    """The permutation p first (exact at the paper's n), then the asymptotic one."""
     test = result.friedman
     if test.chi2 is None:
         return f"chi2 {UNDEFINED} (n = {test.n}; every participant's values tied or no data)"
-    text = (
-        f"chi2({test.df}) = {fmt(test.chi2, 2)}, p = {fmt_p(test.p)}, Bonferroni p = "
-        f"{fmt_p(result.p_bonferroni)}, Kendall's W = {fmt(test.kendall_w, 3)}, n = {test.n}"
+    text = f"chi2({test.df}) = {fmt(test.chi2, 2)}, Kendall's W = {fmt(test.kendall_w, 3)}, "
+    text += f"n = {test.n}; "
+    p, p_bonferroni, how = result.primary_p
+    perm = result.permutation
+    if perm is not None and perm.method != "exact":
+        how += f" ({perm.resamples} resamples, seed {perm.seed})"
+    if perm is None or perm.p is None:
+        return text + f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(result.p_bonferroni)}"
+    return text + (
+        f"{how} p = {fmt_p(p)}, Bonferroni p = {fmt_p(p_bonferroni)} (asymptotic chi-squared "
+        f"p = {fmt_p(test.p)}, Bonferroni {fmt_p(result.p_bonferroni)})"
     )
-    if result.permutation is not None:
-        perm = result.permutation
-        how = (
-            "exact"
-            if perm.method == "exact"
-            else f"Monte Carlo, {perm.resamples} resamples, seed {perm.seed}"
-        )
-        text += (
-            f"; permutation p ({how}) = {fmt_p(perm.p)}, Bonferroni "
-            f"{fmt_p(result.permutation_p_bonferroni)}"
-        )
-    return text
 
 
 def _mean_sd_tex(d: Descriptive) -> str:
