@@ -32,7 +32,9 @@ ACCEPTED = {
 
 
 def score_rows(seed: int = 0, trust_shift: float = 0.0) -> list[dict[str, Any]]:
-    """12 participants x 3 conditions; ``trust_shift`` makes copy's trust clearly higher."""
+    """12 participants x 3 conditions; ``trust_shift`` makes copy's trust clearly higher.
+    Scores are means of whole-number answers, as the default study's 12, 10 and 6 items
+    give them (anything else is refused as impossible)."""
     rng = np.random.default_rng(seed)
     rows = []
     for p in range(12):
@@ -43,12 +45,17 @@ def score_rows(seed: int = 0, trust_shift: float = 0.0) -> list[dict[str, Any]]:
                     "participant": str(p + 1),
                     "condition": condition,
                     "accepted": ACCEPTED[condition][p],
-                    "credibility": round(float(rng.uniform(2, 6)), 3),
-                    "likeability": round(float(rng.uniform(2, 6)), 3),
-                    "trust": round(float(rng.uniform(1, 3)) + bonus + p * 0.01, 3),
+                    "credibility": mean_of(rng.uniform(2, 6), 12),
+                    "likeability": mean_of(rng.uniform(2, 6), 10),
+                    "trust": mean_of(min(7.0, rng.uniform(1, 3) + bonus + p * 0.01), 6),
                 }
             )
     return rows
+
+
+def mean_of(value: float, items: int) -> float:
+    """The mean of ``items`` whole-number answers nearest ``value``."""
+    return round(float(value) * items) / items
 
 
 def column(rows: list[dict[str, Any]], measure: str) -> np.ndarray:

@@ -79,6 +79,16 @@ REFUSALS = [
     (4, "accepted", "2.5", "'2.5' is not a whole number"),
     (4, "credibility", "7.5", "'7.5' is outside 1..7 (the Credibility score"),
     (4, "likeability", "0", "'0' is outside 1..7"),
+    # A score is the mean of the scale's whole-number answers: 12 credibility items give
+    # multiples of 1/12 (53/12 = 4.4167), so 4.42 (a rounded or typed score) is impossible.
+    (
+        4,
+        "credibility",
+        "4.42",
+        "'4.42' is not a mean of 12 whole-number answers (the nearest are 53/12 = 4.4167 and "
+        "54/12 = 4.5000)",
+    ),
+    (4, "trust", "5.1", "'5.1' is not a mean of 6 whole-number answers"),
     (
         4,
         "condition",
@@ -109,6 +119,16 @@ def test_duplicate_participant_condition_rows_are_refused(tmp_path: Path) -> Non
     code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
     assert code == 1
     assert "lines 3 and 38: participant 1 has copy twice" in err
+
+
+def test_exported_means_are_on_the_grid(tmp_path: Path) -> None:
+    """The export writes a mean as Python's repr of the double (53/12 as 4.416666666666667,
+    4.5, 7): those pass, so does a mean written with a few more digits than the double."""
+    rows = score_rows()
+    rows[4]["credibility"] = repr(53 / 12)
+    rows[5]["trust"] = "4.16666666666666696272613990004"  # 25/6 to 30 digits
+    code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
+    assert code == 0, err
 
 
 def test_empty_and_na_cells_are_missing_not_refused(tmp_path: Path) -> None:

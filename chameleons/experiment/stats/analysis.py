@@ -280,7 +280,16 @@ def analyze(
         table.left_out,
         wilcoxon_rule,
         fitted,
-        [] if answers is None else scale_reliability(questionnaires, answers, table.participants),
+        []
+        if answers is None
+        else scale_reliability(
+            questionnaires,
+            answers,
+            table.participants,
+            conditions=view_conditions(rows, view),
+            condition_order=ordered,
+            seed=seed,
+        ),
         None if per_suggestion is None else suggestion_mix(per_suggestion, ordered, seed),
     )
 
@@ -297,6 +306,16 @@ def _with_effect_sizes(
 def _view_condition(row: Mapping[str, Any], view: View) -> str:
     planned = str(row.get("planned_condition") or "").strip()
     return planned if view == "as_planned" and planned else str(row.get("condition")).strip()
+
+
+def view_conditions(rows: Iterable[Mapping[str, Any]], view: View) -> dict[tuple[str, str], str]:
+    """(participant, position) -> the condition the view counts that interaction as."""
+    return {
+        (str(row.get("participant")).strip(), str(row.get("position")).strip()): (
+            _view_condition(row, view)
+        )
+        for row in rows
+    }
 
 
 def model_score_rows(

@@ -57,7 +57,7 @@ def render_text(
             lines.append(f"  {measure:<12} {posthoc_text(test)}")
     lines += effect_sizes_text(analysis, labels) + suggestion_mix_text(analysis, labels)
     lines += models_text(analysis, labels)
-    lines += reliability_text(analysis, names)
+    lines += reliability_text(analysis, names, labels)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
@@ -189,19 +189,35 @@ def _tex(text: str) -> str:
 
 
 def reliability_line(result: Reliability, title: str) -> str:
-    """``title: alpha = 0.81, 95% CI [0.70, 0.89] (n = 36 ratings, 12 items)``."""
-    counts = f"n = {result.n} complete ratings, {result.items} items"
+    """``title: alpha = 0.81, 95% CI [0.70, 0.89] (percentile bootstrap over participants;
+    n = 36 complete ratings from 12 participants, 12 items)``."""
+    who = f" from {result.participants} participants" if result.participants else ""
+    counts = f"n = {result.n} complete ratings{who}, {result.items} items"
     if result.alpha is None:
         return f"{title}: alpha {UNDEFINED} ({result.note}; {counts})"
     level = round(result.confidence * 100)
-    interval = f"{level}% CI [{fmt(result.ci_low, 2)}, {fmt(result.ci_high, 2)}]"
-    return f"{title}: alpha = {fmt(result.alpha, 2)}, {interval} ({counts})"
+    if result.ci_low is None or result.ci_high is None:
+        interval = f"no interval ({result.note})"
+    else:
+        interval = f"{level}% CI [{fmt(result.ci_low, 2)}, {fmt(result.ci_high, 2)}]"
+    return f"{title}: alpha = {fmt(result.alpha, 2)}, {interval} ({result.method}; {counts})"
 
 
-def reliability_text(analysis: Analysis, names: Mapping[str, str]) -> list[str]:
+def reliability_text(
+    analysis: Analysis, names: Mapping[str, str], labels: Mapping[str, str]
+) -> list[str]:
     if not analysis.reliability:
         return []
-    lines = ["", "Internal consistency (Cronbach's alpha, Feldt's interval; all ratings):"]
-    return lines + [
-        "  " + reliability_line(r, names.get(r.scale, r.scale)) for r in analysis.reliability
+    lines = [
+        "",
+        "Internal consistency (Cronbach's alpha): all ratings, with an interval that resamples",
+        "participants (their ratings are not independent); and per condition (one rating per",
+        "participant), with Feldt's interval:",
     ]
+    for result in analysis.reliability:
+        lines.append("  " + reliability_line(result, names.get(result.scale, result.scale)))
+        lines += [
+            "    " + reliability_line(c, labels.get(c.condition, c.condition))
+            for c in result.by_condition
+        ]
+    return lines

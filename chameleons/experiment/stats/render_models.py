@@ -37,10 +37,12 @@ def interval_text(interval: Interval, digits: int = 2) -> str:
         return interval.note or UNDEFINED
     if interval.ci_low is None or interval.ci_high is None:
         return f"{_num(interval.estimate, digits)} (no interval: {interval.note})"
-    return (
+    text = (
         f"{_num(interval.estimate, digits)} [{_num(interval.ci_low, digits)}, "
         f"{_num(interval.ci_high, digits)}]"
     )
+    return text + (" (zero-width interval: not a measure of precision)" if interval.degenerate
+                   else "")  # fmt: skip
 
 
 def effect_sizes_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
@@ -168,7 +170,8 @@ def effect_sizes_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[st
         r"\begin{table}[]",
         r"    \centering",
         r"    \caption{Effect sizes with 95\% bootstrap confidence intervals (resampling "
-        r"participants).}",
+        r"participants). $^\dagger$: zero-width interval (at least 95\% of the resamples gave "
+        r"the same value), not a measure of precision.}",
         r"    \begin{tabular}{ |l|l|c| }",
         r"    \hline",
         r"    Measure & Effect & Estimate [95\% CI] \\",
@@ -224,10 +227,11 @@ def _tex_interval(interval: Interval, digits: int = 2) -> str:
         return "--"
     if interval.ci_low is None or interval.ci_high is None:
         return f"${_num(interval.estimate, digits)}$"
-    return (
+    text = (
         f"${_num(interval.estimate, digits)}$ [${_num(interval.ci_low, digits)}$, "
         f"${_num(interval.ci_high, digits)}$]"
     )
+    return text + ("$^\\dagger$" if interval.degenerate else "")
 
 
 def _tex_coefficient(c: Coefficient) -> str:

@@ -35,9 +35,12 @@ def test_database_mode_matches_the_exported_scores(sqlite_template: Path, tmp_pa
         assert from_db.output == from_file.output
     # Both read the item answers (the file mode from questionnaire.csv beside scores.csv).
     text = runner.invoke(analyze_command, []).output
-    assert "Internal consistency (Cronbach's alpha, Feldt's interval; all ratings):" in text
+    assert "Internal consistency (Cronbach's alpha): all ratings, with an interval" in text
     assert "  Trust: alpha = " in text
-    assert "(n = 36 complete ratings, 6 items)" in text
+    # 36 ratings from 12 people: the pooled interval resamples people; per condition Feldt.
+    assert "(percentile bootstrap over participants; n = 36 complete ratings from 12 " in text
+    assert "    Copy: alpha = " in text
+    assert "(Feldt; n = 12 complete ratings from 12 participants, 6 items)" in text
     # Both read the per-suggestion rows (the file mode from suggestions.csv beside scores.csv).
     models = json.loads(runner.invoke(analyze_command, ["--format", "json"]).output)["models"]
     assert models["acceptance"]["n_observations"] == 108
