@@ -15,7 +15,7 @@ from chameleons.experiment.stats.render_models import (
     models_text,
     suggestion_mix_text,
 )
-from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
+from chameleons.experiment.stats.rounding import RULE, fmt, p_is
 
 MEASURE_LABELS = {
     "accepted": "Accepted robot suggestions",
@@ -149,7 +149,7 @@ def posthoc_text(test: PairwiseTest) -> str:
         return f"{test.a} vs {test.b}: undefined ({test.note}), n = {test.n}"
     return (
         f"{test.a} vs {test.b}: V = {fmt(test.v, 1)}, W = {fmt(test.statistic, 1)}, "
-        f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(test.p_bonferroni)}, n = {test.n}"
+        f"p {p_is(test.p)}, Bonferroni p {p_is(test.p_bonferroni)}, n = {test.n}"
         f" ({test.method}{'; ' + test.note if test.note else ''})"
     )
 
@@ -166,10 +166,10 @@ def _friedman_text(result: MeasureAnalysis) -> str:
     if perm is not None and perm.method != "exact":
         how += f" ({perm.resamples} resamples, seed {perm.seed})"
     if perm is None or perm.p is None:
-        return text + f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(result.p_bonferroni)}"
+        return text + f"p {p_is(test.p)}, Bonferroni p {p_is(result.p_bonferroni)}"
     return text + (
-        f"{how} p = {fmt_p(p)}, Bonferroni p = {fmt_p(p_bonferroni)} (asymptotic chi-squared "
-        f"p = {fmt_p(test.p)}, Bonferroni {fmt_p(result.p_bonferroni)})"
+        f"{how} p {p_is(p)}, Bonferroni p {p_is(p_bonferroni)} (asymptotic chi-squared "
+        f"p {p_is(test.p)}, Bonferroni p {p_is(result.p_bonferroni)})"
     )
 
 

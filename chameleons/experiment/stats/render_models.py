@@ -9,7 +9,7 @@ from chameleons.experiment.stats.analysis import Analysis
 from chameleons.experiment.stats.effect_sizes import Interval
 from chameleons.experiment.stats.friedman_test import PermutationResult
 from chameleons.experiment.stats.models import Coefficient, ModelResult, TermTest
-from chameleons.experiment.stats.rounding import fmt, fmt_p
+from chameleons.experiment.stats.rounding import fmt, fmt_p, p_is
 from chameleons.experiment.stats.suggestion_mix import SuggestionMix
 
 UNDEFINED = "undefined"
@@ -113,9 +113,9 @@ def mix_test_text(mix: SuggestionMix) -> str:
     test = mix.friedman
     if test.chi2 is None:
         return f"Friedman test undefined (n = {test.n}; every participant's counts tied)"
-    text = f"Friedman chi2({test.df}) = {_num(test.chi2)}, p = {_p(test.p)}"
+    text = f"Friedman chi2({test.df}) = {_num(test.chi2)}, p {p_is(test.p)}"
     if mix.permutation is not None:
-        text += f", {permutation_label(mix.permutation)} p = {_p(mix.permutation.p)}"
+        text += f", {permutation_label(mix.permutation)} p {p_is(mix.permutation.p)}"
     return text + f", n = {test.n}"
 
 
