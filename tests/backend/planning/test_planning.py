@@ -84,6 +84,10 @@ def test_preregistration_from_a_study_file_with_power(tmp_path: Path) -> None:
     assert "- Plan seed: 7" in text
     assert "| 12 |" in text  # the power table
     assert "Bonferroni over the 4 measures" in text
+    # The analysis plan: exact permutation p; the acceptance model's total effect (no kind).
+    assert "its p-value is the exact permutation p" in text
+    assert "`accepted ~ condition + position + item set` (the condition's total effect)" in text
+    assert "item set + kind" not in text
     # The design states the study's own suggestion rule (the default: the paper's sentence
     # read literally, each misplaced item moved to its place, random only when none is).
     assert "to its place (preferring a move that lowers the ranking's error" in text
