@@ -14,6 +14,12 @@ flow does. Counted per rule:
 - ``optimal_down``: of the optimal ones, those moving the item down;
 - ``optimal_no_gain``: of the optimal ones, those that do not lower the error score;
 - ``mean_final_error``: the error score after the last suggestion, per interaction.
+
+The second table is why the acceptance model leaves the kind out: under every rule the
+share of random suggestions depends on how often the participant accepts (under
+expert_place and best_move it grows: accepting reaches the expert order sooner; under
+up_only it shrinks: declines block the moves up), so a condition whose participants accept
+more gets a different mix of suggestions (the kind is a mediator).
 """
 
 from __future__ import annotations
@@ -100,5 +106,21 @@ def main() -> None:  # pragma: no cover - a report for the docs
         )
 
 
+def random_share_by_acceptance(
+    rule: Rule, probabilities: tuple[float, ...] = (0.3, 0.5, 0.7), interactions: int = 20_000
+) -> dict[float, float]:
+    return {
+        p: audit(rule, interactions, accept_probability=p).random_share for p in probabilities
+    }
+
+
+def main_mediator() -> None:  # pragma: no cover - a report for the docs
+    print("\nrandom share by acceptance probability")
+    for rule in RULES:
+        shares = random_share_by_acceptance(rule)
+        print(f"{rule:<13} " + "  ".join(f"p={p:.1f}: {v:5.1%}" for p, v in shares.items()))
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
+    main_mediator()
