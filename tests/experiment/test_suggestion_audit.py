@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from chameleons.experiment.suggestion_audit import audit, random_share_by_acceptance
+from chameleons.experiment.suggestions import RULES
 
 
 def test_only_the_default_rule_never_falls_back_while_an_item_not_declined_is_misplaced():
@@ -31,8 +32,7 @@ def test_the_random_share_depends_on_acceptance_under_every_rule() -> None:
     """The kind is a mediator: under expert_place and best_move accepting more reaches the
     expert order sooner and then the robot falls back to random suggestions; under up_only
     declining more blocks the moves up and the robot falls back sooner."""
-    shares = {r: random_share_by_acceptance(r, (0.2, 0.8), interactions=2000)
-              for r in ("expert_place", "best_move", "up_only")}  # fmt: skip
+    shares = {r: random_share_by_acceptance(r, (0.2, 0.8), interactions=2000) for r in RULES}
     assert shares["expert_place"][0.8] > shares["expert_place"][0.2] + 0.03
     assert shares["best_move"][0.8] > shares["best_move"][0.2] + 0.03
     assert shares["up_only"][0.8] < shares["up_only"][0.2] - 0.1
