@@ -278,7 +278,7 @@ def suggestions_table(spec: StudySpec) -> TableSpec:
                 "to_rank",
                 "integer",
                 "Rank the robot proposed (above from_rank, or below it when an optimal "
-                "suggestion moves an item down to its place).",
+                "suggestion moves an item down).",
             ),
             Column(
                 "kind",

@@ -106,21 +106,20 @@ def permutation_p(
 
 def _exact_p(doubled: list[tuple[int, ...]], observed: int) -> float | None:
     """Convolve the null distribution of the rank-sum vector block by block on a grid of
-    the first k - 1 (doubled) rank sums; the last is fixed by the total. ``None`` when the
-    grid work would be too large (then Monte Carlo is used)."""
+    the first k - 1 (doubled) rank sums; the last is fixed by the total. The grid grows
+    with the sums reached so far (block i reaches at most i times the largest rank).
+    ``None`` when the work would be too large (then Monte Carlo is used)."""
     n, k = len(doubled), len(doubled[0])
     size = 2 * k * n + 1
     if size ** (k - 1) * factorial(k) * n > MAX_EXACT_WORK:
         return None
-    grid = np.zeros((size,) * (k - 1))
-    grid[(0,) * (k - 1)] = 1.0
+    grid = np.ones((1,) * (k - 1))
     for block in doubled:
-        following = np.zeros_like(grid)
+        reach = grid.shape[0] - 1
+        following = np.zeros((reach + max(block) + 1,) * (k - 1))
         for arrangement, ways in Counter(itertools.permutations(block)).items():
-            shift = arrangement[:-1]
-            target = tuple(slice(s, size) for s in shift)
-            source = tuple(slice(0, size - s) for s in shift)
-            following[target] += grid[source] * (ways / factorial(k))
+            target = tuple(slice(s, s + reach + 1) for s in arrangement[:-1])
+            following[target] += grid * (ways / factorial(k))
         grid = following
     sums = np.indices(grid.shape)
     last = n * k * (k + 1) - sums.sum(axis=0)  # each block's doubled ranks add to k(k+1)
