@@ -131,6 +131,30 @@ def test_repeated_ratings_do_not_narrow_the_pooled_interval() -> None:
     assert low < (once.alpha or 0) < high
 
 
+def test_cluster_interval_equals_a_slow_bootstrap_of_cronbach_alpha() -> None:
+    """The interval's per-participant sums give, resample by resample, the alpha of the
+    resampled cases themselves: a slow loop that builds each resample and calls
+    cronbach_alpha (the same draws of participants) gives the same interval."""
+    import zlib
+
+    cases = correlated_cases(30, 5, seed=4)
+    who = [f"P{i % 11}" for i in range(30)]  # 11 participants with 2 or 3 ratings each
+    low, high, note = cluster_bootstrap_interval(cases, who, resamples=400, seed=7, key="k")
+    names = sorted(set(who))
+    rng = np.random.default_rng([7, zlib.crc32(b"alpha:k")])
+    draws = rng.integers(0, len(names), size=(400, len(names)))
+    slow = []
+    for draw in draws:
+        chosen = [case for j in draw for case, w in zip(cases, who, strict=True)
+                  if w == names[j]]  # fmt: skip
+        alpha = cronbach_alpha("s", list("abcde"), chosen).alpha
+        if alpha is not None:
+            slow.append(alpha)
+    assert (low, high) == pytest.approx(tuple(np.quantile(slow, [0.025, 0.975])), abs=1e-9)
+    assert len(slow) == 400
+    assert note == ""
+
+
 def test_alpha_per_condition_uses_one_rating_per_participant_with_feldt() -> None:
     study = load_default_study()
     trust: Questionnaire = study.questionnaire("trust")

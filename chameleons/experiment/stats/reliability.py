@@ -118,11 +118,6 @@ def cronbach_alpha(
     return Reliability(scale, k, n, alpha, low, high, confidence, deleted)
 
 
-def _alpha_of_cases(data: np.ndarray) -> float:
-    alpha = alpha_from_covariance(np.cov(data, rowvar=False, ddof=1)) if len(data) > 1 else None
-    return math.nan if alpha is None else alpha
-
-
 def cluster_bootstrap_interval(
     cases: Sequence[Sequence[float]],
     clusters: Sequence[str],
@@ -134,17 +129,36 @@ def cluster_bootstrap_interval(
 ) -> tuple[float | None, float | None, str]:
     """Percentile interval of alpha resampling the ``clusters`` (participants) with
     replacement, each with all its cases; the generator is seeded from ``(seed, key)``.
-    Returns (low, high, note); resamples whose alpha is undefined are left out (counted)."""
+    Returns (low, high, note); resamples whose alpha is undefined are left out (counted).
+
+    Every resample's alpha comes from per-participant sums (of each item, of its squares,
+    of the sum score and of its square), weighted by how often the participant was drawn:
+    the same numbers as the covariance of the resampled cases, without building them."""
     data = np.asarray(cases, dtype=float)
     names = sorted(set(clusters))
     if len(names) < 2:
         return None, None, "needs two participants or more"
-    rows = {name: [i for i, c in enumerate(clusters) if c == name] for name in names}
+    index = np.array([names.index(c) for c in clusters])
+    totals = data.sum(axis=1)
+    per = np.zeros((len(names), 2 * data.shape[1] + 3))
+    k = data.shape[1]
+    np.add.at(per[:, :k], index, data)
+    np.add.at(per[:, k : 2 * k], index, data**2)
+    np.add.at(per[:, 2 * k], index, totals)
+    np.add.at(per[:, 2 * k + 1], index, totals**2)
+    np.add.at(per[:, 2 * k + 2], index, 1.0)
     rng = np.random.default_rng([seed, zlib.crc32(f"alpha:{key}".encode())])
     draws = rng.integers(0, len(names), size=(resamples, len(names)))
-    values = np.array(
-        [_alpha_of_cases(data[[i for j in draw for i in rows[names[j]]]]) for draw in draws]
-    )
+    weights = np.zeros((resamples, len(names)))
+    np.add.at(weights, (np.arange(resamples)[:, None], draws), 1.0)
+    sums = weights @ per
+    n = sums[:, 2 * k + 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        item_variances = (sums[:, k : 2 * k] - sums[:, :k] ** 2 / n[:, None]) / (n - 1)[:, None]
+        trace = item_variances.sum(axis=1)
+        total = (sums[:, 2 * k + 1] - sums[:, 2 * k] ** 2 / n) / (n - 1)
+        values = k / (k - 1) * (1.0 - trace / total)
+    values[(n < 2) | ~(total > NO_VARIANCE * np.maximum(trace, 1.0))] = np.nan
     finite = values[np.isfinite(values)]
     if len(finite) < resamples / 2:
         return None, None, "alpha undefined in most resamples"
