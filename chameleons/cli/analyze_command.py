@@ -181,7 +181,7 @@ def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | No
     type=click.IntRange(min=1),
     default=None,
     help="The Friedman tests' permutation p-values are exact when feasible (3 conditions up "
-    "to about 100 participants); otherwise Monte Carlo with N resamples (default 10000).",
+    "to 64 participants, 4 up to 8); otherwise Monte Carlo with N resamples (default 10000).",
 )
 @click.option(
     "--view",

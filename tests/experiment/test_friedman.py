@@ -142,8 +142,8 @@ def test_monte_carlo_is_seeded_and_close_to_exact(monkeypatch: pytest.MonkeyPatc
 
 
 # The textbook table of exact critical values of Friedman's statistic (the smallest value
-# whose upper tail probability is at most alpha; Friedman 1937, as reprinted e.g. in Siegel
-# & Castellan 1988 and Zar's Biostatistical Analysis), k = 3 and k = 4 conditions.
+# whose upper tail probability is at most alpha), k = 3 and k = 4 conditions, in the copy
+# at https://fr.scribd.com/document/464088360/Tabla-de-Friedman-pdf.
 CRITICAL_K3 = {  # n: (5 %, 1 %)
     3: (6.000, None), 4: (6.500, 8.000), 5: (6.400, 8.400), 6: (7.000, 9.000),
     7: (7.143, 8.857), 8: (6.250, 9.000), 9: (6.222, 9.556), 10: (6.200, 9.600),

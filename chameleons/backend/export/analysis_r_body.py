@@ -102,8 +102,9 @@ all_orders <- function(values) {
   })
   do.call(rbind, rows)
 }
+# The Python analysis's limit (friedman_test.exact_work), so both compute the same kind of p.
 exact_feasible <- function(n, k) {
-  (2 * k * n + 1)^(k - 1) * factorial(k) * n <= 3e8
+  sum((seq_len(n) * 2 * k + 1)^(k - 1)) * factorial(k) <= 2e7
 }
 friedman_permutation_p <- function(values) {
   n <- nrow(values)
