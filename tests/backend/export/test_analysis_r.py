@@ -19,14 +19,14 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from sqlalchemy import select
+from sqlalchemy import Engine
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.dropouts.service import exclude
+from chameleons.backend.db import build_sessionmaker
 from chameleons.backend.export.analysis_r import R_TYPES, analysis_script
 from chameleons.backend.export.columns import TABLE_NAMES, TableSpec, table_specs
 from chameleons.backend.export.service import ExportRequest, export_to_directory
-from chameleons.backend.models import Interaction, Session, Study
+from chameleons.backend.models import Study
 from chameleons.cli.analyze_command import (
     read_answers_beside,
     read_scores_csv,
@@ -37,6 +37,7 @@ from chameleons.experiment.stats import Analysis, View, analyze
 from chameleons.experiment.stats.effect_sizes import BootstrapOptions
 from chameleons.experiment.stats.measures import study_measures
 from chameleons.experiment.study import load_default_study
+from tests.backend.analysis.test_page_from_export import set_up
 from tests.support.factories import create_study, populate
 
 RSCRIPT = shutil.which("Rscript")
@@ -288,27 +289,12 @@ def test_r_runs_on_a_one_participant_export(db_session: DbSession, tmp_path: Pat
 
 @needs_r
 @pytest.mark.parametrize("view", ["as_planned", "as_run"])
-def test_r_agrees_with_python_in_both_views(
-    db_session: DbSession, tmp_path: Path, view: View
-) -> None:
+def test_r_agrees_with_python_in_both_views(engine: Engine, tmp_path: Path, view: View) -> None:
     """Twelve participants, copy clearly better: P003 excluded, P007's second interaction
     ran the first's condition (a deviation), P012 ended early during interaction 3."""
-    data = populate(db_session, 12, seed=4, effects={"copy": 0.8})
-    exclude(db_session, data.study_id, "P003", "fell asleep")
-    sessions = dict(zip(data.codes, data.session_ids, strict=True))
-    p7 = {i.position: i for i in db_session.scalars(
-        select(Interaction).where(Interaction.session_id == sessions["P007"])
-    )}  # fmt: skip
-    p7[2].condition = p7[1].condition
-    ended = db_session.get(Session, sessions["P012"])
-    assert ended is not None
-    ended.state, ended.end_reason = "ended", "technical_failure"
-    last = db_session.scalars(
-        select(Interaction).where(Interaction.session_id == ended.id, Interaction.position == 3)
-    ).one()
-    last.state = "negotiation"
-    db_session.flush()
-    export_to_directory(db_session, ExportRequest(), tmp_path)
+    study_id = set_up(engine, {"copy": 0.8})
+    with build_sessionmaker(engine)() as db:
+        export_to_directory(db, ExportRequest(study_id=study_id), tmp_path)
     stdout = run_r(tmp_path, view)
     ours = python_analysis(tmp_path, view)
     assert "Excluded: P003" in stdout
