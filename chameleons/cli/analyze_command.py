@@ -180,7 +180,8 @@ def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | No
     "--permutations",
     type=click.IntRange(min=1),
     default=None,
-    help="Add permutation p-values: exact when feasible, else Monte Carlo with N resamples.",
+    help="The Friedman tests' permutation p-values are exact when feasible (3 conditions up "
+    "to 64 participants, 4 up to 8); otherwise Monte Carlo with N resamples (default 10000).",
 )
 @click.option(
     "--view",
@@ -224,9 +225,10 @@ def study_for_scores(scores: Path, config: Path | None) -> tuple[Study, str | No
     "--models/--no-models",
     default=True,
     show_default=True,
-    help="Fit the regression models (GEE for acceptance, mixed models for the scores). "
-    "With --scores, the acceptance model reads suggestions.csv and interactions.csv "
-    "from the same directory.",
+    help="Fit the regression models (GEE for acceptance: the condition's total effect, and "
+    "as a secondary the same adjusted for the suggestion kind; mixed models for the "
+    "scores). With --scores, the acceptance model and the suggestion mix read "
+    "suggestions.csv and interactions.csv from the same directory.",
 )
 @click.option(
     "--reference",
@@ -262,7 +264,7 @@ def analyze_command(
         if note:
             click.echo(f"Note: {note}.", err=True)
         row_name, first_row = "line", 2  # a CSV file's data start on its second line
-        suggestions = read_suggestions_beside(scores_path) if models else None
+        suggestions = read_suggestions_beside(scores_path)  # the models and the mix use them
         answers = read_answers_beside(scores_path)
     else:
         spec, rows, suggestions, answers = database_score_rows(study_id, include_rehearsal)

@@ -12,7 +12,7 @@ from chameleons.experiment.procedure import Procedure
 
 ItemType = Literal["differential", "agreement", "text", "choice", "robot"]
 Phase = Literal["before", "interaction", "final"]
-SuggestionRule = Literal["best_move", "up_only"]
+SuggestionRule = Literal["expert_place", "best_move", "up_only"]
 NamePairing = Literal["per_actor", "per_interaction"]
 FacePairing = Literal["independent", "per_actor"]
 

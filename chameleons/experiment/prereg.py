@@ -18,6 +18,7 @@ from chameleons.experiment.blocks import balance_period
 from chameleons.experiment.model import Study
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES
 from chameleons.experiment.stats.power_render import power_markdown
+from chameleons.experiment.suggestions import FALLBACK_WORDS
 
 MEASURE_WORDS = {
     "accepted": "the number of robot suggestions the participant accepts in an interaction",
@@ -25,6 +26,9 @@ MEASURE_WORDS = {
 
 # How each suggestion rule picks its move, in the words of the study YAML's comments.
 SUGGESTION_RULE_WORDS = {
+    "expert_place": "each moving one item the participant has not declined from outside its "
+    "place in the expert order to its place (preferring a move that lowers the ranking's "
+    "error, then a move up, then the most important item)",
     "best_move": "each the single move of one item (up or down) that most lowers the "
     "ranking's error against the expert order",
     "up_only": "each moving the most important item below its expert position up to it",
@@ -108,8 +112,8 @@ def _design(study: Study, plan: PlanFacts, labels: dict[str, str]) -> str:
             f"Per interaction the participant ranks {study.item_sets.set_size} survival-task "
             f"items; the robot then makes {study.suggestions_per_interaction} suggestions, "
             f"{SUGGESTION_RULE_WORDS[study.suggestion_rule]}, each recorded as accepted or "
-            "declined and as *optimal* or *random* (a random upward move, made only when no "
-            "move lowers the error).",
+            "declined and as *optimal* or *random* (a random upward move, made only "
+            f"{FALLBACK_WORDS[study.suggestion_rule]}).",
             "",
             "Counterbalancing (the software's planner, verified independently): condition "
             "orders from a Williams design (each condition equally often in each position, "
@@ -188,22 +192,32 @@ def _analysis(study: Study, alpha: float, labels: dict[str, str], reference: str
             "Primary (as the seed paper):",
             "",
             "- Per measure, a Friedman test across the conditions with the tie correction of "
-            "R's `friedman.test`; an undefined statistic (every participant's values tied) "
-            "counts as not significant.",
+            "R's `friedman.test`; its p-value is the exact permutation p (the null distribution "
+            "of the rank sums enumerated; Monte Carlo with 10 000 seeded resamples only where "
+            "that is too costly), the asymptotic chi-squared p reported beside it; an undefined "
+            "statistic (every participant's values tied) counts as not significant.",
             f"- Bonferroni over the {m} measures: p x {m}, capped at 1; alpha = {alpha:g}.",
-            f"- Post-hoc, only where the corrected Friedman p < {alpha:g}: Wilcoxon signed-rank "
-            f"tests for the {pairs} pairs (p as R's `wilcox.test`), Bonferroni over the pairs.",
+            f"- Post-hoc, only where the corrected permutation p < {alpha:g}: Wilcoxon "
+            f"signed-rank tests for the {pairs} pairs (p as R's `wilcox.test`), Bonferroni over "
+            "the pairs.",
             "- Effect sizes for every measure and pair, whatever the tests say: Kendall's W, the "
-            "matched-pairs rank-biserial correlation and the median of the paired differences, "
-            f"each with a 95% percentile bootstrap interval ({DEFAULT_RESAMPLES} resamples of "
-            "participants, seed 0).",
+            "matched-pairs rank-biserial correlation (from the signed-rank test's V) and the "
+            "median of the paired differences, each with a 95% percentile bootstrap interval "
+            f"({DEFAULT_RESAMPLES} resamples of participants, seed 0); an interval of zero "
+            "width is reported as such, not as precision.",
+            "- Cronbach's alpha per questionnaire: over all ratings with a bootstrap interval "
+            "that resamples participants, and per condition with Feldt's interval.",
             "",
             "Secondary:",
             "",
             "- Acceptance of each suggestion: logistic GEE with an exchangeable working "
             "correlation within participant, bias-reduced sandwich standard errors; "
-            f"`accepted ~ condition + position + item set + kind`, condition compared with "
-            f"{labels.get(reference, reference)}; joint Wald test of condition.",
+            "`accepted ~ condition + position + item set` (the condition's total effect), "
+            f"condition compared with {labels.get(reference, reference)}; joint Wald test of "
+            "condition. The suggestion kind (optimal or random fallback) depends on the "
+            "participant's earlier decisions, a mediator: the model adjusted for it is "
+            "reported as a labelled secondary, and the mix of kinds per condition is reported "
+            "with a Friedman test on each participant's number of random suggestions.",
             "- Each questionnaire score: linear mixed model with a random intercept per "
             "participant, `score ~ condition + position`, REML; joint test of condition as an F "
             "test with the within-participant residual degrees of freedom.",

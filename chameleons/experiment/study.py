@@ -24,6 +24,7 @@ from chameleons.experiment.lines import line_index, line_of
 from chameleons.experiment.model import Study
 from chameleons.experiment.procedure import procedure_config, read_procedure
 from chameleons.experiment.reader import SLUG, Reader
+from chameleons.experiment.suggestions import DEFAULT_RULE, RULES
 from chameleons.experiment.wording import duplicate_wording
 from chameleons.experiment.yaml_limits import ExpansionError, expanded_size
 
@@ -50,7 +51,7 @@ TOP_LEVEL_OPTIONAL = [
     "languages",
     "default_language",
 ]
-SUGGESTION_RULES = ("best_move", "up_only")
+SUGGESTION_RULES = RULES  # the first is the default of a new study file
 # A snapshot stored before the rule was a setting was collected under the up-only rule.
 LEGACY_SUGGESTION_RULE = "up_only"
 
@@ -252,7 +253,7 @@ def _read_parts(
 
 
 def _suggestion_rule(reader: Reader, top: Mapping[str, Any], snapshot: bool) -> str:
-    default = LEGACY_SUGGESTION_RULE if snapshot else SUGGESTION_RULES[0]
+    default = LEGACY_SUGGESTION_RULE if snapshot else DEFAULT_RULE
     rule = top.get("suggestion_rule", default)
     if rule not in SUGGESTION_RULES:
         reader.problem("suggestion_rule", f"must be one of {list(SUGGESTION_RULES)}, got {rule!r}")

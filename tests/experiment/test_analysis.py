@@ -13,6 +13,7 @@ from chameleons.experiment.stats import (
     AnalysisError,
     analyze,
     error_score_table,
+    permutation_p,
     render_latex,
     render_text,
     score_questionnaire,
@@ -31,7 +32,9 @@ ACCEPTED = {
 
 
 def score_rows(seed: int = 0, trust_shift: float = 0.0) -> list[dict[str, Any]]:
-    """12 participants x 3 conditions; ``trust_shift`` makes copy's trust clearly higher."""
+    """12 participants x 3 conditions; ``trust_shift`` makes copy's trust clearly higher.
+    Scores are means of whole-number answers, as the default study's 12, 10 and 6 items
+    give them (anything else is refused as impossible)."""
     rng = np.random.default_rng(seed)
     rows = []
     for p in range(12):
@@ -42,12 +45,17 @@ def score_rows(seed: int = 0, trust_shift: float = 0.0) -> list[dict[str, Any]]:
                     "participant": str(p + 1),
                     "condition": condition,
                     "accepted": ACCEPTED[condition][p],
-                    "credibility": round(float(rng.uniform(2, 6)), 3),
-                    "likeability": round(float(rng.uniform(2, 6)), 3),
-                    "trust": round(float(rng.uniform(1, 3)) + bonus + p * 0.01, 3),
+                    "credibility": mean_of(rng.uniform(2, 6), 12),
+                    "likeability": mean_of(rng.uniform(2, 6), 10),
+                    "trust": mean_of(min(7.0, rng.uniform(1, 3) + bonus + p * 0.01), 6),
                 }
             )
     return rows
+
+
+def mean_of(value: float, items: int) -> float:
+    """The mean of ``items`` whole-number answers nearest ``value``."""
+    return round(float(value) * items) / items
 
 
 def column(rows: list[dict[str, Any]], measure: str) -> np.ndarray:
@@ -151,7 +159,57 @@ def test_text_rendering_has_the_table_and_the_tests() -> None:
     assert "Natural movement" in text
     assert "1.0, 1.4 ± 0.9" in text
     assert "chi2(2) = 0.25" in text
-    assert "permutation p (exact)" in text
+    assert "exact permutation p = " in text
+
+
+def test_the_exact_permutation_p_is_reported_by_default_and_gates_the_posthoc_tests() -> None:
+    """At the paper's 12 participants the asymptotic chi-squared p is rough: the exact
+    permutation p is computed without being asked for, leads the report, and decides the
+    post-hoc tests. Here credibility's asymptotic p (0.0498) is below 0.05 and its exact p
+    (0.0580) is not."""
+    rows = score_rows()
+    analysis = analyze(rows, measures=["credibility"])
+    credibility = analysis.measures["credibility"]
+    assert credibility.permutation is not None
+    assert credibility.permutation.method == "exact"
+    # The exact distribution itself is checked against SciPy's enumeration, brute force and
+    # the published critical values in test_friedman.py.
+    assert credibility.permutation.p == permutation_p(column(rows, "credibility").tolist()).p
+    assert credibility.friedman.p is not None
+    assert credibility.permutation.p is not None
+    assert credibility.friedman.p < 0.05 < credibility.permutation.p
+    assert credibility.posthoc == []
+    assert credibility.posthoc_note == "not done: corrected Friedman p (exact permutation) >= 0.05"
+    data = analysis.to_dict()["measures"]["credibility"]["friedman"]
+    assert data["primary"] == {
+        "p": credibility.permutation.p, "p_bonferroni": credibility.permutation.p,
+        "method": "exact permutation",
+    }  # fmt: skip
+    line = next(x for x in render_text(analysis).splitlines() if x.strip().startswith("cred"))
+    assert line.index("exact permutation p = 0.0580") < line.index("asymptotic chi-squared")
+
+
+@pytest.mark.parametrize(
+    ("participants", "warned"),
+    [(1, ["only 1 participant", "too few"]), (2, ["too few"]), (3, ["too few"]), (4, [])],
+)
+def test_tiny_samples_are_warned_about(participants: int, warned: list[str]) -> None:
+    """One participant gives W = 1 whatever they answered; below 4 participants no data can
+    reach p < 0.05 / 4 with three conditions (the smallest exact p is 6^(1 - n))."""
+    rows = [r for r in score_rows() if int(r["participant"]) <= participants]
+    analysis = analyze(rows, measures=["accepted", "trust"])
+    trust = analysis.measures["trust"]
+    notes = " ".join(trust.notes)
+    for phrase in warned:
+        assert phrase in notes
+    if not warned:
+        assert "too few" not in notes
+        assert "only 1" not in notes
+    if participants == 1:
+        assert trust.friedman.kendall_w == 1.0
+        assert "Kendall's W is 1 (or undefined) whatever the answers" in render_text(analysis)
+    if participants == 3:
+        assert "the smallest possible exact p is 0.0278" in notes
 
 
 def test_bad_rows_are_refused_readably() -> None:

@@ -34,7 +34,10 @@ def test_analyze_json(tmp_path: Path) -> None:
     data = json.loads(out)
     assert set(data["measures"]) == {"accepted", "credibility", "likeability", "trust"}
     assert round(data["measures"]["accepted"]["friedman"]["chi2"], 2) == 0.25
-    assert data["measures"]["accepted"]["friedman"]["permutation"] is None
+    # The exact permutation p is there without asking (12 participants, 3 conditions).
+    permutation = data["measures"]["accepted"]["friedman"]["permutation"]
+    assert permutation["method"] == "exact"
+    assert data["measures"]["accepted"]["friedman"]["primary"]["p"] == permutation["p"]
 
 
 def test_analyze_text_latex_and_permutations(tmp_path: Path) -> None:
@@ -42,7 +45,7 @@ def test_analyze_text_latex_and_permutations(tmp_path: Path) -> None:
     code, out, _ = run("analyze", "--scores", str(scores), "--permutations", "200")
     assert code == 0
     assert "Friedman tests" in out
-    assert "permutation p (exact)" in out
+    assert "exact permutation p = 0.8981" in out
     code, out, _ = run("analyze", "--scores", str(scores), "--format", "latex")
     assert code == 0
     assert r"\multirow{3}*{Credibility}" in out
@@ -76,6 +79,16 @@ REFUSALS = [
     (4, "accepted", "2.5", "'2.5' is not a whole number"),
     (4, "credibility", "7.5", "'7.5' is outside 1..7 (the Credibility score"),
     (4, "likeability", "0", "'0' is outside 1..7"),
+    # A score is the mean of the scale's whole-number answers: 12 credibility items give
+    # multiples of 1/12 (53/12 = 4.4167), so 4.42 (a rounded or typed score) is impossible.
+    (
+        4,
+        "credibility",
+        "4.42",
+        "'4.42' is not a mean of 12 whole-number answers (the nearest are 53/12 = 4.4167 and "
+        "54/12 = 4.5000)",
+    ),
+    (4, "trust", "5.1", "'5.1' is not a mean of 6 whole-number answers"),
     (
         4,
         "condition",
@@ -106,6 +119,16 @@ def test_duplicate_participant_condition_rows_are_refused(tmp_path: Path) -> Non
     code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
     assert code == 1
     assert "lines 3 and 38: participant 1 has copy twice" in err
+
+
+def test_exported_means_are_on_the_grid(tmp_path: Path) -> None:
+    """The export writes a mean as Python's repr of the double (53/12 as 4.416666666666667,
+    4.5, 7): those pass, so does a mean written with a few more digits than the double."""
+    rows = score_rows()
+    rows[4]["credibility"] = repr(53 / 12)
+    rows[5]["trust"] = "4.16666666666666696272613990004"  # 25/6 to 30 digits
+    code, _, err = run("analyze", "--scores", str(write_scores(tmp_path / "s.csv", rows)))
+    assert code == 0, err
 
 
 def test_empty_and_na_cells_are_missing_not_refused(tmp_path: Path) -> None:

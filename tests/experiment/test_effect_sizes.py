@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from chameleons.experiment.stats import analyze
+from chameleons.experiment.stats import analyze, render_text
 from chameleons.experiment.stats.effect_sizes import (
     BootstrapOptions,
     effect_sizes,
     kendall_w_batch,
     rank_biserial_batch,
 )
+from tests.experiment.r_wilcox import r_wilcox_paired
 from tests.experiment.test_analysis import score_rows
 
 CONDITIONS = ["natural", "copy", "still"]
@@ -53,14 +54,76 @@ def test_rank_biserial_matches_scipy_wilcoxon(seed: int) -> None:
     assert rank_biserial_batch(d[None])[0] == pytest.approx(scipy_rank_biserial(d), abs=1e-12)
 
 
-def test_rank_biserial_extremes_and_rounding() -> None:
+def test_rank_biserial_extremes() -> None:
     assert rank_biserial_batch(np.array([[1.0, 2.0, 3.0]]))[0] == 1.0
     assert rank_biserial_batch(np.array([[-1.0, -2.0, 0.0]]))[0] == -1.0
     assert rank_biserial_batch(np.zeros((1, 5)))[0] == 0.0
-    # 4.75 - 4.25 and 5.5 - 5.0 are one tie, whatever floating point makes of them.
-    a, b = np.array([4.75, 5.5, 1 / 3 + 1]), np.array([4.25, 5.0, 1 / 3])
-    r = rank_biserial_batch((b - a)[None])[0]
-    assert r == -1.0
+
+
+def kerby_from_r_v(x: list[float], y: list[float]) -> float:
+    """r from the V of the independent R reference: 2 V / (n (n + 1) / 2) - 1, n = the
+    non-zero differences (the ones V ranks)."""
+    v, _, _ = r_wilcox_paired(x, y)
+    assert v is not None
+    n = sum(1 for a, b in zip(x, y, strict=True) if a - b != 0)
+    return 2 * v / (n * (n + 1) / 2) - 1
+
+
+def test_rank_biserial_comes_from_the_same_differences_as_v() -> None:
+    """Questionnaire means are fractions of twelve: 53/12 - 49/12 and 16/3 - 5 are both a
+    third, but not the same double (0.3333333333333339 vs 0.33333333333333304), and R's
+    wilcox.test ranks them apart. r must use V's ranks: here V = 6 of 10, so r = 0.2 (a
+    rounded tie would give 0.1, disagreeing with the V reported beside it)."""
+    x, y = [53 / 12, 5.0, 2.0, 6.0], [49 / 12, 16 / 3, 3.0, 4.5]
+    pair = effect_sizes(np.array([x, y]).T.tolist(), ["a", "b"], BootstrapOptions(200)).pairs[0]
+    assert pair.rank_biserial.estimate == pytest.approx(kerby_from_r_v(x, y), abs=1e-12)
+    assert pair.rank_biserial.estimate == pytest.approx(0.2, abs=1e-12)
+    # The bootstrap's statistic ranks the same way: on the full sample it gives r too.
+    assert rank_biserial_batch((np.array(x) - np.array(y))[None])[0] == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_rank_biserial_equals_v_on_questionnaire_means_and_counts(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 25))
+    if seed % 2:  # means of 12 items on 1..7, as exported
+        x, y = (list(rng.integers(12, 85, n) / 12) for _ in range(2))
+    else:  # accepted counts, many ties and zeros
+        x, y = (list(rng.integers(0, 4, n).astype(float)) for _ in range(2))
+    effects = effect_sizes(np.array([x, y]).T.tolist(), ["a", "b"], BootstrapOptions(100))
+    pair = effects.pairs[0]
+    nonzero = sum(1 for a, b in zip(x, y, strict=True) if a - b != 0)
+    assert pair.n_nonzero == nonzero
+    if nonzero == 0:
+        assert pair.rank_biserial.estimate is None
+    else:
+        assert pair.rank_biserial.estimate == pytest.approx(kerby_from_r_v(x, y), abs=1e-12)
+
+
+def test_zero_width_intervals_are_flagged() -> None:
+    """Accepted counts where nearly every participant's difference is 0: every resample's
+    median difference is 0, a [0, 0] interval that says nothing about precision."""
+    blocks = [[1.0, 1.0, 2.0]] * 11 + [[2.0, 1.0, 0.0]]
+    effects = effect_sizes(blocks, CONDITIONS, BootstrapOptions(500))
+    natural_copy = effects.pairs[0].median_difference
+    assert (natural_copy.estimate, natural_copy.ci_low, natural_copy.ci_high) == (0.0, 0.0, 0.0)
+    assert natural_copy.degenerate
+    assert "zero-width" in natural_copy.note
+    copy_still = effects.pairs[2].median_difference
+    assert (copy_still.ci_low, copy_still.ci_high) == (-1.0, -1.0)
+    assert copy_still.degenerate
+    w = effects.kendall_w  # the participants do not agree: W's interval has width
+    assert w.ci_low is not None
+    assert w.ci_high is not None
+    assert w.ci_low < w.ci_high
+    assert not w.degenerate
+    rows = [
+        {"participant": str(p), "condition": c, "accepted": int(v)}
+        for p, block in enumerate(blocks)
+        for c, v in zip(CONDITIONS, block, strict=True)
+    ]
+    text = render_text(analyze(rows, measures=["accepted"], bootstrap=BootstrapOptions(500)))
+    assert "0.00 [0.00, 0.00] (zero-width interval: not a measure of precision)" in text
 
 
 def test_bootstrap_interval_equals_a_slow_independent_bootstrap() -> None:

@@ -139,3 +139,43 @@ def test_monte_carlo_is_seeded_and_close_to_exact(monkeypatch: pytest.MonkeyPatc
     assert sampled == permutation_p(data, resamples=20_000, seed=9)
     assert exact.p is not None
     assert sampled.p == pytest.approx(exact.p, abs=0.015)
+
+
+# The textbook table of exact critical values of Friedman's statistic (the smallest value
+# whose upper tail probability is at most alpha), k = 3 and k = 4 conditions, in the copy
+# at https://fr.scribd.com/document/464088360/Tabla-de-Friedman-pdf.
+CRITICAL_K3 = {  # n: (5 %, 1 %)
+    3: (6.000, None), 4: (6.500, 8.000), 5: (6.400, 8.400), 6: (7.000, 9.000),
+    7: (7.143, 8.857), 8: (6.250, 9.000), 9: (6.222, 9.556), 10: (6.200, 9.600),
+    11: (6.545, 9.455), 12: (6.500, 9.500), 13: (6.615, 9.385), 14: (6.143, 9.143),
+    15: (6.400, 8.933),
+}  # fmt: skip
+CRITICAL_K4 = {2: (6.000, None), 3: (7.400, 9.000), 4: (7.800, 9.600), 5: (7.800, 9.960),
+               6: (7.600, 10.200)}  # fmt: skip
+
+
+def exact_critical_value(n: int, k: int, alpha: float) -> float | None:
+    """The smallest attainable chi2 whose exact upper tail is <= alpha, from the module's
+    exact distribution (untied blocks)."""
+    doubled = [tuple(range(2, 2 * k + 1, 2))] * n
+    lowest = 4 * k * (n * (k + 1) // 2) ** 2 if n * (k + 1) % 2 == 0 else k * (n * (k + 1)) ** 2
+    highest = 4 * sum((n * r) ** 2 for r in range(1, k + 1))
+    values = list(range(lowest - lowest % 4, highest + 1, 4))
+    tails = [float(friedman_module._exact_p(doubled, s) or 0.0) for s in values]
+    for index, s in enumerate(values):
+        attained = index + 1 == len(values) or tails[index] - tails[index + 1] > 1e-15
+        if attained and tails[index] <= alpha + 1e-12:
+            return 12 / (n * k * (k + 1)) * s / 4 - 3 * n * (k + 1)
+    return None
+
+
+@pytest.mark.parametrize(("k", "table"), [(3, CRITICAL_K3), (4, CRITICAL_K4)])
+def test_exact_distribution_reproduces_the_published_critical_values(k, table) -> None:
+    for n, (five, one) in table.items():
+        for alpha, expected in ((0.05, five), (0.01, one)):
+            found = exact_critical_value(n, k, alpha)
+            if expected is None:
+                assert found is None, (n, alpha)
+            else:
+                assert found is not None, (n, alpha)
+                assert round(found, 3) == expected, (n, alpha, found)

@@ -12,7 +12,7 @@ import pytest
 import statsmodels.api as sm
 from statsmodels.stats.anova import AnovaRM
 
-from chameleons.experiment.stats import AnalysisError, analyze
+from chameleons.experiment.stats import AnalysisError, analyze, render_text
 from chameleons.experiment.stats.models import fit_models
 
 CONDITIONS = ["natural", "copy", "still"]
@@ -68,11 +68,14 @@ def dummies(frame: pd.DataFrame, column: str, reference: str) -> pd.DataFrame:
     )
 
 
-def test_acceptance_model_equals_an_independent_gee_fit() -> None:
+@pytest.mark.parametrize("by_kind", [False, True])
+def test_acceptance_model_equals_an_independent_gee_fit(by_kind: bool) -> None:
+    """The primary model (the condition's total effect) has no kind term; the secondary
+    one adds it. Both equal a GEE on explicit design matrices."""
     scores, suggestions = simulated()
     models = fit_models(scores, suggestions, measures=["accepted"], conditions=CONDITIONS,
                         reference="still")  # fmt: skip
-    acceptance = models.acceptance
+    acceptance = models.acceptance_by_kind if by_kind else models.acceptance
     assert acceptance is not None
     assert acceptance.error is None
     frame = pd.DataFrame(suggestions)
@@ -82,7 +85,7 @@ def test_acceptance_model_equals_an_independent_gee_fit() -> None:
             dummies(frame, "condition", "still"),
             dummies(frame, "position", "1"),
             dummies(frame, "item_set", "better"),
-            dummies(frame, "kind", "optimal"),
+            *([dummies(frame, "kind", "optimal")] if by_kind else []),
         ],
         axis=1,
     )
@@ -110,10 +113,33 @@ def test_acceptance_model_equals_an_independent_gee_fit() -> None:
     assert test.chi2 == pytest.approx(float(wald.statistic), rel=1e-6)
     assert test.p == pytest.approx(float(wald.pvalue), rel=1e-6)
     assert acceptance.reference == {
-        "condition": "still", "position": "1", "item_set": "better", "kind": "optimal",
+        "condition": "still", "position": "1", "item_set": "better",
+        **({"kind": "optimal"} if by_kind else {}),
     }  # fmt: skip
     assert acceptance.n_observations == len(suggestions)
     assert acceptance.n_participants == 30
+    assert ("C(kind)" in acceptance.formula) == by_kind
+    assert ("mediator" in " ".join(acceptance.notes)) == by_kind
+    assert [m.name for m in models.fitted] == ["acceptance", "acceptance_by_kind"]
+
+
+def test_the_default_acceptance_model_is_the_total_effect() -> None:
+    """Kind depends on earlier acceptances, so the primary model must not adjust for it; the
+    text report names the kind-adjusted model as a secondary adjusted for a mediator."""
+    scores, suggestions = simulated()
+    analysis = analyze(scores, measures=["accepted", "trust"], models=True,
+                       suggestions=suggestions)  # fmt: skip
+    assert analysis.models is not None
+    assert analysis.models.acceptance is not None
+    assert analysis.models.acceptance.formula == (
+        "accepted ~ C(condition) + C(position) + C(item_set)"
+    )
+    data = json.loads(json.dumps(analysis.to_dict()))
+    assert "C(kind)" in data["models"]["acceptance_by_kind"]["formula"]
+    text = render_text(analysis)
+    primary = text.index("acceptance (total effect of condition): accepted ~ C(condition)")
+    secondary = text.index("acceptance adjusted for suggestion kind (secondary: kind is")
+    assert primary < secondary
 
 
 def test_score_model_equals_an_independent_mixed_model_fit() -> None:

@@ -155,12 +155,23 @@ def test_two_to_six_conditions(tmp_path: Path, count: int) -> None:
 
 def test_the_suggestion_rule_is_a_setting(tmp_path: Path) -> None:
     document = default_document()
-    document["suggestion_rule"] = "up_only"
-    assert load_study(write_study(tmp_path, document)).suggestion_rule == "up_only"
+    assert load_study(write_study(tmp_path, document)).suggestion_rule == "expert_place"
+    for rule in ("best_move", "up_only"):
+        document["suggestion_rule"] = rule
+        assert load_study(write_study(tmp_path, document)).suggestion_rule == rule
+    del document["suggestion_rule"]  # a new study file without the key gets the default
+    assert load_study(write_study(tmp_path, document)).suggestion_rule == "expert_place"
     document["suggestion_rule"] = "greedy"
     assert refusal(tmp_path, document).problems == [
-        "suggestion_rule: must be one of ['best_move', 'up_only'], got 'greedy'"
+        "suggestion_rule: must be one of ['expert_place', 'best_move', 'up_only'], got 'greedy'"
     ]
+
+
+def test_a_snapshot_keeps_the_rule_it_ran_under() -> None:
+    """A study stored under best_move (the default before expert_place) keeps it."""
+    config = json.loads(json.dumps(load_study_default_config()))
+    config["suggestion_rule"] = "best_move"
+    assert study_from_config(config).suggestion_rule == "best_move"
 
 
 def test_a_snapshot_stored_before_the_settings_existed_gets_what_ran_then() -> None:

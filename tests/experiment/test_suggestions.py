@@ -70,7 +70,7 @@ def improving_moves_up(ranking: list[str], expert: list[str], declined: set[str]
     ]
 
 
-RULES = st.sampled_from(["best_move", "up_only"])
+RULES = st.sampled_from(["expert_place", "best_move", "up_only"])
 
 
 @given(situations(), RULES)
@@ -92,7 +92,13 @@ def test_optimal_never_worsens_the_error_and_never_moves_a_declined_item(situati
     suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
     if suggestion.kind == "optimal":
         after = error_score(apply_suggestion(ranking, suggestion), expert)
-        assert after < error_score(ranking, expert)
+        now = error_score(ranking, expert)
+        # best_move and up_only only propose a move that lowers the error; expert_place
+        # lowers it whenever any move of an item not declined can (and never raises it).
+        lowest = best_error(ranking, expert, declined)
+        if rule != "expert_place" or (lowest is not None and lowest < now):
+            assert after < now
+        assert after <= now
         assert suggestion.item not in declined
 
 
@@ -157,7 +163,7 @@ def test_best_move_proposes_a_move_down_when_that_helps_most() -> None:
     # b sits first but belongs third; moving it down to 3 puts everything in order (error
     # 4 -> 0), which no move up achieves (moving a or c up leaves the error at 2 or 4).
     expert = ["a", "c", "b"]
-    suggestion = next_suggestion(["b", "a", "c"], expert, set(), random.Random(1))
+    suggestion = next_suggestion(["b", "a", "c"], expert, set(), random.Random(1), "best_move")
     assert suggestion == Suggestion("b", 1, 3, "optimal")
     assert suggestion.direction == "down"
     # up_only finds the best it can going up: a to rank 1 (error 4 -> 2).
@@ -172,22 +178,23 @@ def test_worked_example_with_a_declined_item() -> None:
     assert suggestion.kind == "random"
     assert suggestion.item == "b"  # the only non-declined item that can move up
     # best_move can still improve it: c (not declined) down to rank 3 gives error 2.
-    best = next_suggestion(["c", "a", "b"], expert, {"a"}, random.Random(1))
+    best = next_suggestion(["c", "a", "b"], expert, {"a"}, random.Random(1), "best_move")
     assert best == Suggestion("c", 1, 3, "optimal")
     assert next_suggestion(["c", "a", "b"], expert, set(), random.Random(1), "up_only") == (
         Suggestion("a", 2, 1, "optimal")
     )
 
 
-@pytest.mark.parametrize(
-    ("ranking", "declined"),
-    [
-        (["a", "b", "c", "d"], set()),  # in expert order: every move up is allowed
-        (["a", "b", "c", "d"], {"d"}),  # a declined item is avoided while others can move
-        (["a", "b", "c", "d"], {"b", "c", "d"}),  # only declined items can move: all of them
-    ],
-)
-def test_the_random_fallback_is_uniform_over_the_allowed_moves(ranking, declined) -> None:
+FALLBACK_CASES = [
+    (["a", "b", "c", "d"], set()),  # in expert order: every move up is allowed
+    (["a", "b", "c", "d"], {"d"}),  # a declined item is avoided while others can move
+    (["a", "b", "c", "d"], {"b", "c", "d"}),  # only declined items can move: all of them
+]
+
+
+@pytest.mark.parametrize(("ranking", "declined"), FALLBACK_CASES)
+@pytest.mark.parametrize("rule", ["best_move", "up_only"])
+def test_the_random_fallback_is_uniform_over_the_allowed_moves(ranking, declined, rule) -> None:
     """Every allowed move up (counted here, independently of the policy) is drawn equally
     often: a chi-squared goodness-of-fit test over 12 000 seeded draws."""
     expert = ["a", "b", "c", "d"]
@@ -196,12 +203,111 @@ def test_the_random_fallback_is_uniform_over_the_allowed_moves(ranking, declined
     draws = 12_000
     counts: Counter[tuple[str, int, int]] = Counter()
     for seed in range(draws):
-        s = next_suggestion(ranking, expert, declined, random.Random(seed))
+        s = next_suggestion(ranking, expert, declined, random.Random(seed), rule)
         assert s.kind == "random"
         counts[(s.item, s.from_rank, s.to_rank)] += 1
     assert set(counts) == set(allowed)
     observed = [counts[m] for m in allowed]
     assert chisquare(observed).pvalue > 0.001, observed
+
+
+def out_of_place(ranking: list[str], expert: list[str], declined: set[str]) -> list[str]:
+    """Written out here: the items not declined that are not where the expert order has them
+    (the paper's fallback is for when this is empty)."""
+    return [item for item in ranking if item not in declined
+            and ranking.index(item) != expert.index(item)]  # fmt: skip
+
+
+@given(situations())
+def test_the_default_rule_falls_back_exactly_when_the_paper_says(situation) -> None:
+    """The paper: random "if the order already was at its optimal configuration or only
+    objects that the participant has declined are in an suboptimal position"."""
+    ranking, expert, declined, seed = situation
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed))
+    assert (suggestion.kind == "random") == (not out_of_place(ranking, expert, declined))
+
+
+def test_best_move_falls_back_while_an_item_not_declined_is_out_of_place() -> None:
+    """Why best_move is not the paper's sentence: ranking (b c a) of expert order (a b c)
+    with a and c declined leaves b out of place and not declined, yet no move of b lowers
+    the error (4), so best_move goes random; expert_place moves b to its place (rank 2; the
+    error stays 4, the declined items block every gain)."""
+    expert, ranking, declined = ["a", "b", "c"], ["b", "c", "a"], {"a", "c"}
+    assert error_score(ranking, expert) == 4
+    assert best_error(ranking, expert, declined) == 4
+    assert next_suggestion(ranking, expert, declined, random.Random(0), "best_move").kind == (
+        "random"
+    )
+    assert next_suggestion(ranking, expert, declined, random.Random(0)) == Suggestion(
+        "b", 1, 2, "optimal"
+    )
+
+
+@given(situations())
+def test_expert_place_moves_a_misplaced_item_to_its_place_preferring_gain_then_up(situation):
+    """Brute force over the candidates, independently of the policy: the chosen move puts
+    its item at its expert place; it lowers the error whenever any candidate does; among
+    the candidates that lower it, a move up is taken when there is one, and of those the
+    most important item."""
+    ranking, expert, declined, seed = situation
+    suggestion = next_suggestion(ranking, expert, declined, random.Random(seed), "expert_place")
+    candidates = out_of_place(ranking, expert, declined)
+    if not candidates:
+        return
+    now = error_score(ranking, expert)
+
+    def lowers(item: str) -> bool:
+        return error_score(moved(ranking, item, expert.index(item) + 1), expert) < now
+
+    def goes_up(item: str) -> bool:
+        return bool(expert.index(item) < ranking.index(item))
+
+    pool = [i for i in candidates if lowers(i)] or candidates
+    pool = [i for i in pool if goes_up(i)] or pool
+    chosen = min(pool, key=expert.index)
+    assert suggestion == Suggestion(
+        chosen, ranking.index(chosen) + 1, expert.index(chosen) + 1, "optimal"
+    )
+    # Moving an item to its place never raises the error: it passes d items and loses d
+    # of its own distance, and each item passed changes its distance by one.
+    assert all(
+        error_score(moved(ranking, i, expert.index(i) + 1), expert) <= now for i in candidates
+    )
+
+
+def test_expert_place_without_declines_is_up_only() -> None:
+    """With nothing declined the misplaced item that most matters and sits too low moves up
+    to its place, as under up_only (every permutation of five items)."""
+    expert = list("abcde")
+    for ranking in map(list, permutations(expert)):
+        if ranking == expert:
+            continue
+        ours = next_suggestion(ranking, expert, set(), random.Random(0))
+        assert ours == next_suggestion(ranking, expert, set(), random.Random(0), "up_only")
+
+
+@pytest.mark.parametrize(("ranking", "declined"), FALLBACK_CASES)
+def test_expert_place_fallback_draws_an_item_then_a_rank_above_it(ranking, declined) -> None:
+    """The paper's "randomly choose an item to move to a position above its current
+    position": an item uniformly (not at rank 1; items not declined preferred), then a rank
+    above it uniformly. Chi-squared goodness of fit against those probabilities."""
+    expert = ["a", "b", "c", "d"]
+    items = [i for i in ranking[1:] if i not in declined] or ranking[1:]
+    expected = {
+        (item, ranking.index(item) + 1, to): 1 / len(items) / ranking.index(item)
+        for item in items
+        for to in range(1, ranking.index(item) + 1)
+    }
+    draws = 12_000
+    counts: Counter[tuple[str, int, int]] = Counter()
+    for seed in range(draws):
+        s = next_suggestion(ranking, expert, declined, random.Random(seed))
+        assert s.kind == "random"
+        counts[(s.item, s.from_rank, s.to_rank)] += 1
+    assert set(counts) == set(expected)
+    moves = list(expected)
+    result = chisquare([counts[m] for m in moves], [expected[m] * draws for m in moves])
+    assert result.pvalue > 0.001, counts
 
 
 def test_error_score_full_partial_and_maximum() -> None:

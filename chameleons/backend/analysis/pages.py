@@ -42,6 +42,7 @@ from chameleons.experiment.stats import fmt as fmt_number
 from chameleons.experiment.stats.render import posthoc_text
 from chameleons.experiment.stats.render_models import (
     effect_sizes_latex,
+    mix_test_text,
     models_latex,
     number_text,
     p_text,
@@ -91,10 +92,22 @@ def value_range(scores: StudyScores, measure: str) -> tuple[float, float]:
     return 1.0, float(scores.spec.questionnaire(measure).points)
 
 
-def friedman_text(chi2: float | None, p_bonferroni: float | None, w: float | None) -> str:
+SHORT_P_NAMES = {
+    "exact permutation": "exact",
+    "Monte Carlo permutation": "permutation",
+    "asymptotic chi-squared": "asymptotic",
+}
+
+
+def friedman_text(
+    chi2: float | None, p_bonferroni: float | None, w: float | None, how: str = ""
+) -> str:
+    """The plot's subtitle; ``how``: which p it is (the analysis's primary p)."""
     if chi2 is None or p_bonferroni is None:
         return "Friedman test undefined"
-    text = f"Friedman \u03c7\u00b2 = {fmt_number(chi2, 2)}, p (Bonferroni) = {fmt_p(p_bonferroni)}"
+    label = f"{how} p" if how else "p"
+    text = f"Friedman \u03c7\u00b2 = {fmt_number(chi2, 2)}, {label} (Bonferroni) = "
+    text += fmt_p(p_bonferroni)
     return text + (f", W = {fmt_number(w, 3)}" if w is not None else "")
 
 
@@ -166,6 +179,7 @@ def analysis_extended(
         "extended_latex": latex,
         "number": number_text,
         "p_text": p_text,
+        "mix_test_text": mix_test_text,
     }
     return templates.TemplateResponse(
         request, "pi/analysis_extended.html", context, headers={"Cache-Control": "no-store"}
@@ -198,13 +212,14 @@ def analysis_plot(
         raise HTTPException(status.HTTP_409_CONFLICT, f"There are no {measure} values yet.")
     analysis = whole.measures[measure]
     test = analysis.friedman
+    _, p_bonferroni, how = analysis.primary_p
     image = plot_measure(
         list(analysis.values.values()),
         measure,
         whole.conditions,
         scores.condition_labels,
         value_range(scores, measure),
-        friedman_text(test.chi2, analysis.p_bonferroni, test.kendall_w),
+        friedman_text(test.chi2, p_bonferroni, test.kendall_w, SHORT_P_NAMES.get(how, "")),
         fmt,
     )
     name = f"{measure}-study{scores.study.id}-{view}.{fmt}"

@@ -10,6 +10,7 @@ from typing import Literal
 
 from chameleons.backend.sessions.states import END_REASONS
 from chameleons.experiment.model import Study as StudySpec
+from chameleons.experiment.suggestions import FALLBACK_WORDS
 
 ColumnType = Literal["string", "integer", "number", "boolean", "datetime"]
 LIST_SEPARATOR = ";"
@@ -284,13 +285,16 @@ def suggestions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "to_rank",
                 "integer",
-                "Rank the robot proposed (above from_rank, or below it under the best-move rule).",
+                "Rank the robot proposed (above from_rank, or below it when an optimal "
+                "suggestion moves an item down).",
             ),
             Column(
                 "kind",
                 "string",
                 f"optimal: the {spec.suggestion_rule} rule's move toward the expert order;"
-                " random: the fallback (a random move up) when no move improved the ranking.",
+                f" random: the fallback (a random move up) {FALLBACK_WORDS[spec.suggestion_rule]}."
+                " The kind depends on the participant's earlier decisions (a mediator): "
+                "compare conditions without adjusting for it.",
                 "optimal, random",
             ),
             Column("accepted", "boolean", "The participant's decision; empty if never decided."),

@@ -1,9 +1,11 @@
 """The paper's analysis from score rows (one per participant x condition).
 
 For each measure: descriptives per condition, the Friedman test across conditions with a
-Bonferroni correction over the measures (p x m, capped at 1), Kendall's W, optionally a
-permutation p-value, and pairwise Wilcoxon signed-rank tests (Bonferroni over the pairs)
-only where the corrected Friedman p is below alpha. Rows are read and checked by
+Bonferroni correction over the measures (p x m, capped at 1), Kendall's W, the permutation
+p-value (exact when feasible, as at the paper's 12 participants; else Monte Carlo), and
+pairwise Wilcoxon signed-rank tests (Bonferroni over the pairs) only where the corrected
+permutation p is below alpha. The asymptotic chi-squared p (R's ``friedman.test``) is
+reported beside it. Rows are read and checked by
 :mod:`.scores` (the view, exclusions, refusals). A participant without a value for every
 condition of a measure is left out of that measure, with a note saying why; descriptives
 are over the same complete cases as the test, so the table and the test describe the same
@@ -36,6 +38,7 @@ from chameleons.experiment.stats.friedman_test import (
 from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
 from chameleons.experiment.stats.numbers import finite
 from chameleons.experiment.stats.reliability import Reliability
+from chameleons.experiment.stats.rounding import fmt_p
 from chameleons.experiment.stats.scale_reliability import scale_reliability
 from chameleons.experiment.stats.scores import (
     DEFAULT_VIEW,
@@ -49,9 +52,11 @@ from chameleons.experiment.stats.scores import (
     missing_reason,
     session_reason,
 )
+from chameleons.experiment.stats.suggestion_mix import SuggestionMix, suggestion_mix
 from chameleons.experiment.stats.wilcoxon import DEFAULT_RULE, WilcoxonRule
 
 DEFAULT_MEASURES = ("accepted", "credibility", "likeability", "trust")
+DEFAULT_PERMUTATIONS = 10_000  # Monte Carlo resamples where the exact p is too costly
 PAPER_CONDITION_ORDER = ("natural", "copy", "still")
 PAPER_REFERENCE = "still"  # the models' default baseline: the robot without facial gestures
 __all__ = [
@@ -82,6 +87,17 @@ class MeasureAnalysis:
     values: dict[str, list[float]] = field(default_factory=dict, compare=False, repr=False)
     effect_sizes: EffectSizes | None = None
 
+    @property
+    def primary_p(self) -> tuple[float | None, float | None, str]:
+        """The Friedman p the report leads with and the post-hoc tests are gated on: the
+        permutation p (exact or Monte Carlo) when computed, else the asymptotic one; with
+        its Bonferroni correction and what it is."""
+        perm = self.permutation
+        if perm is not None and perm.p is not None:
+            how = "exact permutation" if perm.method == "exact" else "Monte Carlo permutation"
+            return perm.p, self.permutation_p_bonferroni, how
+        return self.friedman.p, self.p_bonferroni, "asymptotic chi-squared"
+
     def to_dict(self) -> dict[str, Any]:
         test = self.friedman
         friedman_dict: dict[str, Any] = {
@@ -94,6 +110,7 @@ class MeasureAnalysis:
             "kendall_w": test.kendall_w,
             "defined": test.chi2 is not None,
             "permutation": None,
+            "primary": dict(zip(("p", "p_bonferroni", "method"), self.primary_p, strict=True)),
         }
         if self.permutation is not None:
             friedman_dict["permutation"] = {
@@ -124,6 +141,8 @@ class Analysis:
     models: Models | None = None
     # Cronbach's alpha per scored questionnaire, over the view's participants' answers.
     reliability: list[Reliability] = field(default_factory=list)
+    # Optimal and random suggestions per condition (when the per-suggestion rows are given).
+    suggestion_mix: SuggestionMix | None = None
 
     @property
     def view_title(self) -> str:
@@ -158,6 +177,9 @@ class Analysis:
             "notes": self.notes,
             "models": finite(self.models.to_dict()) if self.models else None,
             "reliability": [finite(r.to_dict()) for r in self.reliability],
+            "suggestion_mix": finite(self.suggestion_mix.to_dict())
+            if self.suggestion_mix
+            else None,
         }
 
 
@@ -170,7 +192,7 @@ def analyze(
     scales: Mapping[str, Scale] | None = None,
     view: View = DEFAULT_VIEW,
     alpha: float = 0.05,
-    permutations: int | None = None,
+    permutations: int | None = DEFAULT_PERMUTATIONS,
     seed: int = 0,
     wilcoxon_rule: WilcoxonRule = DEFAULT_RULE,
     row_name: str = "row",
@@ -189,10 +211,10 @@ def analyze(
     ``conditions``: the study's condition ids (a row with another label is refused);
     ``condition_order``: the columns' order (default: the paper's, then the rest sorted);
     ``scales``: the values each measure can take (others are refused);
-    ``view``: ``as_planned`` or ``as_run`` (see :mod:`.scores`); ``permutations``: add a
-    permutation p-value per measure (exact when feasible, otherwise Monte Carlo with that
-    many resamples and ``seed``); ``row_name``/``first_row``: how refusals number the rows
-    (a CSV file's data start on line 2).
+    ``view``: ``as_planned`` or ``as_run`` (see :mod:`.scores`); ``permutations``: the
+    permutation p-value per measure is exact when feasible, otherwise Monte Carlo with that
+    many resamples and ``seed`` (``None``: the default number); ``row_name``/``first_row``:
+    how refusals number the rows (a CSV file's data start on line 2).
 
     ``bootstrap``: add effect sizes with bootstrap intervals per measure (over the
     participants of its Friedman test). ``models``: fit the regression models
@@ -200,7 +222,8 @@ def analyze(
     the score models from the rows (with their ``position``), the acceptance model from
     ``suggestions`` (per-suggestion rows), against ``reference`` (default: still, else the
     first condition). ``answers`` (the export's questionnaire rows) with the study's
-    ``questionnaires``: Cronbach's alpha per scale over the view's participants."""
+    ``questionnaires``: Cronbach's alpha per scale over the view's participants.
+    ``suggestions`` also give the suggestion mix per condition (:mod:`.suggestion_mix`)."""
     rows = list(rows)
     wanted = list(measures or DEFAULT_MEASURES)
     reader = Reader(wanted, conditions, scales or {}, view, row_name, first_row)
@@ -218,12 +241,15 @@ def analyze(
     if bootstrap is not None:
         results = {m: _with_effect_sizes(r, ordered, bootstrap) for m, r in results.items()}
     fitted = None
+    per_suggestion = (
+        None if suggestions is None else model_suggestion_rows(suggestions, table, view)
+    )
     if models:
         baseline = reference or (PAPER_REFERENCE if PAPER_REFERENCE in ordered else None)
         try:
             fitted = fit_models(
                 model_score_rows(rows, table, view, chosen),
-                None if suggestions is None else model_suggestion_rows(suggestions, table, view),
+                per_suggestion,
                 measures=chosen,
                 conditions=ordered,
                 reference=baseline,
@@ -234,7 +260,9 @@ def analyze(
     notes = [
         *table.notes,
         f"Bonferroni: Friedman p x {len(chosen)} measures (capped at 1); post-hoc Wilcoxon "
-        f"signed-rank p x {math.comb(len(ordered), 2)} pairs, only where corrected p < {alpha}.",
+        f"signed-rank p x {math.comb(len(ordered), 2)} pairs, only where the corrected "
+        f"permutation p (exact where feasible) < {alpha}. The asymptotic chi-squared p (R's "
+        "friedman.test) is shown beside it; with few participants it is rough.",
         f"Wilcoxon signed-rank tests as R's wilcox.test(paired = TRUE) ({rule}): zero "
         "differences dropped; exact p below 50 pairs without zeros"
         + (" or ties" if wilcoxon_rule == "R<4.6" else " (conditional on ties)")
@@ -252,7 +280,17 @@ def analyze(
         table.left_out,
         wilcoxon_rule,
         fitted,
-        [] if answers is None else scale_reliability(questionnaires, answers, table.participants),
+        []
+        if answers is None
+        else scale_reliability(
+            questionnaires,
+            answers,
+            table.participants,
+            conditions=view_conditions(rows, view),
+            condition_order=ordered,
+            seed=seed,
+        ),
+        None if per_suggestion is None else suggestion_mix(per_suggestion, ordered, seed),
     )
 
 
@@ -268,6 +306,16 @@ def _with_effect_sizes(
 def _view_condition(row: Mapping[str, Any], view: View) -> str:
     planned = str(row.get("planned_condition") or "").strip()
     return planned if view == "as_planned" and planned else str(row.get("condition")).strip()
+
+
+def view_conditions(rows: Iterable[Mapping[str, Any]], view: View) -> dict[tuple[str, str], str]:
+    """(participant, position) -> the condition the view counts that interaction as."""
+    return {
+        (str(row.get("participant")).strip(), str(row.get("position")).strip()): (
+            _view_condition(row, view)
+        )
+        for row in rows
+    }
 
 
 def model_score_rows(
@@ -349,38 +397,69 @@ def _analyze_measure(
             f"{measure}: Friedman statistic undefined: every participant's values are tied "
             "(or no complete participant)"
         )
-    permutation = (
-        None if permutations is None else permutation_p(blocks, resamples=permutations, seed=seed)
-    )
+    resamples = DEFAULT_PERMUTATIONS if permutations is None else permutations
+    permutation = permutation_p(blocks, resamples=resamples, seed=seed) if blocks else None
+    notes += small_sample_notes(measure, len(blocks), len(conditions), tests, alpha)
     descriptives = {c: describe([b[j] for b in blocks]) for j, c in enumerate(conditions)}
-    p_corrected = bonferroni(test.p, tests)
-    posthoc, posthoc_note = _posthoc(blocks, conditions, p_corrected, alpha, rule)
-    return MeasureAnalysis(
+    result = MeasureAnalysis(
         measure=measure,
         conditions=descriptives,
         friedman=test,
-        p_bonferroni=p_corrected,
+        p_bonferroni=bonferroni(test.p, tests),
         permutation=permutation,
         permutation_p_bonferroni=None if permutation is None else bonferroni(permutation.p, tests),
-        posthoc=posthoc,
-        posthoc_note=posthoc_note,
+        posthoc=[],
+        posthoc_note="",
         excluded=excluded,
         notes=notes,
         values=included,
     )
+    _, gate, how = result.primary_p
+    posthoc, posthoc_note = _posthoc(blocks, conditions, gate, how, alpha, rule)
+    return replace(result, posthoc=posthoc, posthoc_note=posthoc_note)
+
+
+def smallest_exact_p(n: int, k: int) -> float:
+    """The smallest permutation p any data of ``n`` participants and ``k`` conditions can
+    give: every participant ordering the conditions the same way, without ties, has
+    probability ``k! / (k!)^n`` under the null."""
+    return float(math.factorial(k)) ** (1 - n) if n >= 1 and k >= 1 else 1.0
+
+
+def small_sample_notes(measure: str, n: int, k: int, tests: int, alpha: float) -> list[str]:
+    """Warnings for samples too small to test anything: one participant (Kendall's W is 1
+    or undefined whatever they answered), or so few that no data could reach significance
+    after the Bonferroni correction."""
+    if n == 0 or k < 2:
+        return []
+    smallest = smallest_exact_p(n, k)
+    notes = []
+    if n == 1:
+        notes.append(
+            f"{measure}: only 1 participant: Kendall's W is 1 (or undefined) whatever the "
+            "answers, and no test can say anything; do not report these numbers"
+        )
+    if smallest * tests >= alpha:
+        notes.append(
+            f"{measure}: n = {n} is too few: with {k} conditions the smallest possible exact "
+            f"p is {fmt_p(smallest)}, so after Bonferroni over {tests} measure(s) no data "
+            f"could reach p < {alpha:g}"
+        )
+    return notes
 
 
 def _posthoc(
     blocks: list[list[float]],
     conditions: list[str],
     p_corrected: float | None,
+    how: str,
     alpha: float,
     rule: WilcoxonRule,
 ) -> tuple[list[PairwiseTest], str]:
     if p_corrected is None:
         return [], "not done: the Friedman test is undefined"
     if p_corrected >= alpha:
-        return [], f"not done: corrected Friedman p >= {alpha}"
+        return [], f"not done: corrected Friedman p ({how}) >= {alpha}"
     pairs = list(combinations(range(len(conditions)), 2))
     tests = [
         wilcoxon_pair(

@@ -4,8 +4,10 @@
 - Per pair of conditions (a, b), over the same participants:
   the **matched-pairs rank-biserial correlation** ``r = (T+ - T-) / (T+ + T-)`` (Kerby's
   simple difference formula; ``T+``/``T-`` are the Wilcoxon signed-rank sums of the
-  positive/negative differences a - b, zero differences dropped as in the post-hoc test),
-  and the **median of the paired differences** a - b.
+  positive/negative differences a - b), computed from the very differences and ranks the
+  post-hoc test's V comes from (:mod:`.wilcoxon`, R's rules: zero differences dropped,
+  magnitudes compared as the doubles R sees), so ``r = 2 V / (n (n + 1) / 2) - 1`` with
+  ``n`` the non-zero differences; and the **median of the paired differences** a - b.
 
 Intervals are percentile intervals of ``scipy.stats.bootstrap`` resampling participants
 (rows stay paired), as R's ``rcompanion::kendallW`` does by default (``type = "perc"``).
@@ -13,6 +15,10 @@ BCa was tried and rejected: W sits at its boundary 0 when the conditions do not 
 and BCa's bias correction then shrinks the interval to a misleading sliver near 0. Every
 interval has its own generator seeded from ``(seed, what it measures)``, so the same data,
 seed and number of resamples give the same interval, whatever else is computed.
+
+A percentile interval of zero width (both ends equal: at least 95% of the resamples gave
+the same value, typical of a median difference of 0-3 counts) does not describe the
+uncertainty; it is flagged (``degenerate``) and the reports say so.
 """
 
 from __future__ import annotations
@@ -28,11 +34,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import bootstrap, rankdata
 
+from chameleons.experiment.stats.wilcoxon import signed_rank_test
+
 Method = Literal["BCa", "percentile"]
 Array = NDArray[np.float64]
 DEFAULT_RESAMPLES = 2000
 CONFIDENCE = 0.95
-DECIMALS = 10  # differences are rounded before ranking, so 4.75 - 4.25 ties 5.5 - 5.0
+DEGENERATE_NOTE = (
+    "zero-width interval: at least 95% of the resamples gave this value, so the bootstrap "
+    "cannot show the uncertainty"
+)
 
 
 @dataclass(frozen=True)
@@ -51,6 +62,7 @@ class Interval:
     ci_high: float | None
     method: str
     note: str = ""
+    degenerate: bool = False  # both ends equal: the interval says nothing about precision
 
 
 @dataclass(frozen=True)
@@ -93,14 +105,14 @@ def kendall_w_batch(values: Array) -> Array:
 
 
 def rank_biserial_batch(differences: Array) -> Array:
-    """Matched-pairs rank-biserial r of ``differences`` (..., n); 0 where all are zero."""
-    rounded = np.round(differences, DECIMALS)
-    magnitudes = np.abs(rounded)
-    zeros = (rounded == 0).sum(axis=-1, keepdims=True)
+    """Matched-pairs rank-biserial r of ``differences`` (..., n); 0 where all are zero.
+    The differences are used as they are (no rounding), as the signed-rank test's V is."""
+    magnitudes = np.abs(differences)
+    zeros = (differences == 0).sum(axis=-1, keepdims=True)
     # Zeros share the lowest ranks, so the non-zero ranks are the overall ranks minus them.
     ranks = rankdata(magnitudes, axis=-1) - zeros
-    positive = np.where(rounded > 0, ranks, 0.0).sum(axis=-1)
-    negative = np.where(rounded < 0, ranks, 0.0).sum(axis=-1)
+    positive = np.where(differences > 0, ranks, 0.0).sum(axis=-1)
+    negative = np.where(differences < 0, ranks, 0.0).sum(axis=-1)
     total = positive + negative
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(total > 0, (positive - negative) / total, 0.0)
@@ -187,31 +199,40 @@ def _kendall_w(data: Array, columns: list[Array], options: BootstrapOptions, key
     low, high, method, note = bootstrap_interval(
         columns, _w_statistic, options, f"{key}:W", "percentile"
     )
-    return Interval(estimate, low, high, f"{method} bootstrap over participants", note)
+    return _interval(estimate, low, high, method, note)
 
 
 def _all_tied(data: Array) -> bool:
     return bool((data == data[:, :1]).all())
 
 
+def _interval(
+    estimate: float, low: float | None, high: float | None, method: str, note: str
+) -> Interval:
+    """The estimate and its interval, flagged when the interval has zero width."""
+    how = f"{method} bootstrap over participants"
+    if low is not None and high is not None and low == high:
+        return Interval(estimate, low, high, how, note or DEGENERATE_NOTE, degenerate=True)
+    return Interval(estimate, low, high, how, note)
+
+
 def _pair(a: str, b: str, x: Array, y: Array, options: BootstrapOptions, key: str) -> PairEffect:
-    differences = np.round(x - y, DECIMALS)
-    nonzero = int((differences != 0).sum())
+    differences = x - y
     n = len(differences)
+    test = signed_rank_test(list(x), list(y))  # R's V, zeros and ranks
     if n < 2:
         empty = Interval(None, None, None, "", "needs at least 2 participants")
-        return PairEffect(a, b, n, nonzero, empty, empty)
+        return PairEffect(a, b, n, test.n, empty, empty)
     median = float(np.median(differences))
     low, high, method, note = bootstrap_interval(
         [x, y], _median_statistic, options, f"{key}:{a}-{b}:median", "percentile"
     )
-    median_interval = Interval(median, low, high, f"{method} bootstrap over participants", note)
-    if nonzero == 0:
+    median_interval = _interval(median, low, high, method, note)
+    if test.n == 0:
         undefined = Interval(None, None, None, "", "undefined: all differences are zero")
         return PairEffect(a, b, n, 0, undefined, median_interval)
-    r = float(rank_biserial_batch(differences[None])[0])
+    r = 2 * test.v / (test.n * (test.n + 1) / 2) - 1
     low, high, method, note = bootstrap_interval(
         [x, y], _r_statistic, options, f"{key}:{a}-{b}:r", "percentile"
     )
-    r_interval = Interval(r, low, high, f"{method} bootstrap over participants", note)
-    return PairEffect(a, b, n, nonzero, r_interval, median_interval)
+    return PairEffect(a, b, n, test.n, _interval(r, low, high, method, note), median_interval)

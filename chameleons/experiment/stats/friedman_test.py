@@ -14,7 +14,8 @@ distinguishes the treatments and the statistic is *undefined* (``None``), never 
 The permutation p-value conditions on the observed within-block ranks: under the null
 hypothesis every ordering of a block's ranks is equally likely. It is computed *exactly*
 (up to floating-point rounding) by convolving the blocks' rank vectors when that is cheap
-(3 conditions: up to about 100 participants; 4: about 12), otherwise by Monte Carlo with
+(3 conditions: up to 64 participants; 4: up to 8; about 0.1 s per measure at most, since
+the analysis page computes it on every first render), otherwise by Monte Carlo with
 a seeded generator
 (``p = (1 + #{S* >= S}) / (1 + resamples)``).
 """
@@ -30,7 +31,14 @@ from math import factorial
 import numpy as np
 from scipy.stats import chi2 as chi2_distribution
 
-MAX_EXACT_WORK = 300_000_000  # grid cells x arrangements x blocks
+MAX_EXACT_WORK = 20_000_000  # grid cells x arrangements, summed over the blocks
+
+
+def exact_work(n: int, k: int) -> int:
+    """The exact convolution's work for n participants and k conditions: block i touches a
+    grid of (i 2k + 1)^(k - 1) cells once per ordering of its ranks. ``analysis.R`` uses
+    the same formula and limit, so both compute the same kind of p."""
+    return int(sum((i * 2 * k + 1) ** (k - 1) for i in range(1, n + 1))) * factorial(k)
 
 
 @dataclass(frozen=True)
@@ -106,21 +114,19 @@ def permutation_p(
 
 def _exact_p(doubled: list[tuple[int, ...]], observed: int) -> float | None:
     """Convolve the null distribution of the rank-sum vector block by block on a grid of
-    the first k - 1 (doubled) rank sums; the last is fixed by the total. ``None`` when the
-    grid work would be too large (then Monte Carlo is used)."""
+    the first k - 1 (doubled) rank sums; the last is fixed by the total. The grid grows
+    with the sums reached so far (block i reaches at most i times the largest rank).
+    ``None`` when the work would be too large (then Monte Carlo is used)."""
     n, k = len(doubled), len(doubled[0])
-    size = 2 * k * n + 1
-    if size ** (k - 1) * factorial(k) * n > MAX_EXACT_WORK:
+    if exact_work(n, k) > MAX_EXACT_WORK:
         return None
-    grid = np.zeros((size,) * (k - 1))
-    grid[(0,) * (k - 1)] = 1.0
+    grid = np.ones((1,) * (k - 1))
     for block in doubled:
-        following = np.zeros_like(grid)
+        reach = grid.shape[0] - 1
+        following = np.zeros((reach + max(block) + 1,) * (k - 1))
         for arrangement, ways in Counter(itertools.permutations(block)).items():
-            shift = arrangement[:-1]
-            target = tuple(slice(s, size) for s in shift)
-            source = tuple(slice(0, size - s) for s in shift)
-            following[target] += grid[source] * (ways / factorial(k))
+            target = tuple(slice(s, s + reach + 1) for s in arrangement[:-1])
+            following[target] += grid * (ways / factorial(k))
         grid = following
     sums = np.indices(grid.shape)
     last = n * k * (k + 1) - sums.sum(axis=0)  # each block's doubled ranks add to k(k+1)
@@ -131,14 +137,18 @@ def _exact_p(doubled: list[tuple[int, ...]], observed: int) -> float | None:
 def _monte_carlo_p(
     doubled: list[tuple[int, ...]], observed: int, resamples: int, seed: int
 ) -> float:
+    """Each resample draws one of the k! orderings per participant (an index into their
+    orderings, uniformly: the same law as shuffling their ranks)."""
     rng = np.random.default_rng(seed)
     ranks = np.array(doubled, dtype=np.int64)
     n, k = ranks.shape
+    orders = np.array(list(itertools.permutations(range(k))), dtype=np.intp)  # (k!, k)
+    arranged = ranks[:, orders]  # (n, k!, k): every ordering of every participant's ranks
+    people = np.arange(n)[None, :]
     at_least = 0
     for start in range(0, resamples, 2_000):  # chunks keep memory small
         size = min(2_000, resamples - start)
-        order = rng.random((size, n, k)).argsort(axis=2)
-        shuffled = np.take_along_axis(np.broadcast_to(ranks, (size, n, k)), order, axis=2)
-        sums = shuffled.sum(axis=1)
+        chosen = rng.integers(0, len(orders), size=(size, n))
+        sums = arranged[people, chosen].sum(axis=1)  # (size, k)
         at_least += int(((sums * sums).sum(axis=1) >= observed).sum())
     return (1 + at_least) / (1 + resamples)

@@ -48,7 +48,10 @@ def study_measures(spec: Study) -> StudyMeasures:
     for questionnaire in spec.questionnaires_for("interaction"):
         if questionnaire.scored:
             scales[questionnaire.id] = Scale(
-                1, questionnaire.points, what=f"the {questionnaire.title} score (mean of items)"
+                1,
+                questionnaire.points,
+                what=f"the {questionnaire.title} score (mean of items)",
+                mean_of=len(questionnaire.numeric_items),
             )
     return StudyMeasures(
         spec.measures,

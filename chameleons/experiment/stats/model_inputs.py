@@ -10,7 +10,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-MODEL_COLUMNS = ("participant", "session", "position", "condition", "kind", "accepted")
+MODEL_COLUMNS = (
+    "participant", "session", "position", "condition", "kind", "accepted", "direction",
+)  # fmt: skip
 FROM_INTERACTION = ("item_set", "planned_condition")
 
 

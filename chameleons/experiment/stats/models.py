@@ -1,11 +1,16 @@
 """Regression models beyond the rank tests (statsmodels).
 
 - **Acceptance** of each robot suggestion (yes/no): logistic regression on condition,
-  interaction position, item set and suggestion kind, fitted by generalized estimating
-  equations (GEE) with an exchangeable working correlation among one participant's
-  suggestions. Standard errors are the bias-reduced sandwich of Mancl & DeRouen (2001),
-  because a study has few participants (clusters) and the plain sandwich is then too small.
-  Estimates are population-averaged log-odds (reported with odds ratios).
+  interaction position and item set, fitted by generalized estimating equations (GEE) with
+  an exchangeable working correlation among one participant's suggestions. Standard errors
+  are the bias-reduced sandwich of Mancl & DeRouen (2001), because a study has few
+  participants (clusters) and the plain sandwich is then too small. Estimates are
+  population-averaged log-odds (reported with odds ratios). This is the condition's *total*
+  effect: the suggestion kind (optimal or random fallback) is left out because it is a
+  consequence of the participant's earlier decisions (a participant who accepts reaches
+  the expert order sooner and then gets random suggestions), so adjusting for it would
+  condition on a mediator. The kind-adjusted model is fitted as a labelled secondary
+  (``acceptance_by_kind``).
 - **Questionnaire scores** (one per interaction): a linear mixed model with a random
   intercept per participant and condition + position as fixed effects, fitted by REML.
 
@@ -39,6 +44,12 @@ FACTOR_WORDS = {
     "item_set": "item set",
     "kind": "suggestion kind",
 }
+TOTAL_FACTORS = ["condition", "position", "item_set"]
+MEDIATOR_NOTE = (
+    "secondary: adjusted for the suggestion kind, which depends on the participant's earlier "
+    "decisions (a mediator), so its condition effect is not the total effect; the primary "
+    "acceptance model leaves the kind out"
+)
 
 
 class ModelInputError(ValueError):
@@ -101,14 +112,24 @@ class ModelResult:
 @dataclass
 class Models:
     reference: dict[str, str]
-    acceptance: ModelResult | None
+    acceptance: ModelResult | None  # primary: the condition's total effect (no kind)
     scores: dict[str, ModelResult]
     notes: list[str] = field(default_factory=list)
+    acceptance_by_kind: ModelResult | None = None  # secondary: adjusted for the mediator
+
+    @property
+    def fitted(self) -> list[ModelResult]:
+        """Every model, in the order they are reported (primary acceptance first)."""
+        acceptance = [m for m in (self.acceptance, self.acceptance_by_kind) if m is not None]
+        return [*acceptance, *self.scores.values()]
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "reference": self.reference,
             "acceptance": None if self.acceptance is None else self.acceptance.to_dict(),
+            "acceptance_by_kind": None
+            if self.acceptance_by_kind is None
+            else self.acceptance_by_kind.to_dict(),
             "scores": {m: r.to_dict() for m, r in self.scores.items()},
             "notes": self.notes,
         }
@@ -128,16 +149,19 @@ def fit_models(
     baseline = reference if reference is not None and reference in conditions else conditions[0]
     scores = score_frame(score_rows, [m for m in measures if m != "accepted"])
     notes: list[str] = []
-    acceptance = None
+    acceptance = by_kind = None
     if suggestion_rows is None:
         notes.append("acceptance model not fitted: it needs the per-suggestion rows")
     else:
-        acceptance = fit_acceptance(suggestion_frame(suggestion_rows), conditions, baseline)
+        frame = suggestion_frame(suggestion_rows)
+        acceptance = fit_acceptance(frame, conditions, baseline)
+        by_kind = fit_acceptance(frame, conditions, baseline, adjust_for_kind=True)
     fitted = {m: fit_score(scores, m, conditions, baseline) for m in measures if m != "accepted"}
     references = {"condition": baseline, "position": "1"}
-    if acceptance is not None:
-        references.update(acceptance.reference)
-    return Models(references, acceptance, fitted, notes)
+    for model in (acceptance, by_kind):
+        if model is not None:
+            references.update(model.reference)
+    return Models(references, acceptance, fitted, notes, by_kind)
 
 
 def score_frame(rows: Iterable[Mapping[str, Any]], measures: Sequence[str]) -> pd.DataFrame:
@@ -223,9 +247,17 @@ def _level_key(level: str) -> tuple[int, float | str]:
         return (1, level)
 
 
-def fit_acceptance(frame: pd.DataFrame, conditions: Sequence[str], reference: str) -> ModelResult:
+def fit_acceptance(
+    frame: pd.DataFrame,
+    conditions: Sequence[str],
+    reference: str,
+    *,
+    adjust_for_kind: bool = False,
+) -> ModelResult:
+    """The condition's total effect on acceptance; ``adjust_for_kind``: the secondary model
+    with the suggestion kind (a mediator) as a factor too."""
     result = ModelResult(
-        name="acceptance",
+        name="acceptance_by_kind" if adjust_for_kind else "acceptance",
         outcome="accepted",
         family="binomial (logit link)",
         method="GEE, exchangeable working correlation within participant, "
@@ -238,7 +270,10 @@ def fit_acceptance(frame: pd.DataFrame, conditions: Sequence[str], reference: st
     undecided = len(frame) - len(decided)
     if undecided:
         result.notes.append(f"{undecided} suggestion(s) without a decision left out")
-    factors = _usable_factors(decided, ["condition", "position", "item_set", "kind"], result)
+    wanted = [*TOTAL_FACTORS, "kind"] if adjust_for_kind else TOTAL_FACTORS
+    factors = _usable_factors(decided, wanted, result)
+    if adjust_for_kind:
+        result.notes.insert(0, MEDIATOR_NOTE)
     if "condition" not in factors:
         result.error = "needs suggestions in at least two conditions"
         return result
@@ -247,7 +282,7 @@ def fit_acceptance(frame: pd.DataFrame, conditions: Sequence[str], reference: st
         decided[name] = _categorical(decided[name], firsts.get(name))
         result.reference[name] = str(decided[name].cat.categories[0])
     result.formula = "accepted ~ " + " + ".join(f"C({f})" for f in factors)
-    result.description = _words_acceptance(factors, result.reference)
+    result.description = _words_acceptance(factors, result.reference, adjust_for_kind)
     result.n_observations, result.n_participants = len(decided), decided["participant"].nunique()
     if decided["accepted"].nunique() < 2:
         result.error = "every decided suggestion has the same outcome: nothing to model"
@@ -436,7 +471,16 @@ def _with_f(test: TermTest, df_denominator: int) -> TermTest:
     return TermTest(test.term, test.chi2, test.df, test.p, f, df_denominator, p)
 
 
-def _words_acceptance(factors: list[str], reference: Mapping[str, str]) -> str:
+def _words_acceptance(factors: list[str], reference: Mapping[str, str], by_kind: bool) -> str:
+    why = (
+        " Secondary analysis: the suggestion kind is a consequence of the participant's "
+        "earlier decisions (a mediator), so the condition's odds ratio here is conditional "
+        "on it and is not the condition's total effect."
+        if by_kind
+        else " The suggestion kind is left out on purpose: whether a suggestion is optimal "
+        "or a random fallback depends on the participant's earlier decisions, so the "
+        "condition's odds ratio is its total effect."
+    )
     return (
         "Whether the participant accepted each robot suggestion, modelled with logistic "
         "regression on "
@@ -445,6 +489,7 @@ def _words_acceptance(factors: list[str], reference: Mapping[str, str]) -> str:
         "generalized estimating equations), so the odds ratios are population-averaged: "
         "an odds ratio above 1 means the suggestions were accepted more often than in the "
         "reference level, averaged over participants."
+        + why
     )
 
 

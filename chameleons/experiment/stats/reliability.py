@@ -7,18 +7,28 @@ F-based one (Feldt, Woodruff & Salih 1987, formulas 6 and 7, as R's ``cocron`` a
 Python's ``pingouin`` compute it): with ``n`` cases and ``k`` items, ``df1 = n - 1`` and
 ``df2 = (n - 1)(k - 1)``, lower ``1 - (1 - alpha) F(1 - c/2)``, upper
 ``1 - (1 - alpha) F(c/2)``. "Alpha if item deleted" is alpha of the other items.
+
+Feldt's interval assumes independent cases. When each participant rated several robots
+(one case per condition), the cases of one participant are not independent: then
+:func:`cluster_bootstrap_interval` gives the pooled alpha a percentile interval that
+resamples *participants* (with all their ratings), and alpha per condition (one case per
+participant, so independent) keeps Feldt's interval.
 """
 
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.stats import f as f_distribution
 
 CONFIDENCE = 0.95
+FELDT = "Feldt"
+CLUSTER_BOOTSTRAP = "percentile bootstrap over participants"
+DEFAULT_RESAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -35,9 +45,13 @@ class Reliability:
     confidence: float = CONFIDENCE
     if_deleted: dict[str, float | None] = field(default_factory=dict)
     note: str = ""
+    method: str = FELDT  # how the interval was computed
+    condition: str = ""  # set for alpha within one condition
+    participants: int = 0  # distinct participants among the cases (0: not known)
+    by_condition: list[Reliability] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, object]:
-        return dict(self.__dict__)
+        return asdict(self)
 
     @property
     def best_drop(self) -> tuple[str, float] | None:
@@ -102,3 +116,55 @@ def cronbach_alpha(
         for i, item in enumerate(item_ids)
     }
     return Reliability(scale, k, n, alpha, low, high, confidence, deleted)
+
+
+def cluster_bootstrap_interval(
+    cases: Sequence[Sequence[float]],
+    clusters: Sequence[str],
+    *,
+    resamples: int = DEFAULT_RESAMPLES,
+    seed: int = 0,
+    key: str = "",
+    confidence: float = CONFIDENCE,
+) -> tuple[float | None, float | None, str]:
+    """Percentile interval of alpha resampling the ``clusters`` (participants) with
+    replacement, each with all its cases; the generator is seeded from ``(seed, key)``.
+    Returns (low, high, note); resamples whose alpha is undefined are left out (counted).
+
+    Every resample's alpha comes from per-participant sums (of each item, of its squares,
+    of the sum score and of its square), weighted by how often the participant was drawn:
+    the same numbers as the covariance of the resampled cases, without building them."""
+    data = np.asarray(cases, dtype=float)
+    names = sorted(set(clusters))
+    if len(names) < 2:
+        return None, None, "needs two participants or more"
+    index = np.array([names.index(c) for c in clusters])
+    totals = data.sum(axis=1)
+    per = np.zeros((len(names), 2 * data.shape[1] + 3))
+    k = data.shape[1]
+    np.add.at(per[:, :k], index, data)
+    np.add.at(per[:, k : 2 * k], index, data**2)
+    np.add.at(per[:, 2 * k], index, totals)
+    np.add.at(per[:, 2 * k + 1], index, totals**2)
+    np.add.at(per[:, 2 * k + 2], index, 1.0)
+    rng = np.random.default_rng([seed, zlib.crc32(f"alpha:{key}".encode())])
+    draws = rng.integers(0, len(names), size=(resamples, len(names)))
+    weights = np.zeros((resamples, len(names)))
+    np.add.at(weights, (np.arange(resamples)[:, None], draws), 1.0)
+    sums = weights @ per
+    n = sums[:, 2 * k + 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        item_variances = (sums[:, k : 2 * k] - sums[:, :k] ** 2 / n[:, None]) / (n - 1)[:, None]
+        trace = item_variances.sum(axis=1)
+        total = (sums[:, 2 * k + 1] - sums[:, 2 * k] ** 2 / n) / (n - 1)
+        values = k / (k - 1) * (1.0 - trace / total)
+    values[(n < 2) | ~(total > NO_VARIANCE * np.maximum(trace, 1.0))] = np.nan
+    finite = values[np.isfinite(values)]
+    if len(finite) < resamples / 2:
+        return None, None, "alpha undefined in most resamples"
+    tail = (1 - confidence) / 2
+    low, high = np.quantile(finite, [tail, 1 - tail])
+    note = ""
+    if len(finite) < resamples:
+        note = f"{resamples - len(finite)} of {resamples} resamples had no defined alpha"
+    return float(low), float(high), note

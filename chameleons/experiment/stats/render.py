@@ -13,8 +13,9 @@ from chameleons.experiment.stats.render_models import (
     effect_sizes_text,
     models_latex,
     models_text,
+    suggestion_mix_text,
 )
-from chameleons.experiment.stats.rounding import RULE, fmt, fmt_p
+from chameleons.experiment.stats.rounding import RULE, fmt, p_is
 
 MEASURE_LABELS = {
     "accepted": "Accepted robot suggestions",
@@ -46,7 +47,7 @@ def render_text(
         name = f"{names.get(measure, measure)} ({ranges.get(measure, '')})"
         cells = "".join(f"{result.conditions[c].cell():<22}" for c in conditions)
         lines.append(f"{name.replace(' ()', ''):<34}{cells}")
-    lines += ["", "Friedman tests (asymptotic chi-squared; Kendall's W as effect size):"]
+    lines += ["", "Friedman tests (permutation p, exact where feasible; Kendall's W):"]
     lines += [f"  {m:<12} {_friedman_text(r)}" for m, r in analysis.measures.items()]
     lines += ["", "Post-hoc pairwise tests:"]
     for measure, result in analysis.measures.items():
@@ -54,8 +55,9 @@ def render_text(
             lines.append(f"  {measure:<12} {result.posthoc_note}")
         for test in result.posthoc:
             lines.append(f"  {measure:<12} {posthoc_text(test)}")
-    lines += effect_sizes_text(analysis, labels) + models_text(analysis, labels)
-    lines += reliability_text(analysis, names)
+    lines += effect_sizes_text(analysis, labels) + suggestion_mix_text(analysis, labels)
+    lines += models_text(analysis, labels)
+    lines += reliability_text(analysis, names, labels)
     notes = [n for r in analysis.measures.values() for n in r.notes] + analysis.notes
     notes.append(f"Numbers are {RULE}.")
     lines += ["", "Notes:", *(f"  - {n}" for n in notes)]
@@ -147,31 +149,28 @@ def posthoc_text(test: PairwiseTest) -> str:
         return f"{test.a} vs {test.b}: undefined ({test.note}), n = {test.n}"
     return (
         f"{test.a} vs {test.b}: V = {fmt(test.v, 1)}, W = {fmt(test.statistic, 1)}, "
-        f"p = {fmt_p(test.p)}, Bonferroni p = {fmt_p(test.p_bonferroni)}, n = {test.n}"
+        f"p {p_is(test.p)}, Bonferroni p {p_is(test.p_bonferroni)}, n = {test.n}"
         f" ({test.method}{'; ' + test.note if test.note else ''})"
     )
 
 
 def _friedman_text(result: MeasureAnalysis) -> str:
+    """The permutation p first (exact at the paper's n), then the asymptotic one."""
     test = result.friedman
     if test.chi2 is None:
         return f"chi2 {UNDEFINED} (n = {test.n}; every participant's values tied or no data)"
-    text = (
-        f"chi2({test.df}) = {fmt(test.chi2, 2)}, p = {fmt_p(test.p)}, Bonferroni p = "
-        f"{fmt_p(result.p_bonferroni)}, Kendall's W = {fmt(test.kendall_w, 3)}, n = {test.n}"
+    text = f"chi2({test.df}) = {fmt(test.chi2, 2)}, Kendall's W = {fmt(test.kendall_w, 3)}, "
+    text += f"n = {test.n}; "
+    p, p_bonferroni, how = result.primary_p
+    perm = result.permutation
+    if perm is not None and perm.method != "exact":
+        how += f" ({perm.resamples} resamples, seed {perm.seed})"
+    if perm is None or perm.p is None:
+        return text + f"p {p_is(test.p)}, Bonferroni p {p_is(result.p_bonferroni)}"
+    return text + (
+        f"{how} p {p_is(p)}, Bonferroni p {p_is(p_bonferroni)} (asymptotic chi-squared "
+        f"p {p_is(test.p)}, Bonferroni p {p_is(result.p_bonferroni)})"
     )
-    if result.permutation is not None:
-        perm = result.permutation
-        how = (
-            "exact"
-            if perm.method == "exact"
-            else f"Monte Carlo, {perm.resamples} resamples, seed {perm.seed}"
-        )
-        text += (
-            f"; permutation p ({how}) = {fmt_p(perm.p)}, Bonferroni "
-            f"{fmt_p(result.permutation_p_bonferroni)}"
-        )
-    return text
 
 
 def _mean_sd_tex(d: Descriptive) -> str:
@@ -190,19 +189,35 @@ def _tex(text: str) -> str:
 
 
 def reliability_line(result: Reliability, title: str) -> str:
-    """``title: alpha = 0.81, 95% CI [0.70, 0.89] (n = 36 ratings, 12 items)``."""
-    counts = f"n = {result.n} complete ratings, {result.items} items"
+    """``title: alpha = 0.81, 95% CI [0.70, 0.89] (percentile bootstrap over participants;
+    n = 36 complete ratings from 12 participants, 12 items)``."""
+    who = f" from {result.participants} participants" if result.participants else ""
+    counts = f"n = {result.n} complete ratings{who}, {result.items} items"
     if result.alpha is None:
         return f"{title}: alpha {UNDEFINED} ({result.note}; {counts})"
     level = round(result.confidence * 100)
-    interval = f"{level}% CI [{fmt(result.ci_low, 2)}, {fmt(result.ci_high, 2)}]"
-    return f"{title}: alpha = {fmt(result.alpha, 2)}, {interval} ({counts})"
+    if result.ci_low is None or result.ci_high is None:
+        interval = f"no interval ({result.note})"
+    else:
+        interval = f"{level}% CI [{fmt(result.ci_low, 2)}, {fmt(result.ci_high, 2)}]"
+    return f"{title}: alpha = {fmt(result.alpha, 2)}, {interval} ({result.method}; {counts})"
 
 
-def reliability_text(analysis: Analysis, names: Mapping[str, str]) -> list[str]:
+def reliability_text(
+    analysis: Analysis, names: Mapping[str, str], labels: Mapping[str, str]
+) -> list[str]:
     if not analysis.reliability:
         return []
-    lines = ["", "Internal consistency (Cronbach's alpha, Feldt's interval; all ratings):"]
-    return lines + [
-        "  " + reliability_line(r, names.get(r.scale, r.scale)) for r in analysis.reliability
+    lines = [
+        "",
+        "Internal consistency (Cronbach's alpha): all ratings, with an interval that resamples",
+        "participants (their ratings are not independent); and per condition (one rating per",
+        "participant), with Feldt's interval:",
     ]
+    for result in analysis.reliability:
+        lines.append("  " + reliability_line(result, names.get(result.scale, result.scale)))
+        lines += [
+            "    " + reliability_line(c, labels.get(c.condition, c.condition))
+            for c in result.by_condition
+        ]
+    return lines

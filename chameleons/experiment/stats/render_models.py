@@ -7,8 +7,10 @@ from collections.abc import Mapping
 
 from chameleons.experiment.stats.analysis import Analysis
 from chameleons.experiment.stats.effect_sizes import Interval
+from chameleons.experiment.stats.friedman_test import PermutationResult
 from chameleons.experiment.stats.models import Coefficient, ModelResult, TermTest
-from chameleons.experiment.stats.rounding import fmt, fmt_p
+from chameleons.experiment.stats.rounding import fmt, fmt_p, p_is
+from chameleons.experiment.stats.suggestion_mix import SuggestionMix
 
 UNDEFINED = "undefined"
 
@@ -35,10 +37,12 @@ def interval_text(interval: Interval, digits: int = 2) -> str:
         return interval.note or UNDEFINED
     if interval.ci_low is None or interval.ci_high is None:
         return f"{_num(interval.estimate, digits)} (no interval: {interval.note})"
-    return (
+    text = (
         f"{_num(interval.estimate, digits)} [{_num(interval.ci_low, digits)}, "
         f"{_num(interval.ci_high, digits)}]"
     )
+    return text + (" (zero-width interval: not a measure of precision)" if interval.degenerate
+                   else "")  # fmt: skip
 
 
 def effect_sizes_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
@@ -69,9 +73,8 @@ def models_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
     if models is None:
         return []
     lines = ["", "Models (secondary analyses; 95% Wald intervals):"]
-    fitted = [m for m in [models.acceptance, *models.scores.values()] if m is not None]
-    for model in fitted:
-        lines += ["", f"  {model.name}: {model.formula}", f"    {model.method}"]
+    for model in models.fitted:
+        lines += ["", f"  {model_title(model)}: {model.formula}", f"    {model.method}"]
         if model.error:
             lines.append(f"    not available: {model.error}")
             continue
@@ -84,6 +87,42 @@ def models_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
         lines += [f"    note: {n}" for n in model.notes]
     lines += [f"  note: {n}" for n in models.notes]
     return lines
+
+
+def suggestion_mix_text(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
+    mix = analysis.suggestion_mix
+    if mix is None:
+        return []
+    lines = [
+        "",
+        "Suggestion mix per condition (the kind depends on earlier decisions, so the "
+        "acceptance model leaves it out; read differences here as a consequence):",
+    ]
+    for c in mix.conditions:
+        share = "" if c.random_share is None else f" ({_num(100 * c.random_share, 0)}%)"
+        lines.append(
+            f"  {labels.get(c.condition, c.condition):<22} {c.total} suggestions: "
+            f"{c.optimal} optimal, {c.random} random{share}, {c.down} moved down"
+        )
+    lines.append(f"  random suggestions per participant and condition: {mix_test_text(mix)}")
+    lines += [f"  note: {n}" for n in mix.notes]
+    return lines
+
+
+def mix_test_text(mix: SuggestionMix) -> str:
+    test = mix.friedman
+    if test.chi2 is None:
+        return f"Friedman test undefined (n = {test.n}; every participant's counts tied)"
+    text = f"Friedman chi2({test.df}) = {_num(test.chi2)}, p {p_is(test.p)}"
+    if mix.permutation is not None:
+        text += f", {permutation_label(mix.permutation)} p {p_is(mix.permutation.p)}"
+    return text + f", n = {test.n}"
+
+
+def permutation_label(permutation: PermutationResult) -> str:
+    if permutation.method == "exact":
+        return "exact permutation"
+    return f"Monte Carlo permutation ({permutation.resamples} resamples, seed {permutation.seed})"
 
 
 def test_text(test: TermTest) -> str:
@@ -131,7 +170,8 @@ def effect_sizes_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[st
         r"\begin{table}[]",
         r"    \centering",
         r"    \caption{Effect sizes with 95\% bootstrap confidence intervals (resampling "
-        r"participants).}",
+        r"participants). $^\dagger$: zero-width interval (at least 95\% of the resamples gave "
+        r"the same value), not a measure of precision.}",
         r"    \begin{tabular}{ |l|l|c| }",
         r"    \hline",
         r"    Measure & Effect & Estimate [95\% CI] \\",
@@ -147,11 +187,8 @@ def models_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
     models = analysis.models
     if models is None:
         return []
-    fitted = [
-        m for m in [models.acceptance, *models.scores.values()] if m is not None and not m.error
-    ]
     rows = []
-    for model in fitted:
+    for model in (m for m in models.fitted if not m.error):
         condition = model.test("condition")
         test = ""
         if condition and condition.f is not None and condition.p_f is not None:
@@ -161,7 +198,7 @@ def models_latex(analysis: Analysis, labels: Mapping[str, str]) -> list[str]:
             )
         elif condition:
             test = rf" ($\chi^2({condition.df})={_num(condition.chi2)}$, $p={_p(condition.p)}$)"
-        rows.append(rf"    \multicolumn{{3}}{{|l|}}{{{tex(model.name)}{test}}} \\")
+        rows.append(rf"    \multicolumn{{3}}{{|l|}}{{{tex(model_title(model))}{test}}} \\")
         for c in model.coefficients:
             if c.term == "Intercept":
                 continue
@@ -190,10 +227,11 @@ def _tex_interval(interval: Interval, digits: int = 2) -> str:
         return "--"
     if interval.ci_low is None or interval.ci_high is None:
         return f"${_num(interval.estimate, digits)}$"
-    return (
+    text = (
         f"${_num(interval.estimate, digits)}$ [${_num(interval.ci_low, digits)}$, "
         f"${_num(interval.ci_high, digits)}$]"
     )
+    return text + ("$^\\dagger$" if interval.degenerate else "")
 
 
 def _tex_coefficient(c: Coefficient) -> str:
@@ -202,13 +240,21 @@ def _tex_coefficient(c: Coefficient) -> str:
     return f"${_num(c.estimate)}$ [${_num(c.ci_low)}$, ${_num(c.ci_high)}$]"
 
 
+def model_title(model: ModelResult) -> str:
+    """The model's name as reports print it; the kind-adjusted acceptance model says it is
+    the secondary one."""
+    if model.name == "acceptance_by_kind":
+        return "acceptance adjusted for suggestion kind (secondary: kind is a mediator)"
+    if model.name == "acceptance":
+        return "acceptance (total effect of condition)"
+    return model.name
+
+
 def model_by_name(analysis: Analysis, name: str) -> ModelResult | None:
     models = analysis.models
     if models is None:
         return None
-    if name == "acceptance":
-        return models.acceptance
-    return models.scores.get(name)
+    return next((m for m in models.fitted if m.name == name), None)
 
 
 def tex(text: str) -> str:

@@ -65,3 +65,9 @@ def fmt_p(value: float | None, missing: str = "undefined") -> str:
     if value is None:
         return missing
     return "< 0.0001" if value < 0.0001 else fmt(value, 4)
+
+
+def p_is(value: float | None, missing: str = "undefined") -> str:
+    """A p-value after the letter p: ``= 0.0123``, ``< 0.0001`` (never ``= < 0.0001``)."""
+    text = fmt_p(value, missing)
+    return text if value is None or text.startswith("<") else f"= {text}"

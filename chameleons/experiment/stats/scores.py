@@ -3,8 +3,10 @@ be analysed with a sentence that names the row, the column and the value.
 
 Refused: a value that is not a finite number (``inf``, ``nan`` text: a missing value is an
 empty cell or ``NA``), a value outside the measure's scale or not a whole number where one
-is required, a condition the study does not have (labels are case-sensitive: ``Copy`` is
-not ``copy``), and two rows for the same participant and condition.
+is required, a questionnaire score that no set of answers can give (it is the mean of its
+items' whole-number answers, so a multiple of 1/items: 4.42 is no mean of 12 answers), a
+condition the study does not have (labels are case-sensitive: ``Copy`` is not ``copy``),
+and two rows for the same participant and condition.
 
 Which condition a row counts for depends on the *view*:
 
@@ -31,6 +33,7 @@ VIEW_TITLES = {
     "as_run": "as run (per protocol: participants with deviations left out)",
 }
 MISSING_TEXT = {"", "na"}
+GRID_TOLERANCE = 1e-9  # relative: an exported mean (53/12 as 4.416666666666667) is on the grid
 NOT_FINITE_TEXT = {"nan", "-nan", "+nan", "inf", "-inf", "+inf", "infinity", "-infinity"}
 TRUE_TEXT = {"true", "1", "yes", "t"}
 FALSE_TEXT = {"false", "0", "no", "f", "", "na"}
@@ -51,16 +54,33 @@ class AnalysisError(ValueError):
 
 @dataclass(frozen=True)
 class Scale:
-    """The values a measure can take: ``low``..``high``, whole numbers when ``integer``."""
+    """The values a measure can take: ``low``..``high``, whole numbers when ``integer``,
+    multiples of ``1 / mean_of`` when it is the mean of ``mean_of`` whole-number answers."""
 
     low: float
     high: float
     integer: bool = False
     what: str = ""
+    mean_of: int = 0
 
     def describe(self) -> str:
         kind = "whole numbers" if self.integer else "values"
         return f"{self.what or 'this measure'} takes {kind} from {self.low:g} to {self.high:g}"
+
+    def off_grid(self, value: float) -> str | None:
+        """Why ``value`` cannot be a mean of ``mean_of`` whole numbers (None when it can)."""
+        if self.mean_of < 2:
+            return None
+        total = value * self.mean_of
+        if abs(total - round(total)) <= GRID_TOLERANCE * max(1.0, abs(total)):
+            return None
+        below, above = math.floor(total), math.ceil(total)
+        return (
+            f"is not a mean of {self.mean_of} whole-number answers (the nearest are "
+            f"{below}/{self.mean_of} = {below / self.mean_of:.4f} and {above}/{self.mean_of} = "
+            f"{above / self.mean_of:.4f}); a rounded or edited score cannot be analysed: use "
+            "the exported value"
+        )
 
 
 @dataclass(frozen=True)
@@ -187,6 +207,9 @@ class Reader:
                 f"{where}, column {column}: {value!r} is outside {scale.low:g}..{scale.high:g} "
                 f"({scale.describe()})."
             )
+        why = scale.off_grid(number)
+        if why:
+            raise AnalysisError(f"{where}, column {column}: {value!r} {why}.")
         return number
 
     # --- participants ------------------------------------------------------------------------

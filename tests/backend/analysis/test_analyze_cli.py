@@ -35,12 +35,23 @@ def test_database_mode_matches_the_exported_scores(sqlite_template: Path, tmp_pa
         assert from_db.output == from_file.output
     # Both read the item answers (the file mode from questionnaire.csv beside scores.csv).
     text = runner.invoke(analyze_command, []).output
-    assert "Internal consistency (Cronbach's alpha, Feldt's interval; all ratings):" in text
+    assert "Internal consistency (Cronbach's alpha): all ratings, with an interval" in text
     assert "  Trust: alpha = " in text
-    assert "(n = 36 complete ratings, 6 items)" in text
+    # 36 ratings from 12 people: the pooled interval resamples people; per condition Feldt.
+    assert "(percentile bootstrap over participants; n = 36 complete ratings from 12 " in text
+    assert "    Copy: alpha = " in text
+    assert "(Feldt; n = 12 complete ratings from 12 participants, 6 items)" in text
     # Both read the per-suggestion rows (the file mode from suggestions.csv beside scores.csv).
     models = json.loads(runner.invoke(analyze_command, ["--format", "json"]).output)["models"]
     assert models["acceptance"]["n_observations"] == 108
+    assert "C(kind)" not in models["acceptance"]["formula"]  # the total effect
+    assert "C(kind)" in models["acceptance_by_kind"]["formula"]
+    # The suggestion mix per condition, with or without the models, from either source.
+    for args in ([], ["--no-models"], ["--scores", str(tmp_path / "out" / "scores.csv"),
+                                       "--no-models"]):  # fmt: skip
+        text = runner.invoke(analyze_command, args).output
+        assert "Suggestion mix per condition" in text
+        assert "  Copy                   36 suggestions: " in text
     with_rehearsal = runner.invoke(analyze_command, ["--format", "json", "--include-rehearsal"])
     assert '"n": 13' in with_rehearsal.output
     missing = runner.invoke(analyze_command, ["--study", "42"])

@@ -21,7 +21,8 @@ from tests.backend.test_auth import add_user, login
 from tests.support.factories import populate
 
 
-def refit_acceptance(export: Path) -> sm.GEE:
+def refit_acceptance(export: Path, by_kind: bool) -> sm.GEE:
+    """The total effect (no kind), or with ``by_kind`` the secondary kind-adjusted model."""
     suggestions = pd.read_csv(export / "suggestions.csv")
     interactions = pd.read_csv(export / "interactions.csv")
     data = suggestions.merge(
@@ -31,7 +32,7 @@ def refit_acceptance(export: Path) -> sm.GEE:
     )
     data["accepted"] = data["accepted"].astype(float)
     formula = "accepted ~ C(condition, Treatment('still')) + C(position) + C(item_set)" + (
-        " + C(kind, Treatment('optimal'))" if data["kind"].nunique() > 1 else ""
+        " + C(kind, Treatment('optimal'))" if by_kind and data["kind"].nunique() > 1 else ""
     )
     return smf.gee(
         formula,
@@ -54,15 +55,17 @@ def test_models_refit_on_the_exported_csv(
     api = client.get("/api/pi/analysis").json()["analysis"]
     models = api["models"]
 
-    gee = refit_acceptance(tmp_path)
-    ours = {(c["term"], c["level"]): c for c in models["acceptance"]["coefficients"]}
-    for name, estimate in gee.params.items():
-        if name == "Intercept":
-            key = ("Intercept", "")
-        else:
-            key = (name.split("(")[1].split(",")[0].split(")")[0], name.split("[T.")[1][:-1])
-        assert ours[key]["estimate"] == pytest.approx(estimate, rel=1e-6, abs=1e-9), name
-        assert ours[key]["se"] == pytest.approx(gee.bse[name], rel=1e-6), name
+    for model, by_kind in (("acceptance", False), ("acceptance_by_kind", True)):
+        gee = refit_acceptance(tmp_path, by_kind)
+        ours = {(c["term"], c["level"]): c for c in models[model]["coefficients"]}
+        assert len(ours) == len(gee.params)
+        for name, estimate in gee.params.items():
+            if name == "Intercept":
+                key = ("Intercept", "")
+            else:
+                key = (name.split("(")[1].split(",")[0].split(")")[0], name.split("[T.")[1][:-1])
+            assert ours[key]["estimate"] == pytest.approx(estimate, rel=1e-6, abs=1e-9), name
+            assert ours[key]["se"] == pytest.approx(gee.bse[name], rel=1e-6), name
 
     scores = pd.read_csv(tmp_path / "scores.csv")
     for measure in ("credibility", "likeability", "trust"):
@@ -100,6 +103,8 @@ def test_analysis_page_loads_effect_sizes_and_models_after_its_first_render(
     assert fragment.status_code == 200
     assert 'id="effect-sizes"' in fragment.text
     assert 'id="model-acceptance"' in fragment.text
+    assert 'id="model-acceptance_by_kind"' in fragment.text
+    assert "adjusted for suggestion kind (secondary: the kind is a mediator)" in fragment.text
     for measure in ("credibility", "likeability", "trust"):
         assert f'id="model-{measure}"' in fragment.text
     assert r"\label{tab:effects}" in fragment.text

@@ -35,11 +35,12 @@ from tests.support.bots import staff_api
 from tests.support.factories import populate
 
 
-def set_up(engine: Engine) -> int:
+def set_up(engine: Engine, effects: dict[str, float] | None = None) -> int:
     """12 participants: P003 excluded, P007's interaction 2 switched to interaction 1's
-    condition (a deviation), P012 ended early during interaction 3."""
+    condition (a deviation), P012 ended early during interaction 3; ``effects``: the
+    conditions' effects on the answers (the factory's default: small)."""
     with session_scope(build_sessionmaker(engine)) as db:
-        data = populate(db, 12, seed=5)
+        data = populate(db, 12, seed=5, effects=effects)
         exclude(db, data.study_id, "P003", "fell asleep")
         sessions = dict(zip(data.codes, data.session_ids, strict=True))
         p7 = {i.position: i for i in db.scalars(

@@ -84,15 +84,22 @@ def test_preregistration_from_a_study_file_with_power(tmp_path: Path) -> None:
     assert "- Plan seed: 7" in text
     assert "| 12 |" in text  # the power table
     assert "Bonferroni over the 4 measures" in text
-    # The design states the study's own suggestion rule (the paper's: best move, up or down).
-    assert "(up or down) that most lowers the ranking's error" in text
+    # The analysis plan: exact permutation p; the acceptance model's total effect (no kind).
+    assert "its p-value is the exact permutation p" in text
+    assert "`accepted ~ condition + position + item set` (the condition's total effect)" in text
+    assert "item set + kind" not in text
+    # The design states the study's own suggestion rule (the default: the paper's sentence
+    # read literally, each misplaced item moved to its place, random only when none is).
+    assert "to its place (preferring a move that lowers the ranking's error" in text
+    assert "made only when every item the participant has not declined is at its place" in text
     up_only = tmp_path / "up_only.yaml"
-    up_only.write_text(STUDY_YAML.read_text().replace("suggestion_rule: best_move",
+    up_only.write_text(STUDY_YAML.read_text().replace("suggestion_rule: expert_place",
                                                       "suggestion_rule: up_only"))  # fmt: skip
     code, up_text, err = run("prereg", "--study", str(up_only), "--participants", "24")
     assert code == 0, err
     assert "most important item below its expert position up to it" in up_text
-    assert "(up or down)" not in up_text
+    assert "made only when no move up lowers the error" in up_text
+    assert "to its place (preferring" not in up_text
     # The appendix holds the configuration itself: it hashes to the hash the header names.
     config = json.loads(re.search(r"```json\n(.*?)\n```", text, re.S).group(1))  # type: ignore[union-attr]
     digest = hashlib.sha256(canonical_json(config).encode()).hexdigest()
