@@ -25,11 +25,16 @@ from tests.backend.booth.conftest import (
     until,
     worker_config,
 )
-from tests.backend.booth.test_booth_check import acknowledged_behaviour, check_in_background
+from tests.backend.booth.test_booth_check import (
+    TURN_AND_NOD,
+    acknowledged_behaviour,
+    check_in_background,
+    phone_ready,
+    running_behaviour,
+)
 from tests.support.bots import StaffApi
 from tests.worker.furhat_peer import FurhatPeer
-from tests.worker.livelink_recording import head_turn_then_nod
-from tests.worker.test_livelink_replay import _replay
+from tests.worker.head_stream import Pose, stream_after
 
 pytestmark = pytest.mark.usefixtures("flow")
 
@@ -37,9 +42,9 @@ pytestmark = pytest.mark.usefixtures("flow")
 @pytest.fixture
 def settings(settings: Settings) -> Settings:
     """A shorter head movement than a technician's (the replayed turn and nod take 3 s)."""
-    return settings.model_copy(
-        update={"booth_check_turn_seconds": 2.5, "booth_check_nod_seconds": 2.0}
-    )
+    return settings.model_copy(update={"booth_check_rest_seconds": 1.0,
+                                       "booth_check_turn_seconds": 2.5,
+                                       "booth_check_nod_seconds": 2.0})  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -56,11 +61,16 @@ def test_a_turn_read_in_the_wrong_unit_fails_with_the_unit_as_the_likely_cause(
     how: str,
 ) -> None:  # fmt: skip
     config = worker_config(bridge, tmp_path, livelink_port=0, livelink_rotation_scale=scale)
+    # The technician holds still (the resting pose), turns and nods, as the check asks.
+    pose = Pose(turn_at=0.3, turn_deg=turn, turn_s=1.5, nod_at=2.0, nod_deg=15.0, nod_s=1.0)
     with running_worker(bridge, config) as worker:
-        _replay(worker.receivers["livelink"].port, head_turn_then_nod(turn, 15.0).packets)
-        until(lambda: _head_range(bridge), what="the head movement in a heartbeat")
-        result = pi.post(f"/api/booths/{BOOTH}/check?say=false&movement=false")
-    head = next(s for s in result["steps"] if s["id"] == "head")
+        until(lambda: running_behaviour(bridge) == "still", what="the worker in still")
+        checking, answer = check_in_background(pi, f"/api/booths/{BOOTH}/check?say=false")
+        stream_after(worker.receivers["livelink"].port, pose, 3.5, phone_ready(worker),
+                     until=lambda: not checking.is_alive())  # fmt: skip
+        checking.join(timeout=90)
+    assert "error" not in answer, answer
+    head = next(s for s in answer["steps"] if s["id"] == "head")
     assert head["status"] == "fail"
     value = str(head["value"])
     assert ": no turn to the left seen; if the head moved about " in value
@@ -68,12 +78,6 @@ def test_a_turn_read_in_the_wrong_unit_fails_with_the_unit_as_the_likely_cause(
     assert abs(said - meant) <= 2.0, value
     assert f"the rotation unit is wrong ({how} too small)" in value
     assert value.endswith("check CHAMELEONS_LIVELINK_ROTATION_SCALE")
-
-
-def _head_range(bridge: Bridge) -> bool:
-    telemetry = bridge.latest_telemetry(BOOTH)[0] or {}
-    heads = (telemetry.get("ingest") or {}).get("head_range")
-    return bool(heads and heads.get("frames", 0) > 100)
 
 
 def test_a_robot_that_refuses_the_login_fails_the_copy_step_with_the_login_failure(
@@ -91,7 +95,8 @@ def test_a_robot_that_refuses_the_login_fails_the_copy_step_with_the_login_failu
             )
             copying = {"name": "copy", "params": {"delay": 4.0}}
             until(lambda: acknowledged_behaviour(bridge) == copying, what="the switch to copy")
-            _replay(worker.receivers["livelink"].port, head_turn_then_nod(40.0, 15.0).packets)
+            stream_after(worker.receivers["livelink"].port, TURN_AND_NOD, 3.5,
+                         phone_ready(worker), until=lambda: not checking.is_alive())  # fmt: skip
             checking.join(timeout=90)
     assert not checking.is_alive()
     assert "error" not in answer, answer
