@@ -9,6 +9,31 @@ const NOT_SENT = {
   timeout: "worker did not answer",
 };
 
+/** What became of each play (``prompt.played`` id -> {group, position, voiced, reason}):
+ * ``voiced`` true once the robot started speaking it, false once anything says the
+ * participant did not hear it (not sent, not voiced, or ended with a reason such as the
+ * robot display closing while it played), null while that is not known yet. */
+export function playResults(events) {
+  const plays = new Map();
+  for (const event of events) {
+    const p = event.payload || {};
+    if (event.kind === "prompt.played") {
+      plays.set(event.id, { group: p.group, position: p.position, voiced: null, reason: null });
+      continue;
+    }
+    const play = plays.get(p.play_event_id);
+    if (!play) continue;
+    if (event.kind === "prompt.speech_start" && play.voiced === null) play.voiced = true;
+    const failed = ["prompt.not_sent", "prompt.not_voiced"].includes(event.kind)
+      || (event.kind === "prompt.speech_end" && p.reason);
+    if (failed) {
+      play.voiced = false;
+      play.reason = NOT_SENT[p.reason] || p.detail || p.reason || "not voiced";
+    }
+  }
+  return plays;
+}
+
 export function playState(events) {
   let played = null;
   for (let i = events.length - 1; i >= 0; i -= 1) {
@@ -22,13 +47,14 @@ export function playState(events) {
   const related = (kind) => later.find((e) => e.kind === kind && e.payload.play_event_id === played.id);
   const base = { played, text: played.payload.text, group: played.payload.group, duration: played.payload.duration };
   if (later.some((e) => e.kind === "prompt.stopped")) return { ...base, phase: "stopped" };
-  const ended = related("prompt.speech_end");
-  // The robot display could not play it (e.g. it needs a click to enable sound): say so.
-  if (ended && ended.payload.reason) return { ...base, phase: "not-sent", notPlayed: true, reason: ended.payload.detail || ended.payload.reason };
-  if (ended) return { ...base, phase: "finished" };
   // Sent and acknowledged, but no robot voiced it (no display open, robot skipped it...).
   const silent = related("prompt.not_voiced");
   if (silent) return { ...base, phase: "not-sent", notVoiced: true, reason: silent.payload.detail };
+  const ended = related("prompt.speech_end");
+  // The robot display could not play it (e.g. it needs a click to enable sound, or it was
+  // closed while it played): say so.
+  if (ended && ended.payload.reason) return { ...base, phase: "not-sent", notPlayed: true, reason: ended.payload.detail || ended.payload.reason };
+  if (ended) return { ...base, phase: "finished" };
   const failed = related("prompt.not_sent");
   if (failed) return { ...base, phase: "not-sent", reason: NOT_SENT[failed.payload.reason] || failed.payload.detail };
   const started = related("prompt.speech_start") || related("prompt.acked");
