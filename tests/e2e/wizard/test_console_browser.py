@@ -160,7 +160,7 @@ def rank_on_the_phone(console: Console, phone: Page) -> list[str]:
     last = console.wizard.interaction(1)["items"][-1]["name"]
     phone.get_by_role("button", name=f"Move {last} up").click()
     phone.get_by_role("button", name="Submit my ranking").click()
-    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    expect(phone.locator("#save-status")).to_have_text("Ranking saved ✓")
     ranking = [*before[:-2], before[-1], before[-2]]
     assert console.wizard.refresh()["interactions"][0]["initial_ranking"] == ranking
     return ranking
@@ -181,7 +181,7 @@ def answer_page(phone: Page, part: int) -> None:
         else:
             field.locator("label.point").nth(3).click()
     phone.get_by_role("button", name=re.compile(r"^Save")).click()
-    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    expect(phone.locator("#save-status")).to_have_text("Answers saved ✓")
 
 
 def switch_to_an_unplanned_condition(console: Console) -> None:
