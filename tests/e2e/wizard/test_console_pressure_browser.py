@@ -147,3 +147,22 @@ def test_the_questions_before_the_interactions_read_so_on_the_timeline(
     expect(row).not_to_contain_text("-1")
     consent = console.page.locator("#timeline li[data-kind='consent.given']")
     expect(consent).to_contain_text("Phone: consent given")
+
+
+def test_marking_the_participant_a_rehearsal_reaches_the_open_console(
+    console: Console,
+) -> None:
+    page, wizard = console.page, console.wizard
+    tag = page.locator("#bar-rehearsal")
+    expect(page.locator("#primary-action")).to_be_enabled()
+    expect(tag).to_be_hidden()
+    code = page.locator("#bar-participant").inner_text()
+    rehearsal = f"/api/pi/participants/{code}/rehearsal"
+    wizard.staff.post(rehearsal, {"rehearsal": True})
+    expect(tag).to_be_visible()  # live: no reload
+    expect(page.locator("#timeline li[data-kind='session.rehearsal_marked']")).to_have_text(
+        re.compile("Marked as a rehearsal")
+    )
+    wizard.staff.post(rehearsal, {"rehearsal": False})
+    expect(tag).to_be_hidden()
+    expect(page.locator("#timeline li[data-kind='session.rehearsal_unmarked']")).to_have_count(1)
