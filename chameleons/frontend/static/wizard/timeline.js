@@ -51,7 +51,8 @@ export function describe(event, names) {
       if (p.reason) return `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})`;
       return p.outcome && p.outcome !== "played" ? `Speech ${p.outcome} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
-    case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
+    case "robot.applied": return p.behaviour && p.behaviour.unchanged && p.face_result && p.face_result.unchanged
+      ? `Robot runs ${p.condition}, face ${p.face} (set already)` : `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
     case "wizard.note": return `Note: ${p.text}`;
     case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
