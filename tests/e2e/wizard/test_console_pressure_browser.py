@@ -6,6 +6,7 @@ strip says whether typed speech can speak."""
 from __future__ import annotations
 
 import re
+import shutil
 
 import pytest
 from playwright.sync_api import Locator, Page, expect
@@ -130,6 +131,7 @@ def test_the_say_fields_hint_fits_at_1280(console: Console) -> None:
     expect(say).to_have_attribute("placeholder", re.compile(r"\(Shift\+T\)$"))
 
 
+@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is not installed")
 def test_the_health_strip_says_typed_speech_can_speak(console: Console) -> None:
     """The server looked for espeak-ng at its start-up (this machine has it)."""
     chip = console.page.locator("#health .chip[data-check='typed_speech']")
