@@ -30,6 +30,12 @@ def start_discussion(page: Page) -> None:
     expect(page.locator("#bar-step")).to_have_text("discussion")
 
 
+NEEDS_ESPEAK = pytest.mark.skipif(
+    shutil.which("espeak-ng") is None, reason="espeak-ng is not installed"
+)
+
+
+@NEEDS_ESPEAK  # the typed sentence is synthesised (no worker: logged, not sent)
 def test_enter_in_the_note_or_say_field_gives_the_keys_back_to_the_console(
     console: Console,
 ) -> None:
@@ -131,7 +137,7 @@ def test_the_say_fields_hint_fits_at_1280(console: Console) -> None:
     expect(say).to_have_attribute("placeholder", re.compile(r"\(Shift\+T\)$"))
 
 
-@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is not installed")
+@NEEDS_ESPEAK
 def test_the_health_strip_says_typed_speech_can_speak(console: Console) -> None:
     """The server looked for espeak-ng at its start-up (this machine has it)."""
     chip = console.page.locator("#health .chip[data-check='typed_speech']")
