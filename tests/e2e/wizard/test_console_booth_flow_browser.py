@@ -217,16 +217,24 @@ def virtual_worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[W
 def test_a_prompt_cut_short_by_the_display_closing_is_not_voiced(
     console: Console, app: FastAPI
 ) -> None:
-    """The robot display page closes while it speaks: the play ends "not voiced" with the
-    reason, its button loses the tick, and the Speaking chip goes quiet."""
+    """No robot display open: the play is not voiced, its button says so. Then the display
+    page closes while it speaks: the play ends "not voiced" with the reason, its button
+    has no tick, and the Speaking chip goes quiet."""
     page = console.page
+    start_interaction(page)
+    page.keyboard.press("y")  # nobody hears it: no display page is open
+    yes = page.locator("#prompt-sections button.pb[data-group='ack_yes']")
+    expect(yes.locator(".pb-played")).to_have_text("✗ not voiced")
+    expect(yes.locator(".pb-played")).to_have_attribute(
+        "title", re.compile(r"^Not voiced: no robot display open")
+    )
+
     display = page.context.new_page()
     booth = console.wizard.snapshot["booth"]
     display.goto(console.server.url + display_path(signing_key(app), booth))
     wait_for_js(display, "window.robotDisplay && window.robotDisplay.connected()")
     robot = page.locator("#health .chip[data-check='robot']")
     expect(robot).to_have_attribute("data-state", "ok")
-    start_interaction(page)
     page.keyboard.press("i")  # heard to its end: a tick
     intro = page.locator("#timeline li[data-kind='prompt.speech_end']")
     expect(intro).to_have_count(1)
@@ -240,7 +248,7 @@ def test_a_prompt_cut_short_by_the_display_closing_is_not_voiced(
     display.close()
     ended = page.locator("#timeline li[data-kind='prompt.speech_end']").first
     expect(ended).to_contain_text("NOT PLAYED: the robot display was closed while it played")
-    scenario = page.locator("#prompt-sections button.pb.not-voiced")
+    scenario = page.locator("#prompt-sections button.pb.not-voiced[data-stage='scenario']")
     expect(scenario).to_have_count(1)
     expect(scenario.locator(".pb-played")).to_have_text("✗ not voiced")
     expect(page.locator("#now-playing")).to_have_attribute("data-phase", "not-sent")
