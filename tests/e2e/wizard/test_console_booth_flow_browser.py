@@ -35,19 +35,29 @@ def settings(settings: Settings) -> Settings:
     })  # fmt: skip
 
 
-@pytest.fixture
-def worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[Worker]:
+def running_worker(console: Console, app: FastAPI, folder: Path, driver: str) -> Worker:
+    """A real worker of the console's booth on the server's own bridge, once it said hello."""
     bridge = app.state.bridge
-    config = WorkerConfig(booth=console.wizard.snapshot["booth"], driver="null",
-                          livelink_port=None, facecapturex_port=None, data_dir=tmp_path / "w",
+    config = WorkerConfig(booth=console.wizard.snapshot["booth"], driver=driver,
+                          livelink_port=None, facecapturex_port=None, data_dir=folder,
                           command_endpoint=bridge.command_endpoint,
                           telemetry_endpoint=bridge.telemetry_endpoint)  # fmt: skip
-    with Worker(config) as running:
-        deadline = time.monotonic() + 30
-        while config.booth not in bridge.workers():  # polls the hello; not a fixed wait
-            assert time.monotonic() < deadline, "the worker did not say hello"
-            time.sleep(0.02)
-        yield running
+    worker = Worker(config).start()
+    deadline = time.monotonic() + 30
+    while config.booth not in bridge.workers():  # polls the hello; not a fixed wait
+        if time.monotonic() > deadline:
+            worker.stop()
+            raise AssertionError("the worker did not say hello")
+        time.sleep(0.02)
+    return worker
+
+
+@pytest.fixture
+def worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[Worker]:
+    """The null driver: a robot that speaks each prompt for its length, silently."""
+    running = running_worker(console, app, tmp_path / "null", "null")
+    yield running
+    running.stop()
 
 
 def start_interaction(page: Page) -> None:
@@ -200,17 +210,9 @@ def test_a_robot_set_up_the_server_could_not_send_is_flashed(console: Console) -
 @pytest.fixture
 def virtual_worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[Worker]:
     """The built-in virtual robot: its face and voice are the booth's display page."""
-    bridge = app.state.bridge
-    config = WorkerConfig(booth=console.wizard.snapshot["booth"], driver="virtual",
-                          livelink_port=None, facecapturex_port=None, data_dir=tmp_path / "v",
-                          command_endpoint=bridge.command_endpoint,
-                          telemetry_endpoint=bridge.telemetry_endpoint)  # fmt: skip
-    with Worker(config) as running:
-        deadline = time.monotonic() + 30
-        while config.booth not in bridge.workers():  # polls the hello; not a fixed wait
-            assert time.monotonic() < deadline, "the worker did not say hello"
-            time.sleep(0.02)
-        yield running
+    running = running_worker(console, app, tmp_path / "virtual", "virtual")
+    yield running
+    running.stop()
 
 
 @pytest.mark.usefixtures("virtual_worker")
