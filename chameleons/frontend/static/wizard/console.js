@@ -6,7 +6,7 @@ import { confirmDialog, reasonDialog } from "./dialogs.js";
 import { HealthStrip } from "./health.js";
 import { bindKeys } from "./keys.js";
 import { connectLive } from "./live.js";
-import { NowPlaying, playResults, playState } from "./nowplaying.js";
+import { NowPlaying, SPEECH_KINDS, playState, speakingByEvents, voicing } from "./nowplaying.js";
 import {
   interactionAt,
   itemNames,
@@ -167,25 +167,6 @@ function withHeldEvents(next) {
   return { ...next, events };
 }
 
-const SPEECH_KINDS = new Set(["prompt.speech_start", "prompt.speech_end", "prompt.not_voiced", "prompt.stopped"]);
-
-/** Whether the robot speaks the session's last play now, by the events alone: it started
- * and nothing has ended, stopped or failed it since. */
-function speakingByEvents(events) {
-  let last = null;
-  for (const event of events) if (event.kind === "prompt.played") last = event;
-  if (!last) return false;
-  let speaking = false;
-  for (const event of events) {
-    if (event.id <= last.id) continue;
-    const ofLast = event.payload && event.payload.play_event_id === last.id;
-    if (event.kind === "prompt.speech_start" && ofLast) speaking = true;
-    if ((event.kind === "prompt.speech_end" || event.kind === "prompt.not_voiced") && ofLast) speaking = false;
-    if (event.kind === "prompt.stopped" && event.payload.sent) speaking = false;
-  }
-  return speaking;
-}
-
 async function apply(next) {
   if (gone) return;
   if (!next.events_delta) timeline.reset(); // texts may have changed (a withdrawal)
@@ -221,7 +202,7 @@ async function apply(next) {
   board.setDisabled(over || paused);
   $("say-button").disabled = over || paused;
   board.highlight(state.suggestion_prompts);
-  board.markPlayed(voicing(state));
+  board.markPlayed(voicing(state.events, state.prompt_position));
   timeline.sync(state.events, itemNames(state));
   if (!sendingGroup) now.show(playState(state.events));
 }
@@ -234,24 +215,6 @@ function markStep(current) {
   const node = $("console");
   node.dataset.step = session.state === "running" && interaction ? interaction.state : session.state;
   node.dataset.phone = session.phone.connected ? "connected" : "absent";
-}
-
-/** Per prompt group of the current interaction: how many plays the participant heard, how
- * many they did not (never sent, not voiced, cut short by the display closing) and why. A
- * play nobody voiced gets no tick: the wizard must see it was not heard. */
-function voicing(current) {
-  const tally = new Map();
-  for (const play of playResults(current.events).values()) {
-    if (play.position !== current.prompt_position || play.voiced === null) continue;
-    const entry = tally.get(play.group) || { voiced: 0, silent: 0, reason: null };
-    if (play.voiced) entry.voiced += 1;
-    else {
-      entry.silent += 1;
-      entry.reason = play.reason;
-    }
-    tally.set(play.group, entry);
-  }
-  return tally;
 }
 
 async function play(group) {

@@ -1,6 +1,7 @@
 // The now-playing bar: what the robot says, its progress, and whether the worker got it.
 // Derived from the timeline (so a reload shows the same), plus "sending" while a click is
-// on its way.
+// on its way. Also from the timeline: which plays the participant heard (the prompt
+// buttons' marks) and whether the robot speaks now (the Speaking chip, between heartbeats).
 
 const DONE_MARGIN_MS = 1500;
 const NOT_SENT = {
@@ -32,6 +33,43 @@ export function playResults(events) {
     }
   }
   return plays;
+}
+
+/** Per prompt group of the interaction at ``position``: how many plays the participant
+ * heard, how many they did not (never sent, not voiced, cut short by the display closing)
+ * and why. A play nobody voiced gets no tick: the wizard must see it was not heard. */
+export function voicing(events, position) {
+  const tally = new Map();
+  for (const play of playResults(events).values()) {
+    if (play.position !== position || play.voiced === null) continue;
+    const entry = tally.get(play.group) || { voiced: 0, silent: 0, reason: null };
+    if (play.voiced) entry.voiced += 1;
+    else {
+      entry.silent += 1;
+      entry.reason = play.reason;
+    }
+    tally.set(play.group, entry);
+  }
+  return tally;
+}
+
+export const SPEECH_KINDS = new Set(["prompt.speech_start", "prompt.speech_end", "prompt.not_voiced", "prompt.stopped"]);
+
+/** Whether the robot speaks the session's last play now, by the events alone: it started
+ * and nothing has ended, stopped or failed it since. */
+export function speakingByEvents(events) {
+  let last = null;
+  for (const event of events) if (event.kind === "prompt.played") last = event;
+  if (!last) return false;
+  let speaking = false;
+  for (const event of events) {
+    if (event.id <= last.id) continue;
+    const ofLast = event.payload && event.payload.play_event_id === last.id;
+    if (event.kind === "prompt.speech_start" && ofLast) speaking = true;
+    if ((event.kind === "prompt.speech_end" || event.kind === "prompt.not_voiced") && ofLast) speaking = false;
+    if (event.kind === "prompt.stopped" && event.payload.sent) speaking = false;
+  }
+  return speaking;
 }
 
 export function playState(events) {
