@@ -288,7 +288,7 @@ def answer_questionnaire_page(phone: Page, *, last: bool = False) -> None:
     if last:  # the session ends: the phone explains the study (the debriefing)
         expect(phone.get_by_role("heading", name="What this study was about")).to_be_visible()
     else:
-        expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+        expect(phone.locator("#save-status")).to_have_text("Answers saved ✓")
 
 
 def rehearse(demo: Demo, data_dir: Path) -> bool:

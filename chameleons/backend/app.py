@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import secrets
 from collections import Counter
 from collections.abc import AsyncIterator
@@ -61,6 +62,7 @@ from chameleons.i18n import jinja as i18n_jinja
 from chameleons.settings import Settings
 
 FRONTEND_DIR = Path(__file__).resolve().parent.parent / "frontend"
+log = logging.getLogger(__name__)
 
 
 def build_templates() -> Jinja2Templates:
@@ -88,6 +90,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wanted = settings.request_threads or limiter.total_tokens
         limiter.total_tokens = min(wanted, request_threads(engine))
         app.state.request_limiter = limiter  # read by tests and the benchmark
+        # Typed speech needs espeak-ng: found out now, shown on the console's health strip.
+        synthesiser = await anyio.to_thread.run_sync(typed_speech.check_synthesiser)
+        app.state.typed_speech = synthesiser
+        if not synthesiser.available:
+            log.warning("Typed speech (the console's Say field) cannot speak: %s.",
+                        synthesiser.detail)  # fmt: skip
         async with AsyncExitStack() as stack:
             await stack.enter_async_context(
                 socket_revocation.revoking(app, settings.staff_socket_recheck_s)
@@ -118,6 +126,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.socket_guard_counters = Counter()  # sockets closed by events.guard, by code
     app.state.staff_sockets = socket_revocation.StaffSockets()  # open staff WebSockets
     app.state.bridge = None  # set while the worker link runs (lifespan)
+    app.state.typed_speech = None  # the start-up's espeak-ng check (lifespan)
     app.state.live_fanout = None  # PostgreSQL: set while the server runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds

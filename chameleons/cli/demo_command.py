@@ -13,6 +13,7 @@ from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons.backend.app import create_app
 from chameleons.backend.display.links import current_path
+from chameleons.backend.wizard import typed_speech
 from chameleons.cli.common import load_settings
 from chameleons.cli.embedded import (
     DataDirInUseError,
@@ -78,6 +79,13 @@ def _print_ports(ports: ChosenPorts) -> None:
         click.echo(f"  ({line})")
 
 
+def _warn_typed_speech(app: FastAPI) -> None:
+    """The start-up's espeak-ng check, said before anyone opens the console."""
+    found = typed_speech.synthesiser_of(app.state)
+    if found is not None and not found.available:
+        click.echo(f"Typed speech (the console's Say field) cannot speak: {found.detail}.\n")
+
+
 def _loopback(base: str) -> bool:
     """Whether phones elsewhere cannot reach ``base`` (its host is this computer only)."""
     host = urlsplit(base).hostname or ""
@@ -125,6 +133,7 @@ def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: b
 
         def started() -> None:
             _print_welcome(base, data, display_url, ports, simulate_face)
+            _warn_typed_speech(app)
             if simulate_face:  # it follows the booth check's moves (the check passes on the demo)
                 simulator.append(start_face_simulator(settings, follow_cues=True))
                 app.state.face_cues = FaceSimulatorCues(simulator[-1],

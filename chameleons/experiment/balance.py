@@ -253,6 +253,8 @@ def balance_report(study: Study, rows: Iterable[_Row]) -> BalanceReport:
 def balance_summary(report: BalanceReport) -> str:
     """One sentence on the whole report (the plan command and the dashboard)."""
     people = f"{report.participants} participant{'s' if report.participants != 1 else ''}"
+    if report.participants == 0:
+        return "Nothing has run yet: the counts fill in as sessions complete."
     if not report.ok:
         return f"Not every constraint holds with {people}:"
     if report.minimal:
@@ -339,6 +341,8 @@ def _at_ends(study: Study, slots: list[_Interaction], n: int) -> list[Constraint
             "items never first": sum(item not in firsts for item in scenario.items),
             "items never last": sum(item not in lasts for item in scenario.items),
         }
+        if n == 0:  # nothing has run: nothing missed yet (a fresh study is not uneven)
+            counts = dict.fromkeys(counts, 0)
         impossible = ""
         if n > 0 and len(shown) < len(scenario.items):
             impossible = (

@@ -85,16 +85,20 @@ class ConsoleWizard:
             self.tally.prompts_not_sent += 1
             self.tally.note(f"a prompt was not sent: {result.get('detail')}")
 
-    def apply_robot(self) -> None:
-        """What the console does as an interaction starts: condition and face to the robot."""
-        result = self.staff.post(f"{self.console}/robot/apply")
-        if result.get("kind") == "robot.applied":
-            self.tally.robot_applied += 1
-        else:
-            self.tally.robot_not_applied += 1
-            failed = [r for r in (result.get("behaviour"), result.get("face_result")) if r]
-            details = "; ".join(str(r.get("detail")) for r in failed if not r.get("sent"))
-            self.tally.note(f"robot not set to {result.get('condition')}: {details}")
+    def count_robot_set_ups(self) -> None:
+        """How the server set the robot up for this session's interactions. The server's
+        booth flow does it as each interaction starts (the console no longer repeats it,
+        and neither does this script: the timeline logged every set-up twice)."""
+        path = f"/api/sessions/{self.bot.session_id}/events?limit=5000"
+        for event in self.staff.get(path):
+            if event["kind"] == "robot.applied":
+                self.tally.robot_applied += 1
+            elif event["kind"] == "robot.not_applied":
+                self.tally.robot_not_applied += 1
+                result = event["payload"]
+                failed = [r for r in (result.get("behaviour"), result.get("face_result")) if r]
+                details = "; ".join(str(r.get("detail")) for r in failed if not r.get("sent"))
+                self.tally.note(f"robot not set to {result.get('condition')}: {details}")
 
     def stage(self, position: int, stage: str) -> str | None:
         """The first script button of ``stage`` (intro, scenario, rank_instruction...)."""
@@ -177,7 +181,6 @@ def run_interaction(
 ) -> None:
     bot = wizard.bot
     bot.advance(position, "discussion")
-    wizard.apply_robot()
     wizard.discuss(position)
     bot.advance(position, "ranking")
     wizard.play(wizard.stage(position, "rank_instruction"))
@@ -225,7 +228,6 @@ def end_during(
     (that interaction is partial, later ones never run)."""
     bot = wizard.bot
     bot.advance(position, "discussion")
-    wizard.apply_robot()
     bot.advance(position, "ranking")
     interaction = bot.interaction(position)
     expert = {str(item["id"]): int(item["expert_rank"]) for item in interaction["items"]}
@@ -258,9 +260,11 @@ def run_session(
         if position == situation.stop_at:
             end_during(wizard, participant, position, situation.reason)
             tally.ended_early += 1
+            wizard.count_robot_set_ups()
             return bot.refresh()
         run_interaction(wizard, participant, position, tally)
     participant.answer(FINAL_POSITION, None)
+    wizard.count_robot_set_ups()
     snapshot = bot.refresh()
     if snapshot["state"] != "complete":
         raise ApiError(0, f"the session ended in state {snapshot['state']!r}")

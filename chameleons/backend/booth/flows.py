@@ -2,8 +2,8 @@
 
 - ``interaction.advanced`` to ``discussion`` (the interaction starts): the robot is set to
   the interaction's condition and face (:func:`chameleons.backend.wizard.robot.apply_with`,
-  sending only what the worker has not acknowledged already, so the console's own set-up
-  and this one never fight), and the worker starts recording it;
+  sending only what the worker has not acknowledged already; logged once either way: the
+  console sends nothing of its own then), and the worker starts recording it;
 - ``condition.switched`` on a running interaction: the robot is set up again;
 - ``interaction.advanced`` to ``done``, or ``session.ended_early`` while it ran: the
   recording stops and its files are indexed as
@@ -169,10 +169,17 @@ class BoothFlow:
         interaction_id, kind = int(event["interaction_id"]), event.get("kind")
         step = (event.get("payload") or {}).get("to")
         lane = f"session:{event.get('session_id')}"
+        # The robot's set-up has a lane of its own: queued behind a finished interaction's
+        # recording (stopped and indexed in the session's lane) it came late, once after the
+        # next interaction was over (a fast rehearsal), and that one ran unset.
+        robot_lane = f"robot:{event.get('session_id')}"
         if kind == "interaction.advanced" and step == "discussion":
+            # Logged even when the worker runs it already (the last interaction left it so):
+            # the interaction's one "Robot set to" line (the console sends none of its own).
+            self._enqueue(robot_lane, partial(self._set_up_robot, interaction_id, True))
             self._enqueue(lane, partial(self._interaction_started, interaction_id))
         elif kind == "condition.switched":
-            self._enqueue(lane, partial(self._set_up_robot, interaction_id))
+            self._enqueue(robot_lane, partial(self._set_up_robot, interaction_id))
         elif (kind == "interaction.advanced" and step == "done") or kind == ENDED_EARLY:
             self._enqueue(lane, partial(self._interaction_done, interaction_id))
 
@@ -274,10 +281,10 @@ class BoothFlow:
 
     # --- jobs ----------------------------------------------------------------------------------
     async def _interaction_started(self, interaction_id: int) -> None:
+        """Recording starts (the robot is set up in its own lane, see _on_committed)."""
         slot = await self._read(slot_of, interaction_id)
         if slot is None or not slot.running:
             return
-        await self._set_up_robot(interaction_id)
         if service.config_of(self.state).record:
             await self._start_recording(slot)
 
@@ -297,10 +304,11 @@ class BoothFlow:
         if record and not self._recording_acknowledged(slot.booth, slot.interaction_id):
             await self._start_recording(current)
 
-    async def _set_up_robot(self, interaction_id: int) -> None:
+    async def _set_up_robot(self, interaction_id: int, log_unchanged: bool = False) -> None:
         find = partial(running_target, interaction_id=interaction_id)
         with contextlib.suppress(ConflictError, NotFoundError):  # over already: nothing to do
-            await robot.apply_with(self.state, find, source=SOURCE, only_changes=True)
+            await robot.apply_with(self.state, find, source=SOURCE, only_changes=True,
+                                   log_unchanged=log_unchanged)  # fmt: skip
 
     async def _start_recording(self, slot: Slot) -> None:
         directory = self._directory(slot)

@@ -19,6 +19,7 @@ from chameleons.backend.export.preview import preview as export_preview
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.routing import make_router
+from chameleons.backend.sessions.states import END_REASONS
 from chameleons.backend.withdrawal.files import in_recordings, recording_file
 from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.study import study_from_config
@@ -118,6 +119,7 @@ def session_page(
         spec=spec,
         flag_labels=FLAG_LABELS,
         bad_flags=BAD_FLAGS,
+        end_reasons=END_REASONS,
     )
     return templates.TemplateResponse(request, "pi/session.html", context)
 

@@ -10,8 +10,9 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.dashboard.answer_rows import AnsweredPage, answered_pages
 from chameleons.backend.dashboard.flags import SessionFlags, session_flags
-from chameleons.backend.export.scoring import error_score, questionnaire_score
+from chameleons.backend.export.scoring import error_score
 from chameleons.backend.export.selection import as_utc
 from chameleons.backend.models import (
     Event,
@@ -24,6 +25,8 @@ from chameleons.backend.models import (
     Study,
     Suggestion,
 )
+from chameleons.backend.sessions.answers import FINAL_POSITION
+from chameleons.backend.sessions.consent import BEFORE_POSITION
 from chameleons.backend.withdrawal.files import recording_file
 from chameleons.experiment.model import Study as StudySpec
 
@@ -123,9 +126,16 @@ class InteractionDetail:
     initial_error: int | None
     final_error: int | None
     suggestions: list[Suggestion]
-    answers: dict[str, list[QuestionnaireResponse]]
-    scores: dict[str, float | None]
+    questionnaires: list[AnsweredPage]
     recordings: list[tuple[Recording, bool]]
+    item_names: dict[str, str] = field(default_factory=dict)  # item id -> its name
+
+
+@dataclass(frozen=True)
+class FlagLine:
+    kind: str
+    text: str
+    count: int
 
 
 @dataclass
@@ -135,8 +145,19 @@ class SessionDetail:
     plan_row: int | None
     summary_flags: SessionFlags
     interactions: list[InteractionDetail] = field(default_factory=list)
-    final_answers: list[QuestionnaireResponse] = field(default_factory=list)
+    before: list[AnsweredPage] = field(default_factory=list)  # about the participant
+    final: list[AnsweredPage] = field(default_factory=list)
     events: list[Event] = field(default_factory=list)
+
+    @property
+    def flag_lines(self) -> list[FlagLine]:
+        """The session's flags, the same one once with how often (nine prompts not sent in
+        one interaction are one line), in the order first raised."""
+        counts: dict[tuple[str, str], int] = {}
+        for flag in self.summary_flags.flags:
+            key = (flag.kind, flag.text)
+            counts[key] = counts.get(key, 0) + 1
+        return [FlagLine(kind, text, count) for (kind, text), count in counts.items()]
 
 
 def _ranked(spec: StudySpec, task: str, items: list[Any] | None) -> list[RankedItem]:
@@ -166,12 +187,21 @@ def session_detail(
             .order_by(QuestionnaireResponse.id)
         )
     )
+    interactions = list(
+        db.scalars(
+            select(Interaction)
+            .where(Interaction.session_id == session.id)
+            .order_by(Interaction.position)
+        )
+    )
+    robots = {i.position: i.robot_name for i in interactions}
     detail = SessionDetail(
         session,
         participant,
         row.row_number if row else None,
         session_flags(db, spec, [session])[session.id],
-        final_answers=[a for a in answers if a.position == 0],
+        before=answered_pages(spec, [a for a in answers if a.position == BEFORE_POSITION], robots),
+        final=answered_pages(spec, [a for a in answers if a.position == FINAL_POSITION], robots),
         events=list(
             db.scalars(
                 select(Event)
@@ -180,14 +210,11 @@ def session_detail(
             )
         ),
     )
-    interactions = db.scalars(
-        select(Interaction)
-        .where(Interaction.session_id == session.id)
-        .order_by(Interaction.position)
-    )
     for interaction in interactions:
         own = [a for a in answers if a.interaction_id == interaction.id]
-        detail.interactions.append(_interaction_detail(db, spec, interaction, own, data_dir))
+        detail.interactions.append(
+            _interaction_detail(db, spec, interaction, own, data_dir, robots)
+        )
     return detail
 
 
@@ -197,19 +224,8 @@ def _interaction_detail(
     interaction: Interaction,
     answers: list[QuestionnaireResponse],
     data_dir: Path,
+    robots: dict[int, str],
 ) -> InteractionDetail:
-    by_questionnaire: dict[str, list[QuestionnaireResponse]] = {}
-    for answer in answers:
-        by_questionnaire.setdefault(answer.questionnaire, []).append(answer)
-    scores = {}
-    for questionnaire in spec.questionnaires_for("interaction"):
-        if questionnaire.scored:
-            values = {
-                a.item: a.value
-                for a in by_questionnaire.get(questionnaire.id, [])
-                if a.value is not None
-            }
-            scores[questionnaire.id] = questionnaire_score(questionnaire, values)
     presented = [str(item) for item in interaction.presented_order or []]
     try:
         expert = spec.expert_order(interaction.task, presented)
@@ -236,7 +252,11 @@ def _interaction_detail(
                 .order_by(Suggestion.index)
             )
         ),
-        answers=by_questionnaire,
-        scores=scores,
+        questionnaires=answered_pages(spec, answers, robots),
         recordings=[(r, recording_file(data_dir, r.path).is_file()) for r in recordings],
+        item_names=_item_names(spec, interaction.task, presented),
     )
+
+
+def _item_names(spec: StudySpec, task: str, items: list[str]) -> dict[str, str]:
+    return {ranked.item: ranked.name for ranked in _ranked(spec, task, items)}

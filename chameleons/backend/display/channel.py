@@ -9,6 +9,14 @@ forwards speech events to the worker).
 The current face (with its renderer) and the last face frame of each booth are kept, so a page that
 (re)connects shows the right character at once. A slow page loses old face/head frames,
 never control messages; a page that does not read even those is disconnected.
+
+A page that goes (closed, reloaded, the screen unplugged) while it plays a prompt never
+reports the end: the worker would think the robot speaks on, and the console would tick a
+prompt the participant did not hear to its end. When the booth's last page has been gone
+for :data:`DISPLAY_GONE_GRACE_SECONDS` (a page that only lost its connection comes back
+within it and reports the end itself), the channel reports that play's end for it, with
+reason ``display_closed`` (:data:`DISPLAY_CLOSED`), and remembers the play as cut short
+(:meth:`DisplayChannel.cut_short`).
 """
 
 from __future__ import annotations
@@ -34,6 +42,9 @@ log = logging.getLogger(__name__)
 Listener = Callable[[str, Message], Awaitable[None] | None]
 DEFAULT_QUEUE_LIMIT = 256
 PRESENCE_STALE_SECONDS = 3.5  # the page reports once a second
+DISPLAY_GONE_GRACE_SECONDS = 3.0  # the page's first reconnections come within it
+DISPLAY_CLOSED = "display_closed"
+CUT_PLAYS_KEPT = 64
 
 
 class _Entry:
@@ -131,6 +142,10 @@ class DisplayChannel:
         self._telemetry_at: dict[str, float] = {}
         self._sound_blocked: dict[str, bool] = {}
         self._listeners: list[Listener] = []
+        # booth -> (prompt id, play id) the page said it started and has not ended
+        self._playing: dict[str, tuple[str | None, str | None]] = {}
+        self._cut: deque[tuple[str, str | None, str | None]] = deque(maxlen=CUT_PLAYS_KEPT)
+        self._tasks: set[asyncio.Task[None]] = set()
 
     # -- downstream ---------------------------------------------------------------------
     def publish(self, booth: str, message: Message) -> None:
@@ -187,6 +202,34 @@ class DisplayChannel:
         finally:
             with self._lock:
                 self._subscriptions.get(booth, set()).discard(subscription)
+                playing = self._playing.get(booth)
+                last_gone = not self._subscriptions.get(booth)
+            if last_gone and playing is not None:
+                loop = asyncio.get_running_loop()
+                loop.call_later(DISPLAY_GONE_GRACE_SECONDS, self._end_if_gone, booth, playing)
+
+    def _end_if_gone(self, booth: str, play: tuple[str | None, str | None]) -> None:
+        """The booth's pages stayed away while ``play`` played: report its end for them."""
+        with self._lock:
+            if self._subscriptions.get(booth) or self._playing.get(booth) != play:
+                return
+            del self._playing[booth]
+            self._cut.append((booth, *play))
+        prompt_id, play_id = play
+        end = {"type": "speech", "event": "end", "prompt_id": prompt_id, "play_id": play_id,
+               "reason": DISPLAY_CLOSED}  # fmt: skip
+        self.counters["speech.display_closed"] += 1
+        task = asyncio.get_running_loop().create_task(self.report(booth, end))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def cut_short(self, booth: str, prompt_id: str | None, play_id: str | None) -> bool:
+        """Whether this play ended because the booth's display went while it played."""
+        with self._lock:
+            cut = list(self._cut)
+        if play_id is not None:
+            return any(b == booth and played == play_id for b, _, played in cut)
+        return any(b == booth and prompt == prompt_id for b, prompt, _ in cut)
 
     def connected(self, booth: str) -> int:
         with self._lock:
@@ -218,6 +261,7 @@ class DisplayChannel:
         elif message.get("type") == "speech":
             with self._lock:  # sound plays once the page had its click; say when it did not
                 self._sound_blocked[booth] = message.get("reason") == "autoplay_blocked"
+                self._follow_play(booth, message)
         self.counters[f"reported.{message.get('type')}"] += 1
         for listener in list(self._listeners):
             try:
@@ -226,6 +270,16 @@ class DisplayChannel:
                     await result
             except Exception:  # a listener's bug must not cut the display off
                 log.exception("display listener failed for booth %s", booth)
+
+    def _follow_play(self, booth: str, message: Message) -> None:
+        """Which play the booth's page is speaking (call with the lock held)."""
+        prompt_id, play_id = message.get("prompt_id"), message.get("play_id")
+        play = (prompt_id if isinstance(prompt_id, str) else None,
+                play_id if isinstance(play_id, str) else None)  # fmt: skip
+        if message.get("event") == "start":
+            self._playing[booth] = play
+        elif message.get("event") == "end" and self._playing.get(booth) == play:
+            del self._playing[booth]
 
     def presence(self, booth: str) -> tuple[bool, str]:
         """Whether a display page of ``booth`` is open and playing (the virtual robot is

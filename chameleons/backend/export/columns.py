@@ -437,8 +437,18 @@ def events_table(spec: StudySpec) -> TableSpec:
             _participant(),
             _session(),
             Column("position", "integer", "Interaction position; empty for session-level events."),
-            Column("kind", "string", "What happened (e.g. interaction_started, prompt_played)."),
-            Column("source", "string", "Who reported it (wizard, phone, worker, server, ...)."),
+            Column(
+                "kind",
+                "string",
+                "What happened, as area.what (e.g. session.started, interaction.advanced,"
+                " prompt.played, prompt.speech_start, suggestion.decided,"
+                " questionnaire.submitted, session.completed).",
+            ),
+            Column(
+                "source",
+                "string",
+                "Who reported it (wizard, participant, worker, server, staff, ...).",
+            ),
             _time("server_time", "When the server recorded it"),
             Column(
                 "worker_time",

@@ -59,7 +59,7 @@ def _view(flow: Flow) -> PhoneState:
     base = {"position": current.position, "robot_name": current.robot_name}
     step = current.state
     if step in ("pending", "done"):
-        return {"view": "waiting", "position": current.position, "after": step == "done"}
+        return _waiting(current.position, after=step == "done")
     if step == "discussion":
         return {**base, "view": "listen"}
     if step == "ranking" and current.initial_ranking is None:
@@ -68,6 +68,13 @@ def _view(flow: Flow) -> PhoneState:
         ranking = current.current_ranking or current.initial_ranking or []
         return {**base, "view": "ranked", **_task(flow, current), "ranking": list(ranking)}
     return _questionnaire(flow, current.position, robot_name=current.robot_name)
+
+
+def _waiting(position: int, after: bool) -> PhoneState:
+    """Between the steps; ``first`` before the first conversation (there is no "next" one
+    yet). After the last one the final questions follow at once."""
+    return {"view": "waiting", "position": position, "after": after,
+            "first": not after and position == 1}  # fmt: skip
 
 
 def ended_view(flow: Flow) -> PhoneState:
@@ -126,7 +133,7 @@ def _questionnaire(flow: Flow, position: int, robot_name: str | None) -> PhoneSt
     done = answered(flow, position)
     remaining = [q for q in pages if q.id not in done]
     if not remaining:  # everything stored; the flow moves on with the next change
-        return {"view": "waiting", "position": position, "after": True}
+        return _waiting(position, after=True)
     page = remaining[0]
     return {
         "view": "questionnaire",

@@ -11,7 +11,8 @@ from __future__ import annotations
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.models import Event, Participant, PlanRow, Session
+from chameleons.backend.events import repository as events
+from chameleons.backend.models import Participant, PlanRow, Session
 from chameleons.backend.withdrawal.service import WithdrawalError, find_participant
 
 
@@ -29,14 +30,14 @@ def set_rehearsal(db: DbSession, study_id: int, code: str, rehearsal: bool) -> P
     participant.is_rehearsal = rehearsal
     for session in sessions:
         session.is_rehearsal = rehearsal
-        db.add(
-            Event(
-                study_id=study_id,
-                session_id=session.id,
-                kind="session.rehearsal_marked" if rehearsal else "session.rehearsal_unmarked",
-                source="pi",
-                payload={},
-            )
+        # Recorded as every event is: an open console hears it (and shows the rehearsal
+        # tag) as soon as the change commits.
+        events.record(
+            db,
+            "session.rehearsal_marked" if rehearsal else "session.rehearsal_unmarked",
+            source="pi",
+            study_id=study_id,
+            session_id=session.id,
         )
     db.flush()
     return participant

@@ -18,10 +18,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from chameleons.worker.drivers import speaks_text
+
 STALE_AFTER_SECONDS = 3.0  # heartbeats come at 1 Hz: three missed ones mean "gone"
 NOMINAL_TICK_HZ = 125.0
 # Nothing reaches the robot, or nothing is recorded: no grace.
 ALARM_AT_ONCE = frozenset({"worker", "robot", "recording"})
+# A fallback the session can run without: amber for as long as it fails, never an alarm.
+NEVER_ALARM = frozenset({"typed_speech"})
 OK, UNKNOWN, DEGRADED, ALARM = "ok", "unknown", "degraded", "alarm"
 
 
@@ -55,6 +59,7 @@ LABELS = {
     "speaking": "Speaking",
     "face": "Robot face",
     "timecode": "Phone timecode",
+    "typed_speech": "Typed speech",
 }
 ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
@@ -86,6 +91,8 @@ class Check:
             self.level = UNKNOWN
         elif self.ok:
             self.level = OK
+        elif self.id in NEVER_ALARM:
+            self.level = DEGRADED
         elif self.id in ALARM_AT_ONCE or (failing_for or 0.0) >= alarm_after_s:
             self.level = ALARM
         else:
@@ -118,16 +125,20 @@ def evaluate(
     age: float | None,
     limits: Thresholds | None = None,
     display: tuple[bool, str] | None = None,
+    synthesiser: tuple[bool, str] | None = None,
 ) -> dict[str, Check]:
     """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds.
     ``display``: whether the booth's robot display page is open and playing, and why not
-    (:meth:`DisplayChannel.presence`); for the virtual robot that *is* the robot."""
+    (:meth:`DisplayChannel.presence`); for the virtual robot that *is* the robot.
+    ``synthesiser``: whether the server can synthesise typed speech (espeak-ng), and the
+    sentence saying so (:func:`typed_speech.check_synthesiser`); None: not checked."""
     limits = limits or Thresholds()
+    speech = _typed_speech_check(telemetry, synthesiser)
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
         why = "no telemetry" if telemetry is None else f"silent {age:.0f} s"
         checks = {name: Check(name, None, "unknown") for name in (*CHECKS, "speaking")}
         checks["worker"] = Check("worker", False, why)
-        return checks
+        return {**checks, **speech}
     fps = _number(telemetry, "input_fps")
     tick = _number(telemetry, "tick_rate_hz")
     nominal = _number(telemetry, "tick_target_hz") or NOMINAL_TICK_HZ
@@ -147,7 +158,23 @@ def evaluate(
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
         **_timecode_check(telemetry),
+        **speech,
     }
+
+
+def _typed_speech_check(
+    telemetry: Mapping[str, Any] | None, synthesiser: tuple[bool, str] | None
+) -> dict[str, Check]:
+    """Whether the Say field can speak: a robot with its own text-to-speech (a Furhat) says
+    typed sentences itself; any other needs espeak-ng on the server."""
+    driver = telemetry.get("driver") if telemetry is not None else None
+    if isinstance(driver, str) and speaks_text(driver):
+        return {"typed_speech": Check("typed_speech", True, "the robot's own voice")}
+    if synthesiser is None:
+        return {}
+    available, detail = synthesiser
+    value = detail if available else f"{detail}: the Say field cannot speak"
+    return {"typed_speech": Check("typed_speech", available, value)}
 
 
 def _input_value(telemetry: Mapping[str, Any], fps: float | None, fps_ok: bool) -> str:
@@ -274,9 +301,10 @@ class HealthTracker:
         age: float | None,
         now: float | None = None,
         display: tuple[bool, str] | None = None,
+        synthesiser: tuple[bool, str] | None = None,
     ) -> dict[str, Any]:
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age, self.limits, display)
+        checks = evaluate(telemetry, age, self.limits, display, synthesiser)
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:
@@ -292,11 +320,25 @@ class HealthTracker:
             "alarm_after_s": self.limits.alarm_after_s,
             "checks": [
                 checks[name].as_dict()
-                for name in (*CHECKS, "recording", "speaking", "face", "timecode")
+                for name in (*CHECKS, "recording", "speaking", "face", "timecode",
+                             "typed_speech")
                 if name in checks
             ],
             "telemetry": dict(telemetry) if telemetry is not None else None,
+            # How long ago the worker sampled its speaking state: the console lets a speech
+            # event newer than that decide the Speaking chip.
+            "speaking_age_s": _speaking_age(telemetry, age),
         }
+
+
+def _speaking_age(telemetry: Mapping[str, Any] | None, age: float | None) -> float | None:
+    """The age of the heartbeat's speaking flag: the heartbeat's own age plus that of the
+    renderer's statistics it repeats (both come once a second, so the flag alone lagged
+    the robot by up to two seconds, and the server's 1 Hz relay added a third)."""
+    if telemetry is None or age is None:
+        return None
+    stage = _number(telemetry, "stages.renderer")
+    return round(age + (stage or 0.0), 3)
 
 
 def tracker_of(state: Any) -> HealthTracker:

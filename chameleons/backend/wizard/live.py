@@ -26,7 +26,7 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_chan
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
-from chameleons.backend.wizard import health, worker_link
+from chameleons.backend.wizard import health, typed_speech, worker_link
 from chameleons.backend.wizard.console_state import console_state
 from chameleons.backend.wizard.playback import read
 
@@ -183,7 +183,10 @@ async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
             bridge = worker_link.bridge_of(state)
             telemetry, age = worker_link.latest_telemetry(bridge, booth)
             display = display_presence(state, booth)
-            snapshot = tracker.snapshot(booth, telemetry, age, display=display)
+            found = typed_speech.synthesiser_of(state)
+            synthesiser = (found.available, found.detail) if found is not None else None
+            snapshot = tracker.snapshot(booth, telemetry, age, display=display,
+                                        synthesiser=synthesiser)  # fmt: skip
             snapshot["bridge"] = bridge is not None
             await sender.send(snapshot)
             await asyncio.sleep(HEALTH_INTERVAL_SECONDS)

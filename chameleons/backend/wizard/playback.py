@@ -18,6 +18,7 @@ from fastapi import FastAPI
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
+from chameleons.backend.display.channel import DISPLAY_CLOSED
 from chameleons.backend.display.media import media_path
 from chameleons.backend.display.tokens import signing_key
 from chameleons.backend.events.unit_of_work import write_scope
@@ -82,7 +83,8 @@ async def _deliver(state: Any, cue: Cue, body: dict[str, Any]) -> dict[str, Any]
     acked_at = utcnow()
     event = await run_in_threadpool(write, state, service.record_outcome, cue, outcome, acked_at)
     if outcome.sent and events is not None:
-        _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, _logger(state, cue),
+        on_speech = _logger(state, cue, play_id)
+        _spawn(state, speech.watch(events, cue.prompt.id, cue.duration, on_speech,
                                    _not_voiced_logger(state, cue, display), play_id))  # fmt: skip
         if display is not None:
             _spawn(state, display.wait(_failure_logger(state, cue)))
@@ -133,13 +135,23 @@ def _driver(state: Any, booth: str) -> str | None:
     return hello.get("driver") if isinstance(hello, dict) else None
 
 
-def _logger(state: Any, cue: Cue) -> speech.OnSpeech:
+def _logger(state: Any, cue: Cue, play_id: str) -> speech.OnSpeech:
     async def log_speech(started: bool, worker_time: float | None, outcome: str | None) -> None:
+        # The robot display went while it played (closed, reloaded): the participant did
+        # not hear it to its end, so the end says why (the console shows it not voiced).
+        cut = not started and _display_cut_short(state, cue, play_id)
         await run_in_threadpool(
-            write, state, service.record_speech, cue, started, utcnow(), worker_time, outcome
+            write, state, service.record_speech, cue, started, utcnow(), worker_time, outcome,
+            DISPLAY_CLOSED if cut else None,
         )
 
     return log_speech
+
+
+def _display_cut_short(state: Any, cue: Cue, play_id: str) -> bool:
+    channel = getattr(state, "display_channel", None)
+    cut_short = getattr(channel, "cut_short", None)
+    return bool(callable(cut_short) and cut_short(cue.booth, cue.prompt.id, play_id))
 
 
 def _not_voiced_logger(

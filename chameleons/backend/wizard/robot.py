@@ -1,10 +1,11 @@
 """Put the robot in the interaction's condition and face: ``set_behaviour`` and ``set_face``
 to the booth's worker, both logged (``robot.applied`` or ``robot.not_applied``).
 
-The console calls :func:`apply` when an interaction starts and after a condition switch, and
-the wizard can repeat it by hand; the server's booth flow (:mod:`chameleons.backend.booth`)
-calls :func:`apply_with` for the interaction whose events it reacts to, sending only what the
-worker has not acknowledged already, so the two never fight. The behaviour and its
+The server's booth flow (:mod:`chameleons.backend.booth`) calls :func:`apply_with` when an
+interaction starts and after a condition switch, sending only what the worker has not
+acknowledged already; the wizard can send it again by hand (:func:`apply`, always sent and
+logged). The console used to call it after a start or switch too, and every set-up was
+logged twice. The behaviour and its
 parameters are the study's for the condition
 (:func:`chameleons.backend.booth.behaviour.robot_behaviour`); for ``natural`` also the
 recording it replays (clip, yoked or synthetic), logged with the set-up.
@@ -154,17 +155,20 @@ async def apply(state: Any, session_id: int) -> dict[str, Any]:
 
 
 async def apply_with(
-    state: Any, find: Finder, *, source: str = "wizard", only_changes: bool = False
-) -> dict[str, Any] | None:
+    state: Any, find: Finder, *, source: str = "wizard", only_changes: bool = False,
+    log_unchanged: bool = False,
+) -> dict[str, Any] | None:  # fmt: skip
     """Set up the robot for the target ``find`` picks; with ``only_changes`` a command whose
     body the booth's worker has acknowledged already is not sent again (it would restart a
-    ``natural`` clip), and when nothing needed sending nothing is logged (None)."""
+    ``natural`` clip), and when nothing needed sending nothing is logged (None) unless
+    ``log_unchanged`` (an interaction's start: its timeline says what the robot runs, even
+    when the last interaction left it so; the results say ``unchanged``)."""
     target = await run_in_threadpool(write, state, prepared, state, find)
     bridge = worker_link.bridge_of(state)
     behaviour = await _send(bridge, target.booth, SET_BEHAVIOUR, target.behaviour_body(),
                             only_changes)  # fmt: skip
     face = await _send(bridge, target.booth, SET_FACE, target.face_body(), only_changes)
-    if _unchanged(behaviour) and _unchanged(face):
+    if _unchanged(behaviour) and _unchanged(face) and not log_unchanged:
         return None
     event = await run_in_threadpool(write, state, record, target, behaviour, face, source)
     return {"event_id": event.id, "kind": event.kind, **event.payload}

@@ -16,6 +16,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from chameleons.backend.display.channel import DISPLAY_CLOSED
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event
 from chameleons.backend.models.base import utcnow
@@ -29,6 +30,9 @@ NOT_SENT = "prompt.not_sent"
 SPEECH_START = "prompt.speech_start"
 SPEECH_END = "prompt.speech_end"
 NOT_VOICED = "prompt.not_voiced"  # sent, acknowledged, and no robot voiced it
+# The robot display went while it played (the display channel reports the end for it,
+# DISPLAY_CLOSED): a reason on the play's speech end, so the play counts as not voiced.
+REASON_DETAILS = {DISPLAY_CLOSED: "the robot display was closed while it played"}
 STOPPED = "prompt.stopped"
 
 
@@ -144,15 +148,18 @@ def record_outcome(db: Session, cue: Cue, outcome: Outcome, acked_at: datetime) 
 
 def record_speech(
     db: Session, cue: Cue, started: bool, received_at: datetime, worker_time: float | None,
-    outcome: str | None = None,
+    outcome: str | None = None, reason: str | None = None,
 ) -> Event:  # fmt: skip
     """Log a speech start/end the worker reported for this play; an end says how it ended
-    (``played``, ``interrupted`` by the next prompt, ``stopped`` by the wizard)."""
+    (``played``, ``interrupted`` by the next prompt, ``stopped`` by the wizard) and, when
+    the participant did not hear it to its end, why (``reason``: ``display_closed``)."""
     payload: dict[str, Any] = {"prompt_id": cue.prompt.id, "play_event_id": cue.event_id}
     if started:
         payload["click_to_speech_ms"] = _ms_between(cue.clicked_at, received_at)
     elif outcome:
         payload["outcome"] = outcome
+    if not started and reason:
+        payload.update(reason=reason, detail=REASON_DETAILS.get(reason, reason))
     kind = SPEECH_START if started else SPEECH_END
     return _log(db, cue, kind, "worker", payload, at=received_at, worker_time=worker_time)
 

@@ -78,6 +78,42 @@ class RobotSpeech:
     duration: float  # estimated: the robot says when it really ends
 
 
+INSTALL_HINT = "Debian/Ubuntu: apt install espeak-ng; macOS: brew install espeak-ng"
+
+
+@dataclass(frozen=True)
+class SynthesiserStatus:
+    """Whether this server can synthesise typed speech, in one sentence either way."""
+
+    available: bool
+    detail: str
+
+
+def check_synthesiser() -> SynthesiserStatus:
+    """Look for a working espeak-ng (the server's start-up does, so the wizard learns it on
+    the health strip before the session, not from a refused sentence in the middle of it)."""
+    program = shutil.which("espeak-ng")
+    if program is None:
+        return SynthesiserStatus(False, f"espeak-ng not installed ({INSTALL_HINT})")
+    try:
+        done = subprocess.run([program, "--version"], capture_output=True, text=True,
+                              timeout=10, check=False)  # fmt: skip
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return SynthesiserStatus(False, f"espeak-ng does not run: {exc}")
+    if done.returncode != 0:
+        lines = (done.stderr or done.stdout).strip().splitlines()
+        why = lines[0] if lines else f"exit status {done.returncode}"
+        return SynthesiserStatus(False, f"espeak-ng does not run: {why}")
+    version = done.stdout.split(":", 1)[-1].split()[:1]  # "eSpeak NG text-to-speech: 1.51 ..."
+    return SynthesiserStatus(True, f"espeak-ng {version[0]}" if version else "espeak-ng")
+
+
+def synthesiser_of(state: Any) -> SynthesiserStatus | None:
+    """What the start-up found (None: this app was not started through its lifespan)."""
+    found = getattr(state, "typed_speech", None)
+    return found if isinstance(found, SynthesiserStatus) else None
+
+
 def folder(settings: Settings) -> Path:
     return settings.data_dir / FOLDER
 

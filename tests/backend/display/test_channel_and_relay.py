@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from chameleons.backend.display import channel as channel_module
 from chameleons.backend.display.channel import DisplayChannel
 from chameleons.backend.display.protocol import (
     Message,
@@ -241,3 +242,45 @@ def test_the_condition_s_renderer_reaches_the_page_and_stays_for_late_pages() ->
 
     assert run(late_page()) == three_d
     assert channel.current_face(BOOTH) == "face-3"
+
+
+def test_a_display_gone_while_it_speaks_ends_the_play_for_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The last page of the booth goes mid-play and stays away: the channel reports that
+    play's end with reason display_closed (forwarded to the worker like the page's own),
+    and says the play was cut short. A page that comes back within the grace reports the
+    end itself: nothing is reported for it."""
+    monkeypatch.setattr(channel_module, "DISPLAY_GONE_GRACE_SECONDS", 0.05)
+
+    async def scenario() -> tuple[list[Message], bool, bool, bool]:
+        channel = DisplayChannel()
+        ended = asyncio.Event()
+        heard: list[Message] = []
+
+        def listener(_booth: str, message: Message) -> None:
+            heard.append(message)
+            if message.get("reason") == "display_closed":
+                ended.set()
+
+        channel.add_listener(listener)
+        start = {"type": "speech", "event": "start", "prompt_id": "intro", "play_id": "play-7"}
+        with channel.subscribe(BOOTH):
+            await channel.report(BOOTH, start)
+        await asyncio.wait_for(ended.wait(), 10)
+        cut = channel.cut_short(BOOTH, "intro", "play-7")
+        other = channel.cut_short(BOOTH, "intro", "play-8")
+        # A page that reconnects at once: no end is made up for its play.
+        again = {**start, "play_id": "play-9"}
+        with channel.subscribe(BOOTH):
+            await channel.report(BOOTH, again)
+        with channel.subscribe(BOOTH):
+            await asyncio.sleep(0.3)  # several graces long: a wrong report would have come
+            reconnected = channel.cut_short(BOOTH, "intro", "play-9")
+        return heard, cut, other, reconnected
+
+    heard, cut, other, reconnected = run(scenario())
+    ends = [m for m in heard if m.get("event") == "end"]
+    assert ends == [{"type": "speech", "event": "end", "prompt_id": "intro",
+                     "play_id": "play-7", "reason": "display_closed"}]  # fmt: skip
+    assert (cut, other, reconnected) == (True, False, False)

@@ -187,3 +187,38 @@ def test_a_recording_problem_is_a_red_chip_at_once_with_the_workers_sentence() -
     assert (fine["recording"].ok, fine["recording"].value) == (True, "recording, 40 frames")
     assert evaluate({**GOOD, "recording": {"active": False}}, 0.2)["recording"].value == "idle"
     assert "recording" not in evaluate(GOOD, 0.2)  # a worker without a recorder: no chip
+
+
+def test_the_speaking_flags_age_adds_the_renderers_statistics_to_the_heartbeats() -> None:
+    """The flag was sampled by the renderer (its statistics, once a second) before the
+    heartbeat repeated it: the console compares speech events against that moment."""
+    telemetry = {**GOOD, "stages": {"renderer": 0.8, "behaviour": 0.1}}
+    snapshot = HealthTracker().snapshot("booth-1", telemetry, 0.6, now=10.0)
+    assert snapshot["speaking_age_s"] == pytest.approx(1.4)
+    assert HealthTracker().snapshot("booth-1", None, None, now=10.0)["speaking_age_s"] is None
+
+
+def test_typed_speech_is_amber_while_espeak_is_missing_never_an_alarm() -> None:
+    tracker = HealthTracker(limits=Thresholds(alarm_after_s=3.0))
+    missing = (False, "espeak-ng not installed (Debian/Ubuntu: apt install espeak-ng)")
+    first = tracker.snapshot("booth-1", GOOD, 0.5, now=10.0, synthesiser=missing)
+    later = tracker.snapshot("booth-1", GOOD, 0.5, now=100.0, synthesiser=missing)
+    for snapshot in (first, later):
+        check = next(c for c in snapshot["checks"] if c["id"] == "typed_speech")
+        assert check["label"] == "Typed speech"
+        assert check["level"] == "degraded"
+        assert "apt install espeak-ng" in check["value"]
+        assert "the Say field cannot speak" in check["value"]
+        assert snapshot["alarm"] is False
+    # Shown whatever the worker does: the server's own capability.
+    silent = tracker.snapshot("booth-1", None, None, now=10.0, synthesiser=missing)
+    assert any(c["id"] == "typed_speech" for c in silent["checks"])
+
+
+def test_typed_speech_is_ok_with_espeak_or_a_robot_that_speaks_text_itself() -> None:
+    found = evaluate(GOOD, 0.5, synthesiser=(True, "espeak-ng 1.51"))["typed_speech"]
+    assert (found.ok, found.value) == (True, "espeak-ng 1.51")
+    furhat = {**GOOD, "driver": "furhat"}
+    own = evaluate(furhat, 0.5, synthesiser=(False, "espeak-ng not installed"))["typed_speech"]
+    assert (own.ok, own.value) == (True, "the robot's own voice")
+    assert "typed_speech" not in evaluate(GOOD, 0.5)  # not checked: no chip

@@ -70,7 +70,7 @@ def rank_and_submit(page: Page, wizard: WizardBot, position: int, drag: bool = F
     assert rows.evaluate_all("els => els.map(e => e.dataset.id)") == expected
     page.get_by_role("button", name="Submit my ranking").click()
     expect(page.get_by_role("heading", name="Your ranking")).to_be_visible()
-    expect(page.locator("#save-status")).to_have_text("Saved ✓")
+    expect(page.locator("#save-status")).to_have_text("Ranking saved ✓")
     assert wizard.refresh()["interactions"][position - 1]["initial_ranking"] == expected
 
 
@@ -179,7 +179,7 @@ def test_a_participant_completes_a_whole_session_on_a_phone(
     assert count(engine, QuestionnaireResponse, questionnaire="trust") == 0
     phone_context.set_offline(False)
     expect_part(page, 4)
-    expect(page.locator("#save-status")).to_have_text("Saved ✓")
+    expect(page.locator("#save-status")).to_have_text("Answers saved ✓")
 
     # A server restart: the phone comes back to exactly where it was.
     page.locator("textarea").fill("The robot listened well.")

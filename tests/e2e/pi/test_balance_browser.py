@@ -125,3 +125,22 @@ def test_the_balance_map_colours_each_count_by_its_distance_from_the_ideal(
         expect(table).to_be_visible()
         names = table.locator("tbody tr td:first-child").all_inner_texts()
         assert sorted(names) == sorted(constraint["counts"])
+
+
+def test_a_fresh_study_shows_no_alarm(
+    live_server: LiveServer, page: Page, engine: Engine
+) -> None:
+    """A fresh demo: a study with its plan and nobody run yet. Nothing is uneven, so the
+    balance view is calm (it showed four red "uneven" rows with 0 participants)."""
+    with session_scope(build_sessionmaker(engine)) as db:
+        populate(db, 0)
+    add_user(engine, "pia", "correct horse", "pi")
+    log_in(page, live_server, "/pi")
+    status = page.locator("#balance-status")
+    expect(status).to_have_text("Nothing has run yet: the counts fill in as sessions complete.")
+    expect(status).to_have_class("ok-flag")
+    expect(page.locator("#balance-map")).to_be_visible()
+    expect(page.locator("#balance-map tbody tr").first).to_be_visible()
+    expect(page.locator("#balance-map .flag.bad")).to_have_count(0)
+    expect(page.locator("#balance-map .cell.dev-3")).to_have_count(0)  # no red cell
+    assert all(c["ok"] for c in _constraints(page, live_server))

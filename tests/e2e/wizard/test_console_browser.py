@@ -41,9 +41,8 @@ def start_discussion(page: Page) -> None:
     expect(primary).to_contain_text("Start interaction 1")
     page.keyboard.press("Control+Enter")
     expect(page.locator("#bar-step")).to_have_text("discussion")
-    # Starting the interaction sets the robot up; without a worker that is logged as failed.
-    expect(page.locator("#timeline li[data-kind='robot.not_applied']")).to_have_count(1)
-    expect(page.locator("#flash")).to_contain_text("Robot not set")
+    # The server's booth flow sets the robot up (test_console_booth_flow_browser.py); this
+    # server has no worker link, and the console sends nothing of its own.
 
 
 def test_prompts_play_by_click_shortcut_and_search(console: Console) -> None:
@@ -66,7 +65,14 @@ def test_prompts_play_by_click_shortcut_and_search(console: Console) -> None:
     assert ask["payload"]["item"] == interaction["presented_order"][1]  # type: ignore[index]
     page.keyboard.press("y")
     assert expect_played(console, 4)["payload"]["group"] == "ack_yes"  # type: ignore[index]
-    expect(page.locator("button.pb[data-group='ack_yes']")).to_have_class(re.compile("played"))
+    # Never sent (no worker): the participant heard nothing, so no tick but "not voiced".
+    yes = page.locator("button.pb[data-group='ack_yes']")
+    expect(yes).to_have_class(re.compile("not-voiced"))
+    expect(yes.locator(".pb-played")).to_have_text("✗ not voiced")
+    expect(yes.locator(".pb-played")).to_have_attribute(
+        "title", "Not voiced: worker unreachable"
+    )
+    expect(yes).not_to_have_class(re.compile(r"\bplayed\b"))
 
     page.keyboard.press("/")
     expect(page.locator("#prompt-search")).to_be_focused()
@@ -154,7 +160,7 @@ def rank_on_the_phone(console: Console, phone: Page) -> list[str]:
     last = console.wizard.interaction(1)["items"][-1]["name"]
     phone.get_by_role("button", name=f"Move {last} up").click()
     phone.get_by_role("button", name="Submit my ranking").click()
-    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    expect(phone.locator("#save-status")).to_have_text("Ranking saved ✓")
     ranking = [*before[:-2], before[-1], before[-2]]
     assert console.wizard.refresh()["interactions"][0]["initial_ranking"] == ranking
     return ranking
@@ -175,7 +181,7 @@ def answer_page(phone: Page, part: int) -> None:
         else:
             field.locator("label.point").nth(3).click()
     phone.get_by_role("button", name=re.compile(r"^Save")).click()
-    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    expect(phone.locator("#save-status")).to_have_text("Answers saved ✓")
 
 
 def switch_to_an_unplanned_condition(console: Console) -> None:

@@ -97,8 +97,9 @@ def test_with_no_display_open_a_prompt_is_not_voiced_and_gets_no_tick(
         silent = page.locator("#timeline li[data-kind='prompt.not_voiced']")
         expect(silent).to_contain_text("NOT VOICED: no robot display open for booth-1")
         expect(page.locator("#now-playing")).to_contain_text("NOT VOICED")
-        # The participant never heard it: no ✓ on its button.
-        expect(button.locator(".pb-played")).to_have_text("")
+        # The participant never heard it: no ✓ on its button, which says so instead.
+        expect(button.locator(".pb-played")).to_have_text("✗ not voiced")
+        expect(button).to_have_class(re.compile(r"\bnot-voiced\b"))
         expect(button).not_to_have_class(re.compile(r"\bplayed\b"))
     finally:
         worker.stop()

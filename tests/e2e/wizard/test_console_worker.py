@@ -15,6 +15,7 @@ import pytest
 from fastapi import FastAPI
 from playwright.sync_api import expect
 
+from chameleons.backend.booth.flows import BoothFlow
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.e2e.wizard.conftest import Console
 
@@ -34,10 +35,14 @@ def app(app: FastAPI) -> FastAPI:
         bridge = Bridge(ANY_PORT, ANY_PORT)
         await bridge.start()
         application.state.bridge = bridge
+        # The booth flow, as bridge/wiring.py starts it: it sets the robot up as an
+        # interaction starts (the console does not).
+        flow = BoothFlow(application.state).start(bridge)
         try:
             async with original(application) as state:
                 yield state
         finally:
+            await flow.stop()
             await bridge.stop()
 
     app.router.lifespan_context = with_bridge

@@ -85,6 +85,6 @@ def test_a_late_reply_to_a_phones_ranking_does_not_take_the_participant_back(
     questions = page.get_by_role("heading", name=f"Questions about {robot}")
     expect(questions).to_be_visible()
     held.hand_over(page)
-    expect(page.locator("#save-status")).to_have_text("Saved ✓")  # the reply was read
+    expect(page.locator("#save-status")).to_have_text("Ranking saved ✓")  # the reply was read
     expect(questions).to_be_visible()
     expect(page.locator("#app")).to_have_attribute("data-view", "questionnaire")

@@ -89,6 +89,6 @@ def test_a_ranking_sent_during_a_pause_is_held_until_it_continues(
 
     held["on"] = False
     page.locator("#primary-action").click()  # resume
-    expect(phone.locator("#save-status")).to_have_text("Saved ✓")
+    expect(phone.locator("#save-status")).to_have_text("Ranking saved ✓")
     expect(phone.locator("#app")).to_have_attribute("data-view", "ranked")
     assert wizard.refresh()["interactions"][0]["initial_ranking"] is not None

@@ -48,7 +48,17 @@ def test_two_phones_on_one_link_and_the_extra_one_is_sent_away(
         "2 phones on this link now"
     )
 
+    # A wrong click costs a phone: the wizard confirms which one, and may think again.
     rows.nth(1).get_by_role("button", name="Disconnect").click()
+    dialog = page.locator("#confirm-dialog")
+    expect(dialog).to_be_visible()
+    expect(dialog.get_by_role("heading")).to_have_text("Disconnect phone 2?")
+    dialog.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_hidden()
+    expect(chip).to_have_text("2 phones on this link")
+    assert not [e for e in console.events() if e["kind"] == "phone.sent_away"]
+    rows.nth(1).get_by_role("button", name="Disconnect").click()
+    dialog.get_by_role("button", name="Disconnect phone 2").click()
     expect(extra.get_by_role("heading", name="This link is open on another phone")).to_be_visible()
     expect(chip).to_have_text("phone connected")
     expect(page.locator("#phone-devices")).to_be_hidden()
@@ -78,6 +88,7 @@ def test_the_wizard_may_send_the_first_phone_away_instead(
     rows = page.locator("#phone-devices li")
     expect(rows).to_have_count(2)
     rows.nth(0).get_by_role("button", name="Disconnect").click()
+    page.locator("#confirm-dialog").get_by_role("button", name="Disconnect phone 1").click()
     away = phone_page.get_by_role("heading", name="This link is open on another phone")
     expect(away).to_be_visible()
     expect(extra.locator("#connection")).to_have_text("Connected")

@@ -75,16 +75,28 @@
   }
   function announce(text) { announcer.textContent = ""; announcer.textContent = text; }
   function showError(text) { errorBox.textContent = text; errorBox.hidden = !text; }
-  function setSave(kind) {
+  /* "Saved" names what was saved (the consent, the ranking, the answers): on the next
+   * page, a bare "Saved ✓" read as if that page, empty as it was, were saved already. It goes
+   * as soon as the participant changes something there. */
+  function savedText(what) {
+    if (what === "consent") { return t("Consent saved ✓"); }
+    if (what === "ranking") { return t("Ranking saved ✓"); }
+    return t("Answers saved ✓");
+  }
+  function setSave(kind, what) {
     var texts = {
       saving: t("Saving…"),
-      saved: t("Saved ✓"),
+      saved: savedText(what),
       offline: t("Not sent yet – your answers are kept on this phone and sent as soon as the connection is back."),
       held: t("Kept on this phone – sent as soon as the session continues."),
       "": ""
     };
     saveStatus.textContent = texts[kind];
     saveStatus.dataset.state = kind;
+  }
+  /* The participant changed the page shown: what it says is not saved yet. */
+  function editing() {
+    if (saveStatus.dataset.state === "saved") { setSave(""); }
   }
   function setConnection(kind) {
     var texts = { connecting: t("Connecting…"), online: t("Connected"), offline: t("Reconnecting…"), ended: "" };
@@ -181,9 +193,12 @@
       h("p", { text: t("Please keep this page open; it shows you what to do next.") }));
   }
 
+  /* Before the first interaction there is no "next" conversation yet. */
   function waitingView(s) {
+    var lead = s.first ? t("The first conversation begins shortly.")
+      : t("The next conversation begins shortly.");
     return panel(h("h1", { text: s.after ? t("Thank you!") : t("Please wait") }),
-      h("p", { class: "lead", text: t("The next conversation begins shortly.") }),
+      h("p", { class: "lead", text: lead }),
       h("p", { text: t("Please keep this page open.") }));
   }
 
@@ -216,7 +231,7 @@
     if (window.Sortable) {
       window.Sortable.create(list, {
         animation: 150, handle: ".handle", ghostClass: "dragging",
-        onEnd: function () { renumber(list); store(draftName, currentOrder(list)); }
+        onEnd: function () { renumber(list); store(draftName, currentOrder(list)); editing(); }
       });
     }
     var button = h("button", {
@@ -246,6 +261,7 @@
         list.insertBefore(item, step < 0 ? target : target.nextElementSibling);
         renumber(list);
         store(draftName, currentOrder(list));
+        editing();
         var rank = currentOrder(list).indexOf(id) + 1;
         announce(t("{item} is now number {rank}.", { item: name, rank: rank }));
         item.querySelector(step < 0 ? ".up" : ".down").focus();
@@ -315,6 +331,7 @@
         var current = load(draftName, {});
         current[item.id] = value;
         store(draftName, current);
+        editing();
         countAnswered(form, q, counter);
       }));
     });
@@ -479,7 +496,7 @@
         if (response.ok) {
           if (entry.draft) { forget(entry.draft); }
           retryDelay = 1000;
-          setSave("saved");
+          setSave("saved", entry.kind);
           render(data.state);
         } else if (response.status === 410) {
           render({ view: "ended" });

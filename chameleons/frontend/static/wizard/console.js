@@ -6,7 +6,7 @@ import { confirmDialog, reasonDialog } from "./dialogs.js";
 import { HealthStrip } from "./health.js";
 import { bindKeys } from "./keys.js";
 import { connectLive } from "./live.js";
-import { NowPlaying, playState } from "./nowplaying.js";
+import { NowPlaying, SPEECH_KINDS, playState, speakingByEvents, voicing } from "./nowplaying.js";
 import {
   interactionAt,
   itemNames,
@@ -101,11 +101,10 @@ async function checkGone() {
   }
 }
 
-async function perform(what, run, thenApplyRobot = false) {
+async function perform(what, run) {
   if (gone) return;
   try {
     await run();
-    if (thenApplyRobot) await applyRobot();
     if (!link.live) await refresh();
   } catch (error) {
     if (error.status === 404) await checkGone();
@@ -113,7 +112,9 @@ async function perform(what, run, thenApplyRobot = false) {
   }
 }
 
-/** Put the robot in the interaction's condition and face (logged either way). */
+/** Put the robot in the interaction's condition and face again, by hand (logged either
+ * way). Starting an interaction or switching its condition needs no call from here: the
+ * server's booth flow sets the robot up then, once (two set-ups logged the same line twice). */
 async function applyRobot() {
   try {
     const result = await api.robotApply();
@@ -124,6 +125,16 @@ async function applyRobot() {
   } catch (error) {
     flash(`Robot not set: ${error.message}`, "warn");
   }
+}
+
+/** The server could not set the robot up (it does when an interaction starts or its
+ * condition changes): say so where the wizard looks, as the set-up by hand does. */
+function warnRobotNotSet(events) {
+  const failed = events.filter((e) => e.kind === "robot.not_applied" && e.source !== "wizard").pop();
+  if (!failed) return;
+  const p = failed.payload;
+  const details = [p.behaviour, p.face_result].filter((r) => r && !r.sent).map((r) => r.detail);
+  flash(`Robot not set to ${p.condition}: ${details.join("; ")}`, "warn");
 }
 
 function expectedBehaviour() {
@@ -160,6 +171,11 @@ async function apply(next) {
   if (gone) return;
   if (!next.events_delta) timeline.reset(); // texts may have changed (a withdrawal)
   state = withHeldEvents(next);
+  // The Speaking chip follows speech events as they arrive (not the 1 Hz heartbeat).
+  if (next.events_delta && next.events.some((e) => SPEECH_KINDS.has(e.kind))) {
+    health.speechEvent(speakingByEvents(state.events));
+  }
+  if (next.events_delta) warnRobotNotSet(next.events);
   if (state.prompt_position !== promptsPosition) {
     promptsPosition = state.prompt_position;
     try {
@@ -172,7 +188,7 @@ async function apply(next) {
     if (gone) return;
   }
   renderBar(state);
-  renderPhones(state, (phone) => perform(`disconnect phone ${phone.number}`, () => api.disconnectPhone(phone.id)));
+  renderPhones(state, disconnectPhone);
   renderPrimary(state, api, perform);
   renderPause(state);
   renderCondition(state, requestSwitch, () => perform("set up the robot", applyRobot));
@@ -186,7 +202,7 @@ async function apply(next) {
   board.setDisabled(over || paused);
   $("say-button").disabled = over || paused;
   board.highlight(state.suggestion_prompts);
-  board.markPlayed(playedCounts(state));
+  board.markPlayed(voicing(state.events, state.prompt_position));
   timeline.sync(state.events, itemNames(state));
   if (!sendingGroup) now.show(playState(state.events));
 }
@@ -199,18 +215,6 @@ function markStep(current) {
   const node = $("console");
   node.dataset.step = session.state === "running" && interaction ? interaction.state : session.state;
   node.dataset.phone = session.phone.connected ? "connected" : "absent";
-}
-
-function playedCounts(current) {
-  // A play no robot voiced gets no tick: the participant never heard it.
-  const silent = new Set(current.events.filter((e) => e.kind === "prompt.not_voiced").map((e) => e.payload.play_event_id));
-  const counts = new Map();
-  for (const event of current.events) {
-    if (event.kind === "prompt.played" && event.payload.position === current.prompt_position && !silent.has(event.id)) {
-      counts.set(event.payload.group, (counts.get(event.payload.group) || 0) + 1);
-    }
-  }
-  return counts;
 }
 
 async function play(group) {
@@ -258,6 +262,17 @@ function allowedNow(state, undo) {
   return sentence.replace(`; or ${clause}`, "").replace(`${clause}; or `, "");
 }
 
+/** Disconnecting a phone cannot be undone from here (that phone stops and says the link is
+ * open on another): the wizard confirms which one. */
+function disconnectPhone(phone) {
+  confirmDialog(
+    `Disconnect phone ${phone.number} (${phone.label})? It stops and says the link is open on ` +
+      "another phone; the participant continues on the other one.",
+    () => perform(`disconnect phone ${phone.number}`, () => api.disconnectPhone(phone.id)),
+    { title: `Disconnect phone ${phone.number}?`, ok: `Disconnect phone ${phone.number}` },
+  );
+}
+
 function requestSwitch(interaction, condition) {
   if (condition === interaction.condition) return;
   const position = interaction.position;
@@ -269,9 +284,7 @@ function requestSwitch(interaction, condition) {
         // A condition this session already ran: the server asks for a confirmation.
         if (error.confirm !== "confirm_deviation" || confirmed) throw error;
         confirmDialog(error.message, () => switchTo(true));
-        return;
       }
-      await applyRobot();
     });
   if (condition === interaction.planned_condition) {
     switchTo(false);
@@ -300,6 +313,19 @@ function openEndDialog() {
   reasonDialog("end", (reason, note) => perform("end the session", () => api.end(reason, note)));
 }
 
+/** After Enter in a text field the keys belong to the console again (a note typed after
+ * Shift+N must never land in the Say field and be spoken). The text stays in the field
+ * until it is saved, so nothing typed is lost when saving fails. */
+function backToConsole(input) {
+  input.blur();
+  if (document.activeElement && document.activeElement !== document.body) document.activeElement.blur();
+}
+
+/** Escape in a text field stops the robot too, when it is (or may be) speaking. */
+function speakingNow() {
+  return ["playing", "sending"].includes(now.state.phase) || health.speaking;
+}
+
 async function addNote(event) {
   event.preventDefault();
   const input = $("note-text");
@@ -308,6 +334,7 @@ async function addNote(event) {
     flash("Write the note first: it is empty.", "warn");
     return;
   }
+  backToConsole(input);
   try {
     await api.note(text);
     input.value = ""; // kept on failure, so nothing typed is lost
@@ -330,6 +357,7 @@ async function sayTyped(event) {
     flash(promptsOff(), "warn");
     return;
   }
+  backToConsole(input);
   sendingGroup = "typed";
   now.sending(text, "typed");
   try {
@@ -349,6 +377,9 @@ bindKeys({
   note: () => $("note-text").focus(),
   say: () => $("say-text").focus(),
   stop: () => perform("stop", () => api.stop()),
+  stopIfSpeaking: () => {
+    if (speakingNow()) perform("stop", () => api.stop());
+  },
   search: () => $("prompt-search").focus(),
   help: () => $("help-dialog").showModal(),
   accept: () => act("accept"),
@@ -356,7 +387,7 @@ bindKeys({
   undo: () => act("undo"),
   primary: () => {
     const action = state && primaryAction(state, api);
-    if (action && action.run) perform(action.label, action.run, action.startsInteraction);
+    if (action && action.run) perform(action.label, action.run);
   },
   suggestion: (index) => {
     const group = state && state.suggestion_prompts[index];

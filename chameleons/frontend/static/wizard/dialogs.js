@@ -3,9 +3,14 @@
 
 const $ = (id) => document.getElementById(id);
 
-/** Ask ``text``; ``then()`` runs when the wizard confirms. */
-export function confirmDialog(text, then) {
+const SWITCH = { title: "Switch condition?", ok: "Switch and log deviation" };
+
+/** Ask ``text``; ``then()`` runs when the wizard confirms. ``title`` and ``ok`` (the
+ * confirming button's words) default to the condition switch's. */
+export function confirmDialog(text, then, { title = SWITCH.title, ok = SWITCH.ok } = {}) {
   const dialog = $("confirm-dialog");
+  $("confirm-title").textContent = title;
+  $("confirm-ok").textContent = ok;
   $("confirm-text").textContent = text;
   dialog.returnValue = "";
   dialog.onclose = () => {

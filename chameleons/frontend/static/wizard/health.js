@@ -1,6 +1,12 @@
 // The health strip: one chip per check from the worker's telemetry. A failing check is amber
 // ("degraded") until it has failed for the server's grace period, then red with an alarm line;
 // a lost worker or robot is red at once (the server grades each check: `level`).
+//
+// Speaking follows the speech start and end events the moment they reach the console. The
+// heartbeat's flag is three 1 Hz samplings old (the renderer's statistics, the worker's
+// heartbeat, the server's relay) and lagged the robot display by 1.5-2 s. Whichever is
+// newer wins: an event that arrived after the worker sampled the flag, else the flag
+// (which also covers an end that never came as an event).
 
 import { el, seconds } from "./dom.js";
 
@@ -22,13 +28,46 @@ export class HealthStrip {
     this.onPair = onPair;
     this.lastAt = 0;
     this.mismatchSince = null;
+    this.message = null;
+    this.expected = null;
+    this.speech = null; // {speaking, at}: the last speech event the console received
     setInterval(() => this.checkSilence(), 1000);
+  }
+
+  /** A speech event just arrived (start: true, end or stop: false). */
+  speechEvent(speaking) {
+    this.speech = { speaking, at: Date.now() };
+    if (this.message && !this.silent()) this.render();
+  }
+
+  /** Whether the chip says the robot speaks now. */
+  get speaking() {
+    const chip = this.container.querySelector(".chip[data-check='speaking']");
+    return Boolean(chip && chip.dataset.speaking === "true");
   }
 
   update(message, expectedBehaviour) {
     this.lastAt = Date.now();
+    this.message = message;
+    this.expected = expectedBehaviour;
+    this.render();
+  }
+
+  /** The speaking check: from the heartbeat, unless a speech event is newer than it. */
+  speakingCheck(check) {
+    const age = Number(this.message.speaking_age_s); // the worker's sample, not the message
+    const sampledAt = this.lastAt - (Number.isFinite(age) ? age * 1000 : 0);
+    const fromTelemetry = check.value === "speaking";
+    const speaking = this.speech && this.speech.at > sampledAt ? this.speech.speaking : fromTelemetry;
+    if (check.ok === null && !(this.speech && this.speech.at > sampledAt)) return check;
+    return { ...check, ok: true, level: "ok", value: speaking ? "speaking" : "quiet" };
+  }
+
+  render() {
+    const message = this.message;
+    const expectedBehaviour = this.expected;
     const running = message.telemetry && message.telemetry.behaviour;
-    const checks = [...message.checks];
+    const checks = message.checks.map((check) => (check.id === "speaking" ? this.speakingCheck(check) : check));
     const mismatch = Boolean(expectedBehaviour && running && running !== expectedBehaviour);
     if (!mismatch) this.mismatchSince = null;
     else if (!this.mismatchSince) this.mismatchSince = Date.now();
@@ -52,7 +91,9 @@ export class HealthStrip {
         "span",
         {
           class: `chip ${state}`,
-          dataset: { check: check.id, state },
+          dataset: check.id === "speaking"
+            ? { check: check.id, state, speaking: String(check.value === "speaking") }
+            : { check: check.id, state },
           title: state === "bad" || state === "degraded" ? `failing for ${seconds(check.failing_for || 0)}` : state,
         },
         el("strong", { text: check.label }),
@@ -86,8 +127,12 @@ export class HealthStrip {
     this.container.replaceChildren(...parts);
   }
 
+  silent() {
+    return Boolean(this.lastAt) && Date.now() - this.lastAt >= SILENT_AFTER_MS;
+  }
+
   checkSilence() {
-    if (!this.lastAt || Date.now() - this.lastAt < SILENT_AFTER_MS) return;
+    if (!this.silent()) return;
     this.container.classList.add("failing");
     this.container.replaceChildren(
       el("div", { class: "alarm", role: "alert", text: `No health data from the server for ${seconds((Date.now() - this.lastAt) / 1000)}.` }),

@@ -15,8 +15,10 @@ export function bindKeys(handlers) {
     if (document.querySelector("dialog[open]")) return;
     const target = event.target;
     if (TYPING.has(target.tagName)) {
+      // Escape leaves any field and stops the robot from there too; Space types a space.
+      if (event.key === "Escape") handlers.stopIfSpeaking();
       if (target.id === "prompt-search") searchKeys(event, handlers);
-      if (["note-text", "say-text"].includes(target.id) && event.key === "Escape") target.blur();
+      else if (event.key === "Escape") target.blur();
       return;
     }
     if (event.altKey || event.metaKey) return;

@@ -105,8 +105,7 @@ export function primaryAction(state, api) {
   if (action.action === "resume") return { label: "Resume the session", run: () => api.resume() };
   if (action.action === "advance") {
     const label = STEP_ACTIONS[action.to](action.position);
-    const startsInteraction = action.to === "discussion";
-    return { label, run: () => api.advance(action.position, action.to), startsInteraction };
+    return { label, run: () => api.advance(action.position, action.to) };
   }
   if (action.action === "decide") return { label: `Decide suggestion ${action.index}: A accept / D decline`, run: null };
   if (action.action === "wait") return { label: WAITING[action.for] || "Waiting…", run: null };
@@ -130,7 +129,7 @@ export function renderPrimary(state, api, perform) {
   const node = $("primary-action");
   node.replaceChildren(...[action.label, " ", action.run ? kbd("Ctrl+↵") : null].filter(Boolean));
   node.disabled = !action.run;
-  node.onclick = action.run ? () => perform(action.label, action.run, action.startsInteraction) : null;
+  node.onclick = action.run ? () => perform(action.label, action.run) : null;
   $("primary-hint").textContent = state.session.allowed_sentence;
 }
 

@@ -146,11 +146,19 @@ export class PromptBoard {
     return this.byShortcut.get(`${shift ? "S:" : ""}${code}`) || null;
   }
 
-  markPlayed(counts) {
+  /** ✓ (✓n) on a prompt the participant heard; "not voiced" on one whose every play went
+   * unheard, with why in its tooltip and its accessible name. */
+  markPlayed(tally) {
     for (const [group, node] of this.all()) {
-      const count = counts.get(group) || 0;
-      node.classList.toggle("played", count > 0);
-      node.querySelector(".pb-played").textContent = count > 1 ? `✓${count}` : count ? "✓" : "";
+      const { voiced = 0, silent = 0, reason = null } = tally.get(group) || {};
+      const unheard = voiced === 0 && silent > 0;
+      node.classList.toggle("played", voiced > 0);
+      node.classList.toggle("not-voiced", unheard);
+      const mark = node.querySelector(".pb-played");
+      mark.textContent = voiced > 1 ? `✓${voiced}` : voiced ? "✓" : unheard ? "✗ not voiced" : "";
+      mark.title = unheard ? `Not voiced: ${reason}` : "";
+      if (unheard) node.setAttribute("aria-description", `not voiced: ${reason}`);
+      else node.removeAttribute("aria-description");
     }
   }
 

@@ -19,6 +19,13 @@ function summary(payload) {
   return parts.length ? ` (${parts.join(", ")})` : "";
 }
 
+/** Where a questionnaire belongs: before the interactions (position -1), after one, or at
+ * the end (0). */
+function questionnaireWhen(position) {
+  if (position === -1) return "before the interactions";
+  return position > 0 ? `after interaction ${position}` : "final";
+}
+
 export function describe(event, names) {
   const p = event.payload || {};
   const item = (id) => names.get(id) || id;
@@ -27,7 +34,9 @@ export function describe(event, names) {
     case "session.started": return "Session started";
     case "interaction.advanced": return `Interaction ${p.position}: ${p.from} → ${p.to}`;
     case "ranking.submitted": return `Phone: ranking submitted — ${rankingText(p.ranking, names)}`;
-    case "questionnaire.submitted": return `Phone: questionnaire ${p.questionnaire || ""} answered (${p.position ? `interaction ${p.position}` : "final"})`;
+    case "questionnaire.submitted": return `Phone: questionnaire ${p.questionnaire || ""} answered (${questionnaireWhen(p.position)})`;
+    case "consent.given": return `Phone: consent given (${p.version || "consent"})`;
+    case "consent.declined": return `PARTICIPANT DECLINED CONSENT (${p.version || "consent"}): the session ended`;
     case "suggestion.proposed": return `Suggestion ${p.index} proposed: ${item(p.item)} from ${p.from_rank} to ${p.to_rank} (${p.kind})`;
     case "suggestion.decided": return `Suggestion ${p.index} ${p.accepted ? "ACCEPTED" : "DECLINED"}: ${item(p.item)}`;
     case "suggestion.undone": return `Suggestion ${p.index}: decision undone (was ${p.was_accepted ? "accepted" : "declined"})`;
@@ -42,7 +51,8 @@ export function describe(event, names) {
       if (p.reason) return `NOT PLAYED: ${p.detail || p.reason} (${p.prompt_id})`;
       return p.outcome && p.outcome !== "played" ? `Speech ${p.outcome} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
-    case "robot.applied": return `Robot set to ${p.condition}, face ${p.face}`;
+    case "robot.applied": return p.behaviour && p.behaviour.unchanged && p.face_result && p.face_result.unchanged
+      ? `Robot runs ${p.condition}, face ${p.face} (set already)` : `Robot set to ${p.condition}, face ${p.face}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
     case "wizard.note": return `Note: ${p.text}`;
     case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
@@ -143,14 +153,15 @@ export class Timeline {
   add(event, names) {
     this.lastId = Math.max(this.lastId, event.id);
     this.count += 1;
-    const worker = event.worker_time != null ? el("span", { class: "tl-worker", text: `worker ${event.worker_time.toFixed(3)}` }) : null;
+    // Wall-clock time as a person reads it; the worker's own clock (seconds since it
+    // started) stays in the export and in the time's tooltip for an audit.
+    const audit = event.worker_time != null ? `worker clock ${event.worker_time.toFixed(3)} s` : null;
     const row = el(
       "li",
       { class: `tl tl-${event.source} tl-${event.kind.replace(/\./g, "-")}`, dataset: { kind: event.kind, id: String(event.id), category: category(event.kind, event.source) } },
-      el("time", { datetime: event.server_time, text: clock(event.server_time) }),
+      el("time", { datetime: event.server_time, text: clock(event.server_time), title: audit }),
       el("span", { class: "tl-source", text: event.source }),
       el("span", { class: "tl-text", text: describe(event, names) }),
-      worker,
       el("span", { class: "tl-latency" }),
     );
     this.rows.set(event.id, row);
