@@ -126,6 +126,7 @@ class SynchronyResult:
     windows: int = 0
     surrogate_kind: str = "none"  # between | segments | none
     surrogate_count: int = 0
+    surrogates_used: list[int] = field(default_factory=list)  # indices of the pairs given
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -201,8 +202,9 @@ def measure_synchrony(
     result.channels, result.windows = channels, curves.windows
     result.curve, result.head_curve = _listed(curves.combined), _listed(curves.head)
     result.face_curve = _listed(curves.face)
-    pseudo, kind = _surrogate_curves(p, r, channels, surrogates, params)
+    pseudo, kind, used_pairs = _surrogate_curves(p, r, channels, surrogates, params)
     result.surrogate_kind, result.surrogate_count = kind, len(pseudo)
+    result.surrogates_used = used_pairs
     _peaks(result, curves.combined, lags, pseudo, params)
     if copy_delay_s is not None:
         _check_copy(result, copy_delay_s, params)
@@ -249,9 +251,10 @@ def segment_shuffles(
 def _surrogate_curves(
     p: Array, r: Array, channels: list[str],
     surrogates: Sequence[tuple[FaceStream, FaceStream]], params: SyncParams,
-) -> tuple[list[Array], str]:  # fmt: skip
-    curves = []
-    for other_p, other_r in surrogates[: params.surrogates]:
+) -> tuple[list[Array], str, list[int]]:  # fmt: skip
+    """The pseudo-pairs' lag curves, their kind, and which of ``surrogates`` gave one."""
+    curves, used = [], []
+    for index, (other_p, other_r) in enumerate(surrogates[: params.surrogates]):
         a, b = _own_grid(other_p, channels, params), _own_grid(other_r, channels, params)
         n = min(a.shape[0], b.shape[0])
         usable = _moving(a[:n], params) & _moving(b[:n], params)
@@ -261,14 +264,15 @@ def _surrogate_curves(
         found = lag_curves(a[:n][:, usable], b[:n][:, usable], names, params)
         if found is not None and np.isfinite(found.combined).any():
             curves.append(found.combined)
+            used.append(index)
     if len(curves) >= params.min_between:
-        return curves, "between"
+        return curves, "between", used
     shuffled = []
     for a, b in segment_shuffles(p, r, params, params.surrogates):
         found = lag_curves(a, b, channels, params)
         if found is not None and np.isfinite(found.combined).any():
             shuffled.append(found.combined)
-    return (shuffled, "segments") if shuffled else ([], "none")
+    return (shuffled, "segments", []) if shuffled else ([], "none", [])
 
 
 def _own_grid(stream: FaceStream, channels: list[str], params: SyncParams) -> Array:
