@@ -78,10 +78,10 @@ def synchrony_values(db: DbSession, interaction_ids: Iterable[int]) -> dict[int,
     names = [c.name for c in synchrony_columns()]
     if not ids:
         return {}
-    stored = {row.interaction_id: row for row in db.scalars(
-        select(InteractionSynchrony).where(InteractionSynchrony.interaction_id.in_(ids)))}  # fmt: skip
-    recorded = set(db.scalars(select(Recording.interaction_id).where(
-        Recording.interaction_id.in_(ids)).distinct()))  # fmt: skip
+    query = select(InteractionSynchrony).where(InteractionSynchrony.interaction_id.in_(ids))
+    stored = {row.interaction_id: row for row in db.scalars(query)}
+    recorded_query = select(Recording.interaction_id).where(Recording.interaction_id.in_(ids))
+    recorded = set(db.scalars(recorded_query.distinct()))
     values: dict[int, dict[str, Any]] = {}
     for interaction_id in ids:
         empty: dict[str, Any] = dict.fromkeys(names)
