@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from chameleons import __version__
 from chameleons.backend.export.columns import TableSpec
+from chameleons.backend.export.synchrony_r import SYNCHRONY_R
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.stats.analysis import PAPER_CONDITION_ORDER, PAPER_REFERENCE
@@ -62,7 +63,7 @@ def analysis_script(study: Study, spec: StudySpec, tables: list[TableSpec]) -> s
         suggestions=spec.suggestions_per_interaction,
         scale_high="c(" + ", ".join(f"{m} = {_highest(spec, m)}" for m in spec.measures) + ")",
     )
-    return "\n".join([header, settings, READ, reads, BODY])
+    return "\n".join([header, settings, READ, reads, BODY, SYNCHRONY_R])
 
 
 def _highest(spec: StudySpec, measure: str) -> int:
