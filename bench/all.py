@@ -6,7 +6,8 @@ In order: ``bench.server_bench`` (think with an instant and a human-paced wizard
 hold; SQLite, and PostgreSQL when ``TEST_DATABASE_URL`` is set), ``bench.speech_bench``
 (wizard click -> speech start, virtual robot and Furhat peer), ``bench.data_bench``
 (planning, export, analysis page: time and peak memory) and ``bench.cli_bench`` (start-up
-CPU); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
+CPU) and ``bench.synchrony_bench`` (one interaction's synchrony beside a bare NumPy
+correlation); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
 own process included). Each prints its figures beside a baseline of its own run. With
 ``--quick`` each runs its smoke size (each well under two minutes on a quiet 2-core
 machine). The exit status is 1 when any benchmark failed or missed one of its goals; the
@@ -29,6 +30,7 @@ BENCHES: dict[str, list[str]] = {
     "speech": ["bench.speech_bench"],
     "data": ["bench.data_bench"],
     "cli": ["bench.cli_bench"],
+    "synchrony": ["bench.synchrony_bench"],
 }
 WORKER = {"worker": ["bench.worker_bench"]}
 
