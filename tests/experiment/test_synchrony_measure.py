@@ -194,3 +194,15 @@ def test_the_result_records_how_it_was_computed() -> None:
     assert result.lags_s[-1] == 6.0
     assert len(result.curve) == len(result.lags_s) == len(result.surrogate_high)
     assert set(result.channels) == set(participant.channels)
+
+
+def test_a_short_interaction_still_gets_a_within_interaction_baseline() -> None:
+    participant = smooth_face(15, 50.0)  # 50 s: not two 30 s segments, four of 12.5 s
+    robot = delayed(participant, 4.0, noise=0.02, seed=15)
+    result = measure_synchrony(participant, robot, [], SyncParams(), 4.0)
+    assert result.surrogate_kind == "segments"
+    assert result.surrogate_count == 40
+    assert result.segment_s == pytest.approx(12.48)  # 1248 samples // 4 at 25 Hz
+    assert result.mimicry_r is not None
+    assert result.sync_band_r is not None
+    assert result.check == "ok"

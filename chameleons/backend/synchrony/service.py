@@ -169,6 +169,7 @@ def _store_result(
         "face": result.face_curve, "surrogate_mean": result.surrogate_mean,
         "surrogate_high": result.surrogate_high, "windows": result.windows,
         "duration_s": result.duration_s, "mimicry_es": result.mimicry_es,
+        "segment_s": result.segment_s,
     }  # fmt: skip
     return _store(db, row, result.reason, result.detail)
 

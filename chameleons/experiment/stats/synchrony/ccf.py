@@ -147,13 +147,8 @@ def _complete_sums(x: Array, _mx: Array, y: Array, _my: Array, win: int, lag: in
     side are running sums; only the cross products need a correlation."""
     rows, span = x.shape
     size = fft.next_fast_len(span, real=True)
-    k = np.arange(lag + 1)
-    cx, cy = _running(x), _running(y)
-    cxx, cyy = _running(x * x), _running(y * y)
-    shifted_y = cy[:, k + win] - cy[:, k]  # sum y[k:k+win]
-    shifted_yy = cyy[:, k + win] - cyy[:, k]
-    shifted_x = cx[:, k + win] - cx[:, k]
-    shifted_xx = cxx[:, k + win] - cxx[:, k]
+    shifted_x, shifted_xx = _shifted(x, win, lag), _shifted(x * x, win, lag)
+    shifted_y, shifted_yy = _shifted(y, win, lag), _shifted(y * y, win, lag)
     heads = np.zeros((2, rows, span))
     heads[0, :, :win], heads[1, :, :win] = x[:, :win], y[:, :win]
     left = np.conj(fft.rfft(heads, size, axis=-1))
@@ -171,8 +166,13 @@ def _complete_sums(x: Array, _mx: Array, y: Array, _my: Array, win: int, lag: in
     ])  # fmt: skip
 
 
-def _running(values: Array) -> Array:
-    return np.concatenate([np.zeros((values.shape[0], 1)), np.cumsum(values, axis=1)], axis=1)
+def _shifted(values: Array, win: int, lag: int) -> Array:
+    """``sum(values[:, k:k + win])`` for ``k = 0..lag`` (rows of ``win + lag`` samples): the
+    first window's sum, then each shift adds the sample entering and drops the one leaving
+    (running sums over the ``lag`` samples at either end only)."""
+    first = values[:, :win].sum(axis=1, keepdims=True)
+    steps = values[:, win : win + lag] - values[:, :lag]
+    return np.concatenate([first, first + np.cumsum(steps, axis=1)], axis=1)
 
 
 def _sums(

@@ -44,6 +44,7 @@ from chameleons.experiment.stats.synchrony.streams import (
 Ints = npt.NDArray[np.int64]
 Bools = npt.NDArray[np.bool_]
 METHOD_VERSION = 1
+MIN_SEGMENTS = 4
 MOUTH_PREFIXES = ("mouth", "jaw")
 HEAD_PREFIX = "head_"
 
@@ -127,6 +128,7 @@ class SynchronyResult:
     surrogate_kind: str = "none"  # between | segments | none
     surrogate_count: int = 0
     surrogates_used: list[int] = field(default_factory=list)  # indices of the pairs given
+    segment_s: float | None = None  # the fallback's segment length, when it was used
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -205,6 +207,8 @@ def measure_synchrony(
     pseudo, kind, used_pairs = _surrogate_curves(p, r, channels, surrogates, params)
     result.surrogate_kind, result.surrogate_count = kind, len(pseudo)
     result.surrogates_used = used_pairs
+    if kind == "segments":
+        result.segment_s = segment_samples(p.shape[0], params) / params.rate_hz
     _peaks(result, curves.combined, lags, pseudo, params)
     if copy_delay_s is not None:
         _check_copy(result, copy_delay_s, params)
@@ -228,10 +232,10 @@ def lag_curves(p: Array, r: Array, channels: Sequence[str], params: SyncParams) 
 def segment_shuffles(
     p: Array, r: Array, params: SyncParams, count: int
 ) -> list[tuple[Array, Array]]:
-    """``count`` pseudo-pairs from one interaction: both streams cut into segments of
-    ``segment_s`` (the remainder dropped), each shuffled, never two segments of the same
-    time side by side. Empty when fewer than two segments fit."""
-    seg = params.samples(params.segment_s)
+    """``count`` pseudo-pairs from one interaction: both streams cut into segments
+    (:func:`segment_samples`; the remainder dropped), each shuffled, never two segments of
+    the same time side by side. Empty when fewer than two segments fit."""
+    seg = segment_samples(p.shape[0], params)
     n = p.shape[0] // seg
     if n < 2:
         return []
@@ -248,14 +252,31 @@ def segment_shuffles(
     return pairs
 
 
+def segment_samples(samples: int, params: SyncParams) -> int:
+    """The segment length of the within-interaction fallback: ``segment_s``, shortened in a
+    short interaction so that at least ``MIN_SEGMENTS`` fit, but never below twice the lag
+    range (SUSY's lower bound: a segment must hold the largest lag both ways)."""
+    seg = params.samples(params.segment_s)
+    if samples // seg < MIN_SEGMENTS:
+        seg = max(2 * params.samples(params.max_lag_s), samples // MIN_SEGMENTS, 1)
+    return seg
+
+
 def _surrogate_curves(
     p: Array, r: Array, channels: list[str],
     surrogates: Sequence[tuple[FaceStream, FaceStream]], params: SyncParams,
 ) -> tuple[list[Array], str, list[int]]:  # fmt: skip
     """The pseudo-pairs' lag curves, their kind, and which of ``surrogates`` gave one."""
     curves, used = [], []
+    grids: dict[int, Array] = {}  # one stream is in many pairs: resample it once
+
+    def own(stream: FaceStream) -> Array:
+        if id(stream) not in grids:
+            grids[id(stream)] = _own_grid(stream, channels, params)
+        return grids[id(stream)]
+
     for index, (other_p, other_r) in enumerate(surrogates[: params.surrogates]):
-        a, b = _own_grid(other_p, channels, params), _own_grid(other_r, channels, params)
+        a, b = own(other_p), own(other_r)
         n = min(a.shape[0], b.shape[0])
         usable = _moving(a[:n], params) & _moving(b[:n], params)
         if not usable.any():
