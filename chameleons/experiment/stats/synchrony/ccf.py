@@ -92,8 +92,23 @@ def windowed_ccf(x: Array, y: Array, win: int, inc: int, lag: int) -> Array:
 
 def _block(xs: Array, ys: Array, win: int, lag: int) -> Array:
     """|z| for rows of windows (each ``win + lag`` samples long), all lags."""
-    span = win + lag
     missing_x, missing_y = np.isnan(xs), np.isnan(ys)
+    holes = missing_x.any(1) | missing_y.any(1)
+    out = np.empty((xs.shape[0], 2 * lag + 1))
+    if (~holes).any():  # the usual case, without the masks' extra passes
+        x, y = xs[~holes], ys[~holes]
+        x0, y0 = x - x.mean(1, keepdims=True), y - y.mean(1, keepdims=True)
+        sums = _complete_sums(x0, y0, win, lag)
+        out[~holes] = _z(sums, np.ptp(x, 1), np.ptp(y, 1), np.zeros(len(x), dtype=bool))
+    if holes.any():
+        out[holes] = _gappy(xs[holes], ys[holes], missing_x[holes], missing_y[holes], win, lag)
+    return out
+
+
+def _gappy(xs: Array, ys: Array, missing_x: npt.NDArray[np.bool_],
+           missing_y: npt.NDArray[np.bool_], win: int, lag: int) -> Array:  # fmt: skip
+    """Rows with missing samples: sums over the complete pairs only."""
+    span = win + lag
     too_sparse = np.maximum(missing_x.sum(1), missing_y.sum(1)) > span / 2  # rMEA's NA rule
     mx, my = (~missing_x).astype(np.float64), (~missing_y).astype(np.float64)
     with np.errstate(invalid="ignore"):  # all-missing rows: their centre is NaN, set to 0
@@ -101,18 +116,19 @@ def _block(xs: Array, ys: Array, win: int, lag: int) -> Array:
         cy = np.nan_to_num(np.nanmean(np.where(too_sparse[:, None], 0.0, ys), axis=1))
     x0 = np.where(missing_x, 0.0, xs - cx[:, None])
     y0 = np.where(missing_y, 0.0, ys - cy[:, None])
-    complete = ~(missing_x.any(1) | missing_y.any(1))
-    sums = np.empty((6, xs.shape[0], 2 * lag + 1))
-    for rows, compute in ((complete, _complete_sums), (~complete, _masked_sums)):
-        if rows.any():
-            sums[:, rows] = compute(x0[rows], mx[rows], y0[rows], my[rows], win, lag)
+    sums = _masked_sums(x0, mx, y0, my, win, lag)
+    return _z(sums, _range(xs, missing_x), _range(ys, missing_y), too_sparse)
+
+
+def _z(sums: Array, range_x: Array, range_y: Array, too_sparse: npt.NDArray[np.bool_]) -> Array:
+    """|Fisher z| from the sums ``(n, sx, sxx, sy, syy, sxy)``; NaN where missing."""
     n, sx, sxx, sy, syy, sxy = sums
     n = np.rint(n)
     with np.errstate(invalid="ignore", divide="ignore"):
         vx = sxx - sx * sx / n
         vy = syy - sy * sy / n
         r = (sxy - sx * sy / n) / np.sqrt(vx * vy)
-    flat = _flat(vx, n, xs, missing_x) | _flat(vy, n, ys, missing_y)
+    flat = _flat(vx, n, range_x) | _flat(vy, n, range_y)
     bad = (n < MIN_PAIRS) | flat | too_sparse[:, None] | ~np.isfinite(r)
     r = np.clip(np.where(bad, 0.0, r), -1.0, 1.0)
     with np.errstate(divide="ignore"):
@@ -120,17 +136,20 @@ def _block(xs: Array, ys: Array, win: int, lag: int) -> Array:
     return np.where(bad, np.nan, np.abs(z))
 
 
-def _flat(
-    variation: Array, n: Array, rows: Array, missing: npt.NDArray[np.bool_]
-) -> npt.NDArray[np.bool_]:
-    """Where a side does not vary: its variation (sum of squared deviations) is at most
-    ``FLAT`` of its pairs times the window's squared range (exactly constant: range 0)."""
+def _range(rows: Array, missing: npt.NDArray[np.bool_]) -> Array:
+    """Each row's range over its present samples (-inf for a row with none)."""
     high = np.max(np.where(missing, -np.inf, rows), axis=1)
     low = np.min(np.where(missing, np.inf, rows), axis=1)
     with np.errstate(invalid="ignore"):
-        spread = np.square(high - low)[:, None]
-    constant = ~(spread > 0)
-    return np.asarray(constant | (variation <= FLAT * n * spread))
+        return np.asarray(high - low)
+
+
+def _flat(variation: Array, n: Array, spread: Array) -> npt.NDArray[np.bool_]:
+    """Where a side does not vary: its variation (sum of squared deviations) is at most
+    ``FLAT`` of its pairs times the window's squared range (exactly constant: range 0)."""
+    square = np.square(spread)[:, None]
+    constant = ~(square > 0)
+    return np.asarray(constant | (variation <= FLAT * n * square))
 
 
 def _masked_sums(x: Array, mx: Array, y: Array, my: Array, win: int, lag: int) -> Array:
@@ -142,18 +161,18 @@ def _masked_sums(x: Array, mx: Array, y: Array, my: Array, win: int, lag: int) -
                      for i, o in enumerate(order)])  # fmt: skip
 
 
-def _complete_sums(x: Array, _mx: Array, y: Array, _my: Array, win: int, lag: int) -> Array:
+def _complete_sums(x: Array, y: Array, win: int, lag: int) -> Array:
     """The same for rows without a missing sample: every pair counts, so the sums of one
     side are running sums; only the cross products need a correlation."""
     rows, span = x.shape
     size = fft.next_fast_len(span, real=True)
     shifted_x, shifted_xx = _shifted(x, win, lag), _shifted(x * x, win, lag)
     shifted_y, shifted_yy = _shifted(y, win, lag), _shifted(y * y, win, lag)
-    heads = np.zeros((2, rows, span))
-    heads[0, :, :win], heads[1, :, :win] = x[:, :win], y[:, :win]
-    left = np.conj(fft.rfft(heads, size, axis=-1))
-    right = fft.rfft(np.stack([y, x]), size, axis=-1)
-    cross = fft.irfft(left * right, size, axis=-1)[..., : lag + 1]  # x head * y, y head * x
+    # rfft pads with zeros: the first ``win`` samples are the window's head
+    x_head, y_head = fft.rfft(x[:, :win], size, axis=-1), fft.rfft(y[:, :win], size, axis=-1)
+    x_all, y_all = fft.rfft(x, size, axis=-1), fft.rfft(y, size, axis=-1)
+    cross = fft.irfft(np.stack([np.conj(x_head) * y_all, np.conj(y_head) * x_all]), size,
+                      axis=-1)[..., : lag + 1]  # x head * y, y head * x  # fmt: skip
     both = np.concatenate
     ones = np.ones((rows, 2 * lag + 1))
     return np.stack([
