@@ -32,7 +32,7 @@ def rows(
             z = MIMICRY[condition] + own + rng.gauss(0, 0.15)
             still = condition == "still"
             interactions.append({
-                "participant": code, "session": number + 1, "position": position,
+                "participant": code, "session": number + 1, "position": float(position),
                 "planned_condition": condition, "condition": condition, "deviation": False,
                 "sync_r": "" if still else round(0.9 if condition == "copy" else 0.2, 4),
                 "sync_lag_s": "" if still else (4.0 if condition == "copy" else 1.2),
@@ -75,6 +75,7 @@ def test_mimicry_as_outcome_finds_the_condition_difference() -> None:
     assert copy.estimate == pytest.approx(0.20, abs=0.08)
     assert copy.p < 0.001
     assert model.n_observations == 48  # still has no mimicry: nothing moved
+    assert {c.level for c in model.coefficients if c.term == "position"} == {"2", "3"}
 
 
 def test_mimicry_as_covariate_recovers_the_slope_and_matches_statsmodels() -> None:
@@ -97,7 +98,7 @@ def test_mimicry_as_covariate_recovers_the_slope_and_matches_statsmodels() -> No
         for i, s in zip(interactions, scores, strict=True) if i["mimicry_r"] != ""
     ])  # fmt: skip
     frame["condition"] = pd.Categorical(frame["condition"], ["natural", "copy"])
-    frame["position"] = pd.Categorical(frame["position"].astype(str), ["1", "2", "3"])
+    frame["position"] = pd.Categorical(frame["position"].astype(int).astype(str), ["1", "2", "3"])
     direct = smf.mixedlm("credibility ~ C(condition) + C(position) + mimicry_z", frame,
                          groups=frame["participant"]).fit(reml=True)  # fmt: skip
     assert slope.estimate == pytest.approx(float(direct.params["mimicry_z"]), abs=1e-6)

@@ -28,7 +28,6 @@ from chameleons.backend.dependencies import DbSession as Db
 from chameleons.backend.dependencies import Templates
 from chameleons.backend.export.selection import StudyNotFoundError
 from chameleons.backend.routing import make_router
-from chameleons.backend.synchrony.analysis import study_synchrony
 from chameleons.experiment.stats import (
     DEFAULT_RULE,
     DEFAULT_VIEW,
@@ -163,7 +162,6 @@ def analysis_extended(
     context = {
         "result": result,
         "analysis": result.analysis,
-        "synchrony": study_synchrony(db, result.scores.study.id, include_rehearsal, view),
         "measure_titles": MEASURE_TITLES,
         "extended_latex": latex,
         "number": number_text,

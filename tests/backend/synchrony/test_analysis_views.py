@@ -54,7 +54,9 @@ def test_the_analysis_page_shows_synchrony_by_condition(
             service.compute(db, interaction_id, data_dir, PARAMS)
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
-    fragment = client.get("/pi/analysis/extended", params={"study": study.study_id})
+    page = client.get("/pi/analysis", params={"study": study.study_id})
+    assert f'data-src="/pi/analysis/synchrony?study={study.study_id}&amp;view=as_planned"' in page.text
+    fragment = client.get("/pi/analysis/synchrony", params={"study": study.study_id})
     assert fragment.status_code == 200
     assert 'id="synchrony-by-condition"' in fragment.text
     assert "copy checks" in fragment.text.lower()

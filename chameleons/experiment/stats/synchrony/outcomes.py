@@ -136,7 +136,7 @@ def _mimicry_frame(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             continue
         frame.append({
             "participant": str(r["participant"]), "condition": str(r["condition"]),
-            "position": _number(r.get("position")), OUTCOME: math.atanh(value),
+            "position": _position(r.get("position")), OUTCOME: math.atanh(value),
         })  # fmt: skip
     return frame
 
@@ -160,7 +160,7 @@ def _outcome_model(frame: list[dict[str, Any]], conditions: Sequence[str],
 def _with_scores(frame: list[dict[str, Any]], scores: list[dict[str, Any]], measure: str,
                  view: str) -> list[dict[str, Any]]:  # fmt: skip
     """The score of each interaction (participant, position) beside its mimicry."""
-    by_slot = {(str(s["participant"]), _number(s.get("position"))): s for s in scores}
+    by_slot = {(str(s["participant"]), _position(s.get("position"))): s for s in scores}
     joined = []
     for row in frame:
         score = by_slot.get((row["participant"], row["position"]))
@@ -178,6 +178,12 @@ def _number(value: Any) -> float | None:
     except (TypeError, ValueError):
         return None
     return number if math.isfinite(number) else None
+
+
+def _position(value: Any) -> int | None:
+    """An interaction position as a whole number (a CSV gives "2", a frame 2.0)."""
+    number = _number(value)
+    return None if number is None else int(number)
 
 
 def _true(value: Any) -> bool:
