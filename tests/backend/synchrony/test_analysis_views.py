@@ -55,7 +55,8 @@ def test_the_analysis_page_shows_synchrony_by_condition(
     add_user(engine, "pia", "correct horse", "pi")
     login(client, "pia", "correct horse")
     page = client.get("/pi/analysis", params={"study": study.study_id})
-    assert f'data-src="/pi/analysis/synchrony?study={study.study_id}&amp;view=as_planned"' in page.text
+    source = f"/pi/analysis/synchrony?study={study.study_id}&amp;view=as_planned"
+    assert f'data-src="{source}"' in page.text
     fragment = client.get("/pi/analysis/synchrony", params={"study": study.study_id})
     assert fragment.status_code == 200
     assert 'id="synchrony-by-condition"' in fragment.text
