@@ -147,3 +147,27 @@ def interactions_of(
     if interaction_id is not None:
         query = query.where(Interaction.id == interaction_id)
     return list(db.scalars(query))
+
+
+def forget_derived(db: DbSession, study_id: int, recording_ids: Iterable[int],
+                   interaction_ids: Iterable[int]) -> list[int]:  # fmt: skip
+    """Delete the synchrony of the study's interactions that was derived from these
+    recordings (measured from them, or with them in its pseudo-pairs) or belongs to these
+    interactions (a withdrawal: their robot replayed the withdrawn face); returns the
+    interactions that lost theirs (``chameleons synchrony`` computes them again)."""
+    gone, own = set(recording_ids), set(interaction_ids)
+    query = (
+        select(InteractionSynchrony)
+        .join(Interaction, Interaction.id == InteractionSynchrony.interaction_id)
+        .join(Session, Session.id == Interaction.session_id)
+        .where(Session.study_id == study_id)
+    )
+    doomed: list[InteractionSynchrony] = []
+    for row in db.scalars(query):
+        used = set(row.recordings) | {i for pair in row.surrogates for ids in pair for i in ids}
+        if row.interaction_id in own or used & gone:
+            doomed.append(row)
+    if doomed:
+        ids = [row.id for row in doomed]
+        db.execute(delete(InteractionSynchrony).where(InteractionSynchrony.id.in_(ids)))
+    return [row.interaction_id for row in doomed]
