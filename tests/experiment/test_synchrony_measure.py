@@ -203,6 +203,21 @@ def test_a_short_interaction_still_gets_a_within_interaction_baseline() -> None:
     assert result.surrogate_kind == "segments"
     assert result.surrogate_count == 40
     assert result.segment_s == pytest.approx(12.48)  # 1248 samples // 4 at 25 Hz
+    assert result.detail == ""
     assert result.mimicry_r is not None
     assert result.sync_band_r is not None
     assert result.check == "ok"
+
+
+def test_too_short_for_any_baseline_says_so() -> None:
+    participant = smooth_face(16, 40.0)  # windows fit (20 s + 12 s lag), four 12 s segments not
+    robot = delayed(participant, 4.0, noise=0.02, seed=16)
+    params = SyncParams(window_s=20.0, increment_s=10.0, max_lag_s=12.0, segment_s=20.0)
+    result = measure_synchrony(participant, robot, [], params, 4.0)
+    assert result.reason is None  # the copy was measured
+    assert result.sync_lag_s == pytest.approx(4.0, abs=0.05)
+    assert result.surrogate_kind == "none"
+    assert result.mimicry_r is None
+    assert result.sync_band_r is None
+    assert result.detail.startswith("No surrogate baseline")
+    assert "(no surrogate band to compare with)" in result.check_reason

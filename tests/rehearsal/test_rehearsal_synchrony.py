@@ -17,9 +17,10 @@ from chameleons.rehearsal.embedded import embedded_system
 from chameleons.rehearsal.runner import Options, rehearse
 from chameleons.settings import Settings
 
-# Shorter windows than the default 30 s keep the rehearsal to a couple of minutes: each
-# interaction's discussion is held HOLD seconds, enough for a 10 s window and the 6 s lag.
-HOLD = 24.0
+# Shorter windows than the default 30 s keep the rehearsal to a few minutes: each
+# interaction's discussion is held HOLD seconds, enough for a 10 s window and the 6 s lag,
+# and for the within-interaction baseline's four shuffled segments of at least 6 s.
+HOLD = 30.0
 
 
 @pytest.mark.slow
@@ -43,7 +44,8 @@ def test_a_rehearsal_exports_synchrony_for_every_recorded_interaction(tmp_path: 
     for row in rows:
         assert row["sync_missing"] not in ("no_recording", "not_computed"), row
         if row["sync_missing"]:
-            assert row["sync_note"], row  # empty values come with the reason in words
+            assert row["sync_missing"] == "robot_still", row  # nothing else may be empty
+            assert row["sync_note"], row  # and that comes with the reason in words
             continue
         for column in ("sync_lag_s", "sync_r", "mimicry_r", "mimicry_lag_s"):
             assert row[column] != "", (column, row)

@@ -20,8 +20,9 @@ from chameleons.backend.models import InteractionSynchrony, Recording
 METHOD = ("windowed lagged cross-correlation of head rotation and facial blendshapes "
           "(rMEA's MEAccf: |Fisher z| per window and lag, averaged over windows and "
           "channels; docs/science.md)")  # fmt: skip
+NO_BASELINE = "no_baseline"  # measured, but mimicry_r has no pseudo-pairs to be corrected by
 MISSING = ("no_recording, not_computed, unreadable, no_frames, too_short, robot_still, "
-           "participant_still, no_common_channels, gaps")  # fmt: skip
+           "participant_still, no_common_channels, gaps, no_baseline")  # fmt: skip
 
 
 def synchrony_columns() -> tuple[Column, ...]:
@@ -67,7 +68,8 @@ def synchrony_columns() -> tuple[Column, ...]:
         Column("sync_surrogate_count", "integer", "Pseudo-pairs in the baseline."),
         Column("sync_missing", "string",
                "Why the synchrony values are empty (else empty): not_computed means run "
-               "`chameleons synchrony`.", MISSING),
+               "`chameleons synchrony`; no_baseline: sync_lag_s and sync_r were measured, "
+               "but mimicry_r (surrogate-corrected) has no pseudo-pairs.", MISSING),
         Column("sync_note", "string", "The reason for empty values, in words."),
     )  # fmt: skip
 
@@ -108,7 +110,7 @@ def synchrony_values(db: DbSession, interaction_ids: Iterable[int]) -> dict[int,
             "sync_face_source": row.face_source,
             "sync_surrogate_kind": row.surrogate_kind,
             "sync_surrogate_count": row.surrogate_count,
-            "sync_missing": row.reason,
+            "sync_missing": row.reason or (NO_BASELINE if row.mimicry_r is None else None),
             "sync_note": row.detail or None,
         }
     return values

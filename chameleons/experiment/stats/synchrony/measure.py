@@ -212,6 +212,16 @@ def measure_synchrony(
     _peaks(result, curves.combined, lags, pseudo, params)
     if copy_delay_s is not None:
         _check_copy(result, copy_delay_s, params)
+    if result.mimicry_r is None or result.sync_band_r is None:
+        result.detail = (
+            "No surrogate baseline: too few other participants' recordings, and too short "
+            f"for {MIN_SEGMENTS} shuffled segments of at least {params.max_lag_s:g} s; "
+            "mimicry_r and the surrogate band are empty (chameleons synchrony computes them "
+            "again once more participants are recorded)."
+            if not pseudo else
+            "The pseudo-pairs gave no comparable peak (their faces hardly moved): mimicry_r "
+            "or the surrogate band is empty."
+        )  # fmt: skip
     return result
 
 
@@ -237,7 +247,7 @@ def segment_shuffles(
     the same time side by side. Empty when fewer than two segments fit."""
     seg = segment_samples(p.shape[0], params)
     n = p.shape[0] // seg
-    if n < 2:
+    if n < MIN_SEGMENTS:
         return []
     rng = np.random.default_rng([params.seed, 1])
     pairs = []
@@ -254,11 +264,12 @@ def segment_shuffles(
 
 def segment_samples(samples: int, params: SyncParams) -> int:
     """The segment length of the within-interaction fallback: ``segment_s``, shortened in a
-    short interaction so that at least ``MIN_SEGMENTS`` fit, but never below twice the lag
-    range (SUSY's lower bound: a segment must hold the largest lag both ways)."""
+    short interaction so that ``MIN_SEGMENTS`` fit, but never below the lag range (a
+    shuffled segment then still holds the largest lag). Fewer segments would give only a
+    handful of distinct shuffles, so then there is no within-interaction baseline."""
     seg = params.samples(params.segment_s)
     if samples // seg < MIN_SEGMENTS:
-        seg = max(2 * params.samples(params.max_lag_s), samples // MIN_SEGMENTS, 1)
+        seg = max(params.samples(params.max_lag_s), samples // MIN_SEGMENTS, 1)
     return seg
 
 
