@@ -6,8 +6,9 @@ In order: ``bench.server_bench`` (think with an instant and a human-paced wizard
 hold; SQLite, and PostgreSQL when ``TEST_DATABASE_URL`` is set), ``bench.speech_bench``
 (wizard click -> speech start, virtual robot and Furhat peer), ``bench.data_bench``
 (planning, export, analysis page: time and peak memory), ``bench.cli_bench`` (start-up
-CPU) and ``bench.display_bench`` (the robot display's 3D head against its 2D face in
-Chromium); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
+CPU), ``bench.display_bench`` (the robot display's 3D head against its 2D face in
+Chromium) and ``bench.synchrony_bench`` (one interaction's synchrony beside a bare NumPy
+correlation); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
 own process included). Each prints its figures beside a baseline of its own run. With
 ``--quick`` each runs its smoke size (each well under two minutes on a quiet 2-core
 machine). The exit status is 1 when any benchmark failed or missed one of its goals; the
@@ -31,6 +32,7 @@ BENCHES: dict[str, list[str]] = {
     "data": ["bench.data_bench"],
     "cli": ["bench.cli_bench"],
     "display": ["bench.display_bench"],
+    "synchrony": ["bench.synchrony_bench"],
 }
 WORKER = {"worker": ["bench.worker_bench"]}
 

@@ -163,6 +163,18 @@ class Settings(BaseSettings):
     booth_check_turn_seconds: float = Field(default=4.0, gt=0, le=30)
     booth_check_nod_seconds: float = Field(default=4.0, gt=0, le=30)
 
+    # Synchrony of the recorded faces (issue 32, docs/science.md "Synchrony"): rMEA's
+    # windowed lagged cross-correlation, computed in the background when a recording stops.
+    # Window, increment and lag in seconds (whole samples at 25 Hz); pseudo-pairs per
+    # interaction; how long a stopping server waits for queued computations (the rest:
+    # `chameleons synchrony`). Every result stores the parameters it was computed with.
+    sync_window_s: float = Field(default=30.0, gt=0)
+    sync_increment_s: float = Field(default=15.0, gt=0)
+    sync_max_lag_s: float = Field(default=6.0, gt=0)
+    sync_surrogates: int = Field(default=40, ge=0, le=1000)
+    sync_enabled: bool = True
+    sync_drain_s: float = Field(default=60.0, ge=0)
+
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None

@@ -52,6 +52,7 @@ from chameleons.backend.sessions import endpoints as session_endpoints
 from chameleons.backend.sessions import live as session_live
 from chameleons.backend.studies import endpoints as study_endpoints
 from chameleons.backend.studies import pages as study_pages
+from chameleons.backend.synchrony import pages as synchrony_pages
 from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
@@ -192,6 +193,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         wizard_live.router,
         typed_speech.router,
         booth_check.router,
+        synchrony_pages.router,
     ):
         app.include_router(router)
     return app

@@ -24,9 +24,12 @@ from chameleons.experiment.stats import (
     render_latex,
     render_text,
 )
+from chameleons.experiment.stats.analysis import PAPER_REFERENCE
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES, BootstrapOptions
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
+from chameleons.experiment.stats.synchrony.outcomes import SynchronyAnalysis, analyze_synchrony
+from chameleons.experiment.stats.synchrony.render import render_synchrony_text
 from chameleons.experiment.study import StudyError, load_default_study, study_from_config
 
 REQUIRED_COLUMNS = ("participant", "condition")
@@ -53,6 +56,7 @@ def analysis_output(
     reference: str | None = None,
     questionnaires: Sequence[Questionnaire] = (),
     answers: Iterable[Mapping[str, Any]] | None = None,
+    interactions: Iterable[Mapping[str, Any]] | None = None,
 ) -> str:
     """The analysis of score rows rendered as text, JSON or LaTeX (any row source: a CSV
     file, the database), checked against the study's conditions and scales (default: the
@@ -81,13 +85,34 @@ def analysis_output(
         )
     except AnalysisError as exc:
         raise click.ClickException(f"{exc} Nothing was analysed.") from exc
+    synchrony = _synchrony(interactions, rows, design, view, reference, models)
     if output_format == "json":
-        return json.dumps(analysis.to_dict(), indent=2)
+        data = analysis.to_dict()
+        if synchrony is not None:
+            data["synchrony"] = synchrony.to_dict()
+        return json.dumps(data, indent=2)
     titles, ranges = design.titles, design.ranges
     if output_format == "latex":
         return render_latex(analysis, design.labels, layout=latex_layout,
                             measure_labels=titles, measure_ranges=ranges)  # fmt: skip
-    return render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
+    text = render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
+    if synchrony is not None:
+        text += "\n" + render_synchrony_text(synchrony, design.labels)
+    return text
+
+
+def _synchrony(
+    interactions: Iterable[Mapping[str, Any]] | None, scores: Iterable[Mapping[str, Any]],
+    design: StudyMeasures, view: View, reference: str | None, models: bool,
+) -> SynchronyAnalysis | None:  # fmt: skip
+    """Synchrony by condition and the mimicry models (issue 32), when the interaction rows
+    carry the synchrony columns."""
+    if interactions is None:
+        return None
+    return analyze_synchrony(
+        interactions, scores, conditions=design.order, measures=design.measures,
+        reference=reference or PAPER_REFERENCE, view=view, models=models,
+    )  # fmt: skip
 
 
 def read_csv_rows(path: Path, required: Iterable[str] = REQUIRED_COLUMNS) -> list[dict[str, str]]:
@@ -266,8 +291,11 @@ def analyze_command(
         row_name, first_row = "line", 2  # a CSV file's data start on its second line
         suggestions = read_suggestions_beside(scores_path)  # the models and the mix use them
         answers = read_answers_beside(scores_path)
+        beside = scores_path.with_name("interactions.csv")
+        interactions = read_csv_rows(beside) if beside.is_file() else None
     else:
         spec, rows, suggestions, answers = database_score_rows(study_id, include_rehearsal)
+        interactions = database_interaction_rows(study_id, include_rehearsal)
         row_name, first_row = "row", 1
     click.echo(
         analysis_output(
@@ -288,8 +316,23 @@ def analyze_command(
             reference=reference,
             questionnaires=spec.questionnaires,
             answers=answers,
+            interactions=interactions,
         )
     )
+
+
+def database_interaction_rows(study_id: int | None, include_rehearsal: bool) -> Rows:
+    """The export's interaction rows (with the synchrony columns) from the database."""
+    from chameleons.backend.db import build_engine, build_sessionmaker
+    from chameleons.backend.synchrony.analysis import rows_for_analyze
+    from chameleons.cli.common import load_settings
+
+    engine = build_engine(load_settings().effective_database_url)
+    try:
+        with build_sessionmaker(engine)() as db:
+            return rows_for_analyze(db, study_id, include_rehearsal)
+    finally:
+        engine.dispose()
 
 
 def database_score_rows(

@@ -52,6 +52,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "simulate-face": ("simulate_face_command", "simulate_face",
                       "Send a plausible synthetic face (blinks, head sway, smiles, talking) or a "
                       "Live Link Face take to a worker, as a phone would."),
+    "synchrony": ("synchrony_command", "synchrony",
+                  "Compute the synchrony of the recorded faces per interaction: the robot "
+                  "following the participant, the participant following the robot, and their "
+                  "surrogate baseline."),
     "user": ("user_commands", "user", "Staff accounts (PI and wizards)."),
     "worker": ("worker_command", "worker",
                "Run the realtime worker of one booth (capture -> behaviour -> renderer -> "

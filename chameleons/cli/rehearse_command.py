@@ -96,6 +96,16 @@ from chameleons.rehearsal.script import SCRIPTS
     "default. The phone, the study's texts and the console's prompts follow it.",
 )
 @click.option(
+    "--hold",
+    type=click.FloatRange(0.0, 3600.0),
+    default=0.0,
+    show_default=True,
+    metavar="SECONDS",
+    help="Each interaction's discussion lasts at least this long (the simulated face is "
+    "recorded meanwhile), so its synchrony can be measured: it needs the window plus the "
+    "lag (36 s by default), e.g. --hold 45.",
+)
+@click.option(
     "--simulate-face/--no-simulate-face",
     default=True,
     show_default=True,
@@ -104,7 +114,7 @@ from chameleons.rehearsal.script import SCRIPTS
 def rehearse(
     participants: int, seed: int, pattern: str, server: str | None, username: str | None,
     password: str | None, study_id: int | None, booth: str | None, script: str,
-    drop_out: float, deviate: float, language: str | None, simulate_face: bool,
+    drop_out: float, deviate: float, language: str | None, hold: float, simulate_face: bool,
 ) -> None:  # fmt: skip
     """Run whole sessions with a scripted wizard and participant, marked as rehearsals.
 
@@ -113,7 +123,14 @@ def rehearse(
     analysis unless asked for (chameleons export --include-rehearsal).
     """
     options = Options(
-        participants, seed, pattern, script, drop_out=drop_out, deviate=deviate, language=language
+        participants,
+        seed,
+        pattern,
+        script,
+        drop_out=drop_out,
+        deviate=deviate,
+        language=language,
+        hold=hold,
     )
     # Ctrl-C and SIGTERM end it with 130 / 143 once everything it started has stopped, so a
     # script that chains `rehearse` and `export` never exports a half-finished rehearsal.

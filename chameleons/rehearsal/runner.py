@@ -59,6 +59,7 @@ class Options:
     drop_out: float = 0.0  # share of sessions that drop out (see .situations)
     deviate: float = 0.0  # share of sessions with a confirmed repeated condition
     language: str | None = None  # the participants' language; None: the study's default
+    hold: float = 0.0  # seconds each interaction's discussion lasts at least (face recordings)
 
 
 @dataclass
@@ -273,7 +274,7 @@ def _sessions(
         bot = _create(staff, study["id"], target.booth, options.language)
         count = int(bot.snapshot["interaction_count"])
         situation = draw(situations, options.drop_out, options.deviate, count)
-        wizard = ConsoleWizard(bot, options.script, tally, wizard_rng)
+        wizard = ConsoleWizard(bot, options.script, tally, wizard_rng, hold=options.hold)
         keying = keying_for(bot.snapshot["config_hash"], target.studies)
         if keying is not_keyed:
             tally.note("unknown study configuration: reverse-keyed items answered as plain")

@@ -9,6 +9,7 @@ prompts), the participant adds the phone page's socket and a persona's answers.
 from __future__ import annotations
 
 import random
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -53,6 +54,7 @@ class ConsoleWizard:
     script: str
     tally: Tally
     rng: random.Random
+    hold: float = 0.0  # seconds the discussion lasts at least: recordings long enough to measure
     _buttons: dict[int, dict[str, list[Json]]] = field(default_factory=dict)
 
     @property
@@ -181,7 +183,11 @@ def run_interaction(
 ) -> None:
     bot = wizard.bot
     bot.advance(position, "discussion")
+    started = time.monotonic()
     wizard.discuss(position)
+    # --hold: the discussion goes on like a person's (the face is recorded meanwhile), so
+    # the interaction's recordings are long enough for its synchrony to be measured.
+    time.sleep(max(0.0, wizard.hold - (time.monotonic() - started)))
     bot.advance(position, "ranking")
     wizard.play(wizard.stage(position, "rank_instruction"))
     interaction = bot.interaction(position)

@@ -18,6 +18,8 @@
   ``worker.lost`` / ``worker.restarted`` / ``worker.connected`` / ``robot.disconnected`` /
   ``robot.connected`` events of the session running on that booth, so the dashboard's
   outage flags see them;
+- once an interaction's recordings are indexed, its synchrony (issue 32) is queued on the
+  synchrony runner's own thread (:mod:`chameleons.backend.synchrony.runner`);
 - ``session.started``: the booth's face capture is told to pair with the next phone that
   sends (``capture.pairing_reset``, :mod:`chameleons.backend.wizard.capture`);
 - the worker's ``head_neutral`` event (the neutral pose the copied head is re-centred on)
@@ -54,6 +56,8 @@ from chameleons.backend.events import repository as events
 from chameleons.backend.events.unit_of_work import write_session
 from chameleons.backend.sessions.ending import ENDED_EARLY
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
+from chameleons.backend.synchrony.runner import SynchronyRunner
+from chameleons.backend.synchrony.service import params_from
 from chameleons.backend.wizard import capture, robot, worker_link
 from chameleons.backend.wizard.service import Outcome
 from chameleons.worker.control import START_RECORDING, STOP_RECORDING
@@ -127,6 +131,11 @@ class BoothFlow:
         self._remove_listener: Callable[[], None] | None = None
         self._stopped = False
         self._robot_kinds: dict[str, str] = {}  # booth -> last robot.* kind logged
+        settings = getattr(state, "settings", None)
+        self.synchrony: SynchronyRunner | None = None
+        if settings is not None and settings.sync_enabled:
+            self.synchrony = SynchronyRunner(state.sessionmaker, Path(settings.data_dir),
+                                             params_from(settings))  # fmt: skip
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self, bridge: Any | None = None) -> BoothFlow:
@@ -150,6 +159,8 @@ class BoothFlow:
         for task in tasks:
             task.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
+        if self.synchrony is not None:
+            await self.synchrony.stop(self.state.settings.sync_drain_s)
 
     async def settled(self) -> None:
         """Wait until every queued job has run (tests, shutdown)."""
@@ -340,6 +351,8 @@ class BoothFlow:
         started: bool = await self._read(repository.recording_started, interaction_id)
         if rows or started:
             await self._log(slot, kind, payload)
+        if rows:
+            self._synchronise(interaction_id)
 
     async def _route_reported(self, body: dict[str, Any]) -> None:
         """A ``recording_stopped`` event: index its files in the interaction's own lane."""
@@ -372,6 +385,12 @@ class BoothFlow:
         rows = await self._index(slot, body, None)
         if rows:
             await self._log(slot, "recording.indexed", {"recordings": rows})
+            self._synchronise(slot.interaction_id)
+
+    def _synchronise(self, interaction_id: int) -> None:
+        """Queue the synchrony of an interaction whose recordings were just indexed."""
+        if self.synchrony is not None and not self._stopped:
+            self.synchrony.submit(interaction_id)
 
     async def _index(
         self, slot: Slot, reported: dict[str, Any] | None, scan: Path | None

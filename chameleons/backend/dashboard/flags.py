@@ -9,6 +9,8 @@ run interactions, excluded participants and prompts the robot did not voice.
   event the session flow logged;
 - outages: worker or robot outage / disconnection events, and prompts the worker never
   got (``prompt.not_sent``), during an interaction (by interaction id, or by time);
+- synchrony: a copy interaction whose robot did not follow the participant at the configured
+  delay, above the surrogate band (:mod:`chameleons.backend.synchrony.flags`);
 - wizard-latency outliers: a latency in an event payload (``click_to_ack_ms``,
   ``click_to_speech_ms``, any ``*latency_ms``) above ``LATENCY_LIMIT_MS``, or above the
   study's own upper fence for that latency (third quartile + 3 x IQR, with enough values).
@@ -29,6 +31,7 @@ from sqlalchemy.orm import Session as DbSession
 from chameleons.backend.dashboard.run_flags import run_flags
 from chameleons.backend.export.selection import as_utc
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse, Session
+from chameleons.backend.synchrony.flags import synchrony_flags
 from chameleons.experiment.model import Study as StudySpec
 
 LATENCY_LIMIT_MS = 1500.0
@@ -138,6 +141,7 @@ def session_flags(
         result[session_id].flags.append(Flag(kind, position, text, event))
 
     run_flags(db, sessions, interactions, events, spec.suggestions_per_interaction, add)
+    synchrony_flags(db, interactions, add)
     return result
 
 

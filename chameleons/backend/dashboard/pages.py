@@ -20,6 +20,7 @@ from chameleons.backend.export.selection import StudyNotFoundError, resolve_stud
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.states import END_REASONS
+from chameleons.backend.synchrony import repository as synchrony_repository
 from chameleons.backend.withdrawal.files import in_recordings, recording_file
 from chameleons.experiment.balance import balance_summary
 from chameleons.experiment.study import study_from_config
@@ -37,9 +38,10 @@ FLAG_LABELS = {
     "latency": "slow wizard/worker",
     "typed_speech": "typed speech",
     "recording": "recording failed",
+    "synchrony": "manipulation check failed",
 }
 BAD_FLAGS = ("deviation", "outage", "ended_early", "excluded", "partial", "not_voiced",
-             "recording")  # fmt: skip
+             "recording", "synchrony")  # fmt: skip
 
 
 def _overview(db: DbSession, study: Study, include_rehearsal: bool) -> dict[str, Any]:
@@ -110,12 +112,14 @@ def session_page(
     study = study_or_404(db, session.study_id)
     spec = study_from_config(study.config)
     detail = session_detail(db, spec, session_id, settings.data_dir)
+    ids = [d.interaction.id for d in detail.interactions] if detail else []
     context = page_context(
         request,
         user,
         study,
         "overview",
         detail=detail,
+        synchrony=synchrony_repository.stored(db, ids),
         spec=spec,
         flag_labels=FLAG_LABELS,
         bad_flags=BAD_FLAGS,

@@ -16,6 +16,7 @@ from __future__ import annotations
 from chameleons import __version__
 from chameleons.backend.export.analysis_r_body import MODELS, TESTS
 from chameleons.backend.export.columns import TableSpec
+from chameleons.backend.export.synchrony_r import SYNCHRONY_R
 from chameleons.backend.models import Study
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.stats.analysis import (
@@ -78,7 +79,7 @@ def analysis_script(study: Study, spec: StudySpec, tables: list[TableSpec]) -> s
         permutations=DEFAULT_PERMUTATIONS,
         bootstrap=DEFAULT_RESAMPLES,
     )
-    return "\n".join([header, settings, READ, reads, TESTS, MODELS])
+    return "\n".join([header, settings, READ, reads, TESTS, MODELS, SYNCHRONY_R])
 
 
 def _highest(spec: StudySpec, measure: str) -> int:

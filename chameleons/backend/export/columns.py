@@ -182,6 +182,8 @@ def participants_table(spec: StudySpec) -> TableSpec:
 
 
 def interactions_table(spec: StudySpec) -> TableSpec:
+    from chameleons.backend.export.synchrony_columns import synchrony_columns
+
     return TableSpec(
         "interactions",
         f"One row per interaction ({spec.interactions_per_session} per session).",
@@ -261,6 +263,7 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "Why the face recording of this interaction failed or never started (e.g. a "
                 "full disk or a read-only recordings folder); empty when it was recorded.",
             ),
+            *synchrony_columns(),
         ),
     )
 

@@ -25,6 +25,7 @@ from chameleons.backend.export.queries import (
 )
 from chameleons.backend.export.scoring import error_score
 from chameleons.backend.export.selection import as_utc, iso
+from chameleons.backend.export.synchrony_columns import synchrony_values
 from chameleons.backend.models import (
     Event,
     Interaction,
@@ -93,7 +94,9 @@ def interaction_rows(
     actors = {actor.id: actor for actor in spec.actors}
     behaviours = {condition.id: condition.behaviour for condition in spec.conditions}
     problems = recording_problems(db, study.id)
-    for record in counted_interactions(db, study.id, include_rehearsal):
+    records = counted_interactions(db, study.id, include_rehearsal)
+    synchrony = synchrony_values(db, [record.interaction.id for record in records])
+    for record in records:
         interaction = record.interaction
         actor = actors.get(interaction.actor)
         yield {
@@ -125,6 +128,7 @@ def interaction_rows(
             "natural_recording": interaction.natural_recording,
             "renderer": interaction.renderer,
             "recording_problem": problems.get(interaction.id),
+            **synchrony.get(interaction.id, {}),
         }
 
 

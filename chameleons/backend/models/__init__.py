@@ -5,6 +5,7 @@ from chameleons.backend.models.booth_check import BoothCheck
 from chameleons.backend.models.display_link import DisplayLink
 from chameleons.backend.models.event import Event
 from chameleons.backend.models.interaction import Interaction
+from chameleons.backend.models.interaction_synchrony import InteractionSynchrony
 from chameleons.backend.models.participant import Participant
 from chameleons.backend.models.plan_row import PlanRow
 from chameleons.backend.models.questionnaire_response import QuestionnaireResponse
@@ -21,6 +22,7 @@ __all__ = [
     "DisplayLink",
     "Event",
     "Interaction",
+    "InteractionSynchrony",
     "Participant",
     "PlanRow",
     "QuestionnaireResponse",

@@ -31,6 +31,7 @@ from chameleons.backend.models import (
     Session,
     Suggestion,
 )
+from chameleons.backend.synchrony.repository import forget_derived as forget_synchrony
 from chameleons.backend.withdrawal.derived import (
     Withdrawn,
     YokedReplay,
@@ -103,6 +104,10 @@ def withdraw_participant(
     replay_files = [path for replay in replays.values() for path in replay.files]
     withdrawn = replace(withdrawn, file_names=frozenset(p.name for p in files + replay_files))
     row = _plan_row_of(db, participant, session_ids)
+    # Synchrony measured with their face (their own, a yoked replay's, a baseline's pairs).
+    resynchronise = forget_synchrony(
+        db, study_id, [r for r, _ in recordings], [*interaction_ids, *replays]
+    )
     _delete_rows(db, participant, session_ids, interaction_ids)
     forget_replays(db, replays)
     redacted = redact_events(db, study_id, withdrawn)
@@ -126,6 +131,13 @@ def withdraw_participant(
         removed.append(
             f"what {redacted} event{_s(redacted)} of other sessions said about them "
             "(each keeps its kind and time, not its content)"
+        )
+    others = len(set(resynchronise) - set(interaction_ids))
+    if others > 0:
+        removed.append(
+            f"the synchrony of {others} other interaction{_s(others)} measured with their "
+            "face (a yoked replay, or a pseudo-pair of its baseline): run `chameleons "
+            "synchrony` to compute it again without them"
         )
     removed.append("the analysis page's cached results")
     kept = _outside(refused + refused_replays)

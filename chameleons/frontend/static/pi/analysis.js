@@ -40,3 +40,25 @@
     }
   });
 })();
+
+// The synchrony of the faces (issue 32): a fragment of its own, so it shows even when the
+// effect sizes or models cannot be computed (and they when it cannot).
+(function () {
+  "use strict";
+  const holder = document.getElementById("synchrony-section");
+  if (!holder) return;
+  fetch(holder.dataset.src, { credentials: "same-origin", headers: { Accept: "text/html" } })
+    .then(function (response) {
+      if (!response.ok) throw new Error("HTTP " + response.status);
+      return response.text();
+    })
+    .then(function (html) {
+      holder.innerHTML = html;
+      holder.dataset.loaded = "true";
+    })
+    .catch(function (error) {
+      const status = document.getElementById("synchrony-status");
+      if (status) status.textContent = "The synchrony of the faces could not be loaded (" + error.message + "): reload the page.";
+      holder.dataset.loaded = "error";
+    });
+})();
