@@ -48,7 +48,11 @@ def rounded(value: Number, digits: int) -> Decimal:
             decimal = Decimal(value.numerator) / Decimal(value.denominator)
     else:
         decimal = Decimal(value)  # a float's exact binary value
-    with localcontext(Context(prec=60)):
+    # Enough digits for the integer part too: a finite double reaches 1.8e308 (a Wald
+    # chi-squared from a near-singular fit), and quantize refuses to round to fewer digits
+    # than the value has.
+    precision = max(60, decimal.adjusted() + digits + 2)
+    with localcontext(Context(prec=precision)):
         result = decimal.quantize(Decimal(1).scaleb(-digits), rounding=ROUND_HALF_UP)
     return abs(result) if result.is_zero() else result  # no "-0.0"
 
