@@ -1,4 +1,5 @@
-# The two commands of the README: `make demo` (start everything) and `make test`.
+# The two commands of the README: `make demo` (start everything) and `make test` (which
+# first installs the system packages the tests need: scripts/system_packages.sh).
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -16,7 +17,12 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/chameleons demo $(if $(PORT),--port $(PORT))
 
-test: $(STAMP)
+# First the system packages the tests need (scripts/system-packages.txt): installed when
+# they are missing and this user can (root, or sudo without a password), else it stops here
+# naming the one command to run. Then the virtual environment, then the checks.
+test:
+	scripts/system_packages.sh ensure
+	$(MAKE) --no-print-directory $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy chameleons tests
 	$(BIN)/pytest -n $(PYTEST_WORKERS) -m "not browser"
