@@ -4,7 +4,7 @@ FROM python:3.11-slim
 ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 PIP_NO_CACHE_DIR=1
 WORKDIR /app
 
-# espeak-ng: the wizard's typed sentences in the actor's synthetic voice (README, "The two
+# espeak-ng: the wizard's typed sentences in the actor's synthetic voice (docs/getting-started.md, "The two
 # commands"); the server checks for it at start-up and shows it on the console.
 RUN apt-get update && apt-get install --no-install-recommends -y espeak-ng \
     && rm -rf /var/lib/apt/lists/*

@@ -1,11 +1,12 @@
-# The two commands of the README: `make demo` (start everything) and `make test`.
+# The two commands of the README: `make demo` (start everything) and `make test` (which
+# first installs the system packages the tests need: scripts/system_packages.sh).
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PYTEST_WORKERS ?= auto
 
-.PHONY: demo test lint fmt bench screenshots clean i18n-extract i18n-compile
+.PHONY: demo test lint fmt bench screenshots clean i18n-extract i18n-compile docs docs-reference
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,17 +17,31 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/chameleons demo $(if $(PORT),--port $(PORT))
 
-test: $(STAMP)
+# First the system packages the tests need (scripts/system-packages.txt): installed when
+# they are missing and this user can (root, or sudo without a password), else it stops here
+# naming the one command to run. Then the virtual environment, then the checks.
+test:
+	scripts/system_packages.sh ensure
+	$(MAKE) --no-print-directory $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy chameleons tests
 	$(BIN)/pytest -n $(PYTEST_WORKERS) -m "not browser"
 	$(BIN)/pytest -n $(PYTEST_WORKERS) -m browser
 
-# The README's screenshots (docs/screenshots/), from a real demo session in Chromium.
+# The documentation's screenshots (docs/screenshots/), from a real demo session in Chromium.
 screenshots: $(STAMP)
 	$(BIN)/python scripts/take_screenshots.py
 
-# Languages (README, "Languages"): extract the participant's texts into the templates
+# The documentation site (mkdocs.yml, docs/) at http://127.0.0.1:8001 while you edit it.
+docs: $(STAMP)
+	$(BIN)/mkdocs serve --dev-addr 127.0.0.1:8001
+
+# The reference pages generated from the code (docs/reference/: commands, settings, study
+# YAML, codebook); a test fails while a committed page differs from what this writes.
+docs-reference: $(STAMP)
+	$(BIN)/python scripts/docs_reference.py
+
+# Languages (docs/designing-a-study.md, "Languages"): extract the participant's texts into the templates
 # (.pot) and merge them into every language's .po; then translate the new entries.
 LOCALE := chameleons/locale
 i18n-extract: $(STAMP)

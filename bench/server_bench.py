@@ -21,7 +21,7 @@ the phone page does) and its session's console socket (``/ws/wizard/sessions/{id
   at the human pace for a fixed time, every socket held open.
 - **think, paced, phone processes** (PostgreSQL, ``--phone-servers N``, default 1): the
   human-paced run again with the phones' links and sockets on N more server processes on
-  the same database, the wizards and consoles on the main one (the deployment of README
+  the same database, the wizards and consoles on the main one (the deployment of docs/deployment.md,
   "More than one server process"): each answer reaches its console through LISTEN/NOTIFY.
 
 Figures per scenario: the phone's HTTP round trip and **submit -> console update** (from
@@ -60,7 +60,7 @@ from bench.server_walk import BaselinePhone, Pace, Phone, RealServer, submit_mea
 GOALS = {"think_update_p99_ms": 50.0, "burst_update_p99_ms": 500.0}
 SCENARIOS = {"think_instant": "think, instant wizard (stress)",
              "think_paced": "think, human-paced wizard", "burst": "burst"}  # fmt: skip
-# PostgreSQL only: the human-paced run with the phones on more server processes (README
+# PostgreSQL only: the human-paced run with the phones on more server processes (docs/deployment.md,
 # "More than one server process"); its baseline is the human-paced run's.
 SPLIT, SPLIT_LABEL = "think_paced_split", "think, paced, phone processes"
 

@@ -276,7 +276,7 @@ class Server:
         room for ``sessions`` and a staff member of ``role``), that staff member's cookie
         and CSRF, and the studies' ids. ``env`` adds settings (the worker link is off
         unless it says so). ``phone_servers``: as many more processes on the same database
-        and secret (PostgreSQL: README "More than one server process"), in the set-up's
+        and secret (PostgreSQL: docs/deployment.md, "More than one server process"), in the set-up's
         ``phone_servers``, for the phones."""
         study_ids, username, password = _prepare(database_url, sessions, role)
         port = free_port()

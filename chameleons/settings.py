@@ -33,12 +33,17 @@ class Settings(BaseSettings):
         env_prefix="CHAMELEONS_", env_file=".env", env_file_encoding="utf-8", extra="ignore"
     )
 
+    # Demo mode (`chameleons demo` sets it): runs without a secret key, with demo content.
     demo_mode: bool = False
+    # Database file, recordings, CURVE keys, demo credentials, a lab's 3D heads (heads/).
     data_dir: Path = DEFAULT_DATA_DIR
     database_url: str | None = Field(
         default=None, description="SQLAlchemy URL; default: SQLite file under data_dir"
     )
+    # Signs staff sessions and display links; required outside demo mode: at least 128 bits
+    # (python -c 'import secrets; print(secrets.token_urlsafe(32))'), not an example value.
     secret_key: SecretStr = SecretStr("")
+    # Where `chameleons serve` listens (`chameleons demo` takes --host / --port).
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=1, le=65535)
     public_url: str | None = Field(
@@ -67,6 +72,8 @@ class Settings(BaseSettings):
     ws_message_rate: float = Field(default=200.0, gt=0)
     ws_message_burst: int = Field(default=400, ge=1)
     ws_send_timeout_s: float = Field(default=10.0, gt=0)
+    # Failed logins before a user name is locked out from that address, and the first wait
+    # (it doubles with every further failure, at most 15 minutes).
     login_max_failures: int = Field(default=5, ge=1)
     login_lockout_seconds: float = Field(default=30.0, ge=0)
     # Reverse proxies whose X-Forwarded-For / -Proto headers say who the client is
@@ -84,8 +91,9 @@ class Settings(BaseSettings):
     zmq_keys_dir: Path | None = None
     worker_key_name: str = Field(default="worker", pattern=r"^[A-Za-z0-9_.-]{1,64}$")
 
-    # The server's ZeroMQ link to workers; off for tests that need no worker and for
-    # extra server processes that only serve phones (README: more than one server process).
+    # The server's ZeroMQ link to workers; off for tests that need no worker and for extra
+    # server processes that only serve phones (docs/deployment.md: more than one server
+    # process).
     bridge_enabled: bool = True
     # PostgreSQL only: carry live updates to other server processes on the same database
     # (LISTEN/NOTIFY, chameleons.backend.events.pg_fanout). Costs two connections.
@@ -95,7 +103,7 @@ class Settings(BaseSettings):
     embedded_worker_booth: str = "booth-1"
     # The robot display's face where neither the study's condition, the display link
     # (?renderer=) nor the booth's own default (the PI's /display page) chooses: the 2D
-    # cartoon or the 3D head (README: "The robot display").
+    # cartoon or the 3D head (docs/hardware/virtual-robot.md).
     display_renderer: Literal["2d", "3d"] = "2d"
 
     # Face capture inputs of a worker.
@@ -179,6 +187,7 @@ class Settings(BaseSettings):
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None
 
+    # The server's and the worker's log level.
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
     @model_validator(mode="after")

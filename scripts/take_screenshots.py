@@ -1,4 +1,4 @@
-"""Take the README's screenshots from a real demo session, so they stay current.
+"""Take the documentation's screenshots from a real demo session, so they stay current.
 
 Starts `chameleons demo` itself (free ports, a temporary data dir, so it never disturbs a
 demo already running), runs one whole three-interaction session in three browser contexts
@@ -176,6 +176,25 @@ def optimise(path: Path) -> None:
     with Image.open(path) as image:
         palette = image.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
     palette.save(path, optimize=True)
+
+
+def compose_overview(out: Path) -> None:
+    """The README's one picture: the wizard console beside the robot (the 3D head) it drives."""
+    with Image.open(out / "wizard-console.png") as console, \
+            Image.open(out / "robot-display-3d.png") as robot:  # fmt: skip
+        console_rgb = console.convert("RGB")
+        robot_rgb = robot.convert("RGB")
+    scale = 720 / console_rgb.height
+    size = (round(console_rgb.width * scale), 720)
+    console_rgb = console_rgb.resize(size, Image.Resampling.LANCZOS)
+    gap = 16
+    canvas = Image.new("RGB", (console_rgb.width + gap + robot_rgb.width, 720), (238, 240, 243))
+    canvas.paste(console_rgb, (0, 0))
+    canvas.paste(robot_rgb, (console_rgb.width + gap, (720 - robot_rgb.height) // 2))
+    path = out / "overview.png"
+    canvas.save(path)
+    optimise(path)
+    print(f"  {path.name}  {path.stat().st_size // 1024} KB")
 
 
 def phone_context(browser: Browser) -> BrowserContext:
@@ -370,6 +389,7 @@ def main() -> None:
             browser.close()
         if args.keep:
             shutil.copytree(data_dir, args.keep, dirs_exist_ok=True)
+    compose_overview(shots.out)
     total = sum(p.stat().st_size for p in shots.out.glob("*.png"))
     print(f"{total // 1024} KB in {shots.out}")
 

@@ -79,7 +79,7 @@ def build_engine(url: str) -> Engine:
     """Create an engine; for SQLite make the directory and set WAL, foreign keys, timeout.
 
     ``hide_parameters``: a database error in the log shows the SQL but not its bound values,
-    which may be a participant's free text (README: answers and free text are never logged)."""
+    which may be a participant's free text (docs/security.md: free text is never logged)."""
     parsed = make_url(url)
     pool = {"pool_size": POOL_SIZE, "max_overflow": POOL_OVERFLOW}
     if parsed.get_backend_name() == "sqlite":

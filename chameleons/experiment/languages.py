@@ -78,7 +78,7 @@ def catalogue_notes(
                 f"{place}: {code!r} has no translation of the phone's own texts (buttons, "
                 f"progress, errors, offline notices), which would stay in English. Add one: "
                 f"`make i18n-extract`, then `pybabel init` a {code} catalogue for each domain "
-                f'(README, "Adding a language") and translate '
+                f'(docs/designing-a-study.md, "Adding a language") and translate '
                 f"chameleons/locale/{code}/LC_MESSAGES/messages.po and phone.po"
             )
         elif count := untranslated_phone_texts(code):

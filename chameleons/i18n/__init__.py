@@ -8,7 +8,7 @@ the message ids, so English needs no catalogue. Each other language has
 
 The ``.po`` files are read directly (compiled in memory at first use, a few milliseconds),
 so a fresh clone works without a build step; a ``.mo`` beside a ``.po`` (``make
-i18n-compile``) is used instead when it is newer. See README, "Languages".
+i18n-compile``) is used instead when it is newer. See docs/designing-a-study.md, "Languages".
 """
 
 from __future__ import annotations

@@ -54,7 +54,7 @@ class SuggestionKind(StrEnum):
         return self in (SuggestionKind.BELOW, SuggestionKind.MAKE_LAST, SuggestionKind.MOVE_DOWN)
 
 
-# Group name endings that say how a suggestion prompt phrases its move (README: conventions).
+# Group name endings that say how a suggestion prompt phrases its move (prompts/README.md).
 MAKE_FIRST_SUFFIXES = ("_first", "_top")
 MAKE_LAST_SUFFIXES = ("_last", "_bottom")
 MOVE_DOWN_SUFFIXES = ("_down",)

@@ -144,7 +144,7 @@ def require_safe(endpoints: list[str], *, who: str) -> str:
         raise CurveError(
             f"the {who}'s ZeroMQ endpoint {outside[0]} is reachable from the network, but no "
             "CURVE keys are configured: anyone there could drive the robot or inject "
-            "recordings. Run `chameleons keys create` (see the README's booth set-up) or "
+            "recordings. Run `chameleons keys create` (see docs/hardware/booth-pc.md) or "
             "bind to 127.0.0.1."
         )
     return (f"the {who}'s ZeroMQ link runs unauthenticated, on loopback only "

@@ -321,7 +321,7 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[int(signum)] = signal.signal(signum, request_stop)
     # `kill -USR1 <worker>` prints every thread's stack to stderr: where a worker that does
-    # not stop, or stalls, is waiting (README, "A worker that hangs").
+    # not stop, or stalls, is waiting (docs/hardware/booth-pc.md, "A worker that hangs").
     dump_signal = getattr(signal, "SIGUSR1", None)  # not on Windows
     if dump_signal is not None:
         faulthandler.register(dump_signal, all_threads=True)
