@@ -107,6 +107,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 )
             if settings.bridge_enabled:
                 await stack.enter_async_context(worker_link(app, settings))
+            if settings.lsl:  # LSL markers of each booth's timeline (docs/instruments.md)
+                from chameleons.backend.instruments.markers import publishing
+
+                await stack.enter_async_context(publishing(app))
             yield
         engine.dispose()
 
@@ -129,6 +133,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.typed_speech = None  # the start-up's espeak-ng check (lifespan)
     app.state.live_fanout = None  # PostgreSQL: set while the server runs (lifespan)
+    app.state.lsl_markers = None  # settings.lsl: set while the server runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
     )
