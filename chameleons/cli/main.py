@@ -32,6 +32,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                    "Live Link Face take: ARKit's 52 values and head and eye rotations in "
                    "radians, the video's time as the timecode, frames without a face left "
                    "out."),
+    "import-xdf": ("xdf_command", "import_xdf_command",
+                   "Attach the other instruments' streams of an XDF recording (EMG, eye "
+                   "tracking, physiology, other tools' markers) to a session, aligned through "
+                   "this system's LSL markers."),
     "keys": ("keys_command", "keys",
              "CURVE keys that authenticate and encrypt the link between server and workers."),
     "plan": ("plan_command", "plan_command",
