@@ -44,6 +44,7 @@ from chameleons.backend.events.pg_fanout import fan_out
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
 from chameleons.backend.input_guard import InputGuardMiddleware
+from chameleons.backend.instruments import pages as instrument_pages
 from chameleons.backend.phone import endpoints as phone_endpoints
 from chameleons.backend.phone import pages as phone_pages
 from chameleons.backend.planning import pages as planning_pages
@@ -199,6 +200,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         typed_speech.router,
         booth_check.router,
         synchrony_pages.router,
+        instrument_pages.router,
     ):
         app.include_router(router)
     return app
