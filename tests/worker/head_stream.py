@@ -11,7 +11,7 @@ import random
 import socket
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from tests.worker.livelink_recording import FPS, pose_packet
 
@@ -66,6 +66,13 @@ def _bump(t: float, start: float | None, length: float) -> float:
 class Sent:
     start: float  # monotonic time of the stream's t = 0
     count: int
+    # When each packet actually left (monotonic), by packet number: on a busy machine the
+    # sender's sleeps overrun, and a copy on arrival times follows these, not the schedule.
+    sent_at: dict[int, float] = field(default_factory=dict)
+
+    def left_at(self, t: float) -> float:
+        """When the packet captured at ``t`` s into the stream left (its schedule if unknown)."""
+        return self.sent_at.get(round(t * FPS), self.start + t)
 
 
 def stream(
@@ -78,6 +85,7 @@ def stream(
     n = int(seconds * FPS)
     schedule = sorted((k / FPS + rng.uniform(0.0, jitter_s), k) for k in range(n))
     packets = {k: pose_packet(timecode(k), *pose.at(k / FPS)) for k in range(n)}
+    sent_at: dict[int, float] = {}
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         start = time.monotonic()
         for when, k in schedule:
@@ -85,7 +93,8 @@ def stream(
             if delay > 0:
                 time.sleep(delay)
             sock.sendto(packets[k], ("127.0.0.1", port))
-    return Sent(start, n)
+            sent_at[k] = time.monotonic()
+    return Sent(start, n, sent_at)
 
 
 def stream_after(

@@ -44,7 +44,8 @@ def sqrt(value: Fraction) -> Decimal:
 def rounded(value: Number, digits: int) -> Decimal:
     """``value`` rounded to ``digits`` decimals, half away from zero, from its exact value."""
     if isinstance(value, Fraction):
-        with localcontext(Context(prec=60)):
+        whole_digits = len(str(abs(value.numerator) // value.denominator))
+        with localcontext(Context(prec=max(60, whole_digits + digits + 20))):
             decimal = Decimal(value.numerator) / Decimal(value.denominator)
     else:
         decimal = Decimal(value)  # a float's exact binary value

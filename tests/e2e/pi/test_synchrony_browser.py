@@ -56,6 +56,9 @@ def test_the_pi_sees_synchrony_on_a_desk_and_a_phone(
     box = plot.bounding_box()
     assert box is not None
     assert box["x"] + box["width"] <= width  # the plot fits the screen
+    # Nothing on the page (the rankings and suggestions tables) makes the whole page scroll
+    # sideways: a wide table scrolls inside its own box.
+    assert page.evaluate("document.documentElement.scrollWidth") <= width
     page.goto(f"{live_server.url}/pi/analysis")
     section = page.locator("#synchrony-section[data-loaded='true']")
     expect(section.locator("#synchrony-by-condition")).to_be_visible(timeout=SLOW)
