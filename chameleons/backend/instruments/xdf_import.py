@@ -24,11 +24,12 @@ import pyarrow.parquet as pq
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
+from chameleons.backend.instruments.retention import session_folder
 from chameleons.backend.models import Event, InstrumentStream, Session
 from chameleons.instruments.lsl import parse_marker
 
 OWN_PREFIX = "chameleons-"
-FOLDER = "instruments"
+
 MIN_SLOPE_SPAN_S = 60.0  # markers spanning less than this fit an offset only
 MAX_SLOPE_ERROR = 1e-3  # a fitted rate further from 1 than this is not a clock: offset only
 
@@ -184,7 +185,7 @@ def import_xdf(db: DbSession, session_id: int, path: Path, data_dir: Path, *,
     fit = match_markers(streams, events, session_id)
     start = session.started_at or min((e.server_time for e in events.values()), default=None)
     zero = _epoch(start) if start is not None else 0.0
-    folder = data_dir / FOLDER / f"session-{session_id}"
+    folder = session_folder(data_dir, session_id)
     folder.mkdir(parents=True, exist_ok=True)
     stored, skipped = [], []
     for stream in streams:
