@@ -5,6 +5,7 @@ worked by hand)."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import secrets
 from datetime import timedelta
@@ -95,7 +96,7 @@ def test_each_session_becomes_an_eaf_with_the_seven_tiers(
     assert all(d.endswith(("accepted", "declined")) for d in decisions)
     for tier in TIERS:  # ELAN keeps a tier's annotations apart
         spans = sorted(eaf.get_annotation_data_for_tier(tier))
-        assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:], strict=False))
+        assert all(a[1] <= b[0] for a, b in itertools.pairwise(spans))
 
 
 def _coded(source: Path, coder: str, target: Path) -> Path:
