@@ -3,6 +3,7 @@ pyxdf) lands on the session's timeline through the markers this system sent."""
 
 from __future__ import annotations
 
+import csv
 import secrets
 from pathlib import Path
 
@@ -19,6 +20,11 @@ from chameleons.backend.migrate import upgrade
 from chameleons.backend.models import InstrumentStream
 from chameleons.cli.main import cli
 from tests.instruments.xdf_session import recorded_session
+
+
+def read_csv_rows(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="", encoding="utf-8") as file:
+        return list(csv.DictReader(file))
 
 
 @pytest.mark.slow
@@ -86,6 +92,15 @@ def test_the_command_imports_and_reports(tmp_path: Path) -> None:
     assert "left out (this system's own)" in ran.output
     with build_sessionmaker(engine)() as db:
         assert len(list(db.scalars(select(InstrumentStream)))) == 2
+    out = tmp_path / "export"
+    exported = CliRunner().invoke(cli, ["export", "--out", str(out), "--instruments"], env=env)
+    assert exported.exit_code == 0, exported.output
+    assert "2 instrument stream(s) in instruments/" in exported.output
+    index = read_csv_rows(out / "instruments" / "streams.csv")
+    assert [row["stream"] for row in index] == ["BioSemi", "PsychoPy"]
+    emg = pq.read_table(out / "instruments" / index[0]["file"]).to_pandas()
+    assert list(emg.columns) == ["time", "lsl_time", "zygomaticus", "corrugator"]
+    assert index[0]["channels"] == "zygomaticus|corrugator"
     refused = CliRunner().invoke(cli, ["import-xdf", str(tmp_path / "none.xdf"), "--session",
                                        str(recorded.session_id)], env=env)  # fmt: skip
     engine.dispose()
