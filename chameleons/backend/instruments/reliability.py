@@ -90,23 +90,23 @@ def tier_reliability(tier: str, annotations: list[CodedAnnotation],
         return None
     categories = sorted({v for row in rows for v in row if v is not None})
     code = {c: i for i, c in enumerate(categories)}
+    # Category codes per unit and coder; -1: the coder did not code that session.
+    coded = np.array([[-1 if v is None else code[v] for v in row] for row in rows])
     result = TierReliability(tier, coders, shared, len(rows), categories=categories)
-    for a, b in itertools.combinations(range(len(coders)), 2):
-        pairs = [(code[r[a]], code[r[b]]) for r in rows if r[a] is not None and r[b] is not None]  # type: ignore[index]
-        key = f"{coders[a]}|{coders[b]}"
-        if not pairs:
+    for first, second in itertools.combinations(range(len(coders)), 2):
+        both = coded[(coded[:, first] >= 0) & (coded[:, second] >= 0)]
+        key = f"{coders[first]}|{coders[second]}"
+        if not len(both):
             result.cohen[key] = None
             continue
         table = np.zeros((len(categories), len(categories)))
-        for x, y in pairs:
-            table[x, y] += 1
+        np.add.at(table, (both[:, first], both[:, second]), 1)
         result.cohen[key] = _finite(cohens_kappa(table).kappa)
-    complete = [[code[v] for v in row] for row in rows if all(v is not None for v in row)]  # type: ignore[index]
-    if complete:
-        counts, _ = aggregate_raters(np.asarray(complete), n_cat=len(categories))
+    complete = coded[(coded >= 0).all(axis=1)]
+    if len(complete):
+        counts, _ = aggregate_raters(complete, n_cat=len(categories))
         result.fleiss = _finite(fleiss_kappa(counts))
-    matrix = np.array([[np.nan if row[c] is None else code[row[c]] for row in rows]  # type: ignore[index]
-                       for c in range(len(coders))], dtype=float)  # fmt: skip
+    matrix = np.where(coded >= 0, coded, np.nan).T.astype(np.float64)
     if len(categories) > 1:
         result.alpha = _finite(krippendorff.alpha(reliability_data=matrix,
                                                   level_of_measurement="nominal"))  # fmt: skip
