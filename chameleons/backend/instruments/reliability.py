@@ -47,11 +47,13 @@ def _finite(value: float) -> float | None:
     return round(float(value), 4) if math.isfinite(float(value)) else None
 
 
-def _label(spans: list[tuple[int, int, str]], middle: float) -> str:
-    for start, end, value in spans:
-        if start <= middle < end:
-            return value or NONE
-    return NONE
+def _labels(spans: list[tuple[int, int, str]], middles: np.ndarray) -> np.ndarray:
+    """Each unit's category: the value of the (earliest) annotation covering its middle."""
+    labels = np.full(len(middles), NONE, dtype=object)
+    for begin, end, value in sorted(spans, reverse=True):  # the earliest written last: wins
+        low, high = np.searchsorted(middles, [begin, end], side="left")
+        labels[low:high] = value or NONE
+    return labels
 
 
 def units_of(annotations: list[CodedAnnotation], coders: list[str],
@@ -62,11 +64,10 @@ def units_of(annotations: list[CodedAnnotation], coders: list[str],
         by_coder[a.coder].append((a.start_ms, a.end_ms, a.value))
     first = min(a.start_ms for a in annotations)
     last = max(a.end_ms for a in annotations)
-    rows = []
-    for start in range(first, last, unit_ms):
-        middle = start + unit_ms / 2
-        rows.append([_label(by_coder[c], middle) if c in by_coder else None for c in coders])
-    return rows
+    middles = np.arange(first, last, unit_ms, dtype=np.float64) + unit_ms / 2
+    columns = [_labels(by_coder[c], middles) if c in by_coder else [None] * len(middles)
+               for c in coders]  # fmt: skip
+    return [list(row) for row in zip(*columns, strict=True)]
 
 
 def tier_reliability(tier: str, annotations: list[CodedAnnotation],
