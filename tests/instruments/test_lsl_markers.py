@@ -16,12 +16,15 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.app import create_app
+from chameleons.backend.db import build_sessionmaker
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.instruments.markers import MarkerPublisher
 from chameleons.backend.instruments.xdf_import import import_xdf
 from chameleons.backend.models import Event, Session
 from chameleons.instruments.lsl import parse_marker
 from chameleons.settings import Settings
+from chameleons.worker.envelope import Message
 from tests.instruments.lsl_inlets import open_inlet, pull_until, resolve
 from tests.instruments.xdf_session import epoch
 from tests.instruments.xdf_writer import XdfStream, write_xdf
@@ -108,3 +111,15 @@ def test_markers_recorded_by_an_inlet_align_an_xdf_file_onto_the_timeline(
     assert session.started_at is not None
     expected = epoch(resumed.server_time) - epoch(session.started_at)
     assert landed == pytest.approx(expected, abs=0.01)
+
+
+def test_a_booth_whose_worker_connects_gets_its_stream(db_session: DbSession) -> None:
+    booth = f"lsl-{uuid.uuid4().hex[:6]}"
+    publisher = MarkerPublisher(build_sessionmaker(db_session.get_bind()))  # type: ignore[arg-type]
+    publisher.start()
+    try:
+        publisher.on_worker(Message(f"worker.{booth}", "connected"))
+        info = resolve(f"chameleons-{booth}-events")
+    finally:
+        publisher.stop()
+    assert info.type() == "Markers"

@@ -6,8 +6,9 @@ the event's server time on LSL's clock.
 A listener of the live hub queues each committed event; one thread of its own finds the
 session's booth (a database read, remembered), opens the booth's outlet when it has none and
 pushes the marker, so neither a request nor the event loop ever waits for LSL. Outlets are
-opened at start for every booth the database knows (and the configured worker booth), so a
-lab's LabRecorder sees the streams before the first session starts.
+opened at start for every booth the database knows (and the configured worker booth), and
+for a booth whose worker connects, so a lab's LabRecorder sees the streams before the first
+session starts.
 """
 
 from __future__ import annotations
@@ -57,6 +58,13 @@ class MarkerPublisher:
             log.info("LSL markers stream chameleons-%s-events opened", booth)
         return outlet
 
+    def on_worker(self, message: Any) -> None:
+        """The bridge's ``worker.<booth>`` news: a booth's worker (re)connected, so its
+        markers stream is open before its first session (a bridge listener)."""
+        booth = str(getattr(message, "topic", "")).partition(".")[2]
+        if booth:
+            self._queue.put(("open", booth))
+
     def on_message(self, channel: str, message: Message) -> None:
         """The hub listener: queue committed events (on the loop; returns at once)."""
         if channel.startswith(SESSION_PREFIX) and message.get("type") == "event":
@@ -75,7 +83,10 @@ class MarkerPublisher:
     def _run(self) -> None:
         while (item := self._queue.get()) is not _STOP:
             try:
-                self.push(item)  # type: ignore[arg-type]
+                if isinstance(item, tuple):
+                    self._outlet(item[1])
+                else:
+                    self.push(item)  # type: ignore[arg-type]
             except Exception:  # one bad event never ends the markers of the rest
                 log.exception("LSL marker not sent")
 
@@ -125,6 +136,8 @@ async def publishing(app: FastAPI) -> AsyncIterator[MarkerPublisher]:
     await anyio.to_thread.run_sync(publisher.open, [*booths, settings.worker_booth])
     publisher.start()
     remove = hub.add_listener(publisher.on_message)
+    if app.state.bridge is not None:  # a booth whose worker connects gets its stream then
+        app.state.bridge.add_listener("worker.", publisher.on_worker)
     app.state.lsl_markers = publisher
     try:
         yield publisher
