@@ -45,6 +45,19 @@ def stream_name(booth: str, stream: str) -> str:
     return f"chameleons-{booth}-{stream}"
 
 
+def require_pylsl() -> None:
+    """Load pylsl (and the liblsl it bundles) now, or say in one sentence why not."""
+    try:
+        import pylsl
+
+        pylsl.library_version()
+    except (ImportError, RuntimeError, OSError) as exc:
+        raise RuntimeError(
+            "LSL is on (CHAMELEONS_LSL or --lsl) but liblsl cannot be loaded: reinstall the "
+            f"pylsl package, which bundles it ({exc})."
+        ) from exc
+
+
 def local_clock() -> float:
     import pylsl
 

@@ -192,7 +192,10 @@ class Worker:
                                     self.recorder, self.hub]  # fmt: skip
         self.lsl: LslStage | None = None
         if config.lsl:
+            from chameleons.instruments.lsl import require_pylsl
             from chameleons.worker.lsl_stage import LslStage
+
+            require_pylsl()  # before any thread starts: a clear error, not a stage crash
 
             self.lsl = LslStage(self.context, self.endpoints, booth=config.booth,
                                 tick_rate=config.render.tick_rate)  # fmt: skip

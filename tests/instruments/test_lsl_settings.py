@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from chameleons.cli.worker_command import build_config
-from chameleons.instruments.lsl import marker_text, parse_marker, stream_name
+from chameleons.instruments.lsl import marker_text, parse_marker, require_pylsl, stream_name
 from chameleons.settings import Settings
 
 
@@ -41,3 +41,15 @@ def test_markers_name_their_event_and_keep_free_text_off_the_network() -> None:
     assert stream_name("booth-2", "events") == "chameleons-booth-2-events"
     with pytest.raises(ValueError, match="unknown LSL stream"):
         stream_name("booth-2", "video")
+
+
+def test_a_missing_liblsl_is_said_in_one_sentence(monkeypatch: pytest.MonkeyPatch) -> None:
+    import pylsl
+
+    def missing() -> int:
+        raise RuntimeError("LSL binary library file was not found.")
+
+    monkeypatch.setattr(pylsl, "library_version", missing)
+    with pytest.raises(RuntimeError, match=r"^LSL is on \(CHAMELEONS_LSL or --lsl\) but liblsl "
+                                           r"cannot be loaded: reinstall the pylsl package"):
+        require_pylsl()

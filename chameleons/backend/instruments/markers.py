@@ -28,7 +28,7 @@ from sqlalchemy.orm import sessionmaker
 
 from chameleons.backend.events.hub import LiveHub, Message
 from chameleons.backend.models import Session
-from chameleons.instruments.lsl import LslClock, marker_text, markers_outlet
+from chameleons.instruments.lsl import LslClock, marker_text, markers_outlet, require_pylsl
 
 log = logging.getLogger(__name__)
 SESSION_PREFIX = "session:"
@@ -129,6 +129,7 @@ async def publishing(app: FastAPI) -> AsyncIterator[MarkerPublisher]:
     ``settings.lsl`` is on)."""
     import anyio.to_thread
 
+    require_pylsl()
     settings = app.state.settings
     hub: LiveHub = app.state.live_hub
     publisher = MarkerPublisher(app.state.sessionmaker)
