@@ -20,10 +20,14 @@ from chameleons.cli.common import load_settings
                 type=click.Path(dir_okay=False, path_type=Path))  # fmt: skip
 @click.option("--session", "session_id", type=int,
               help="The session coded (default: the one the exported file names).")  # fmt: skip
-@click.option("--coder", default=None,
-              help="Who coded (default: the tiers' annotator in the file).")
-@click.option("--all-tiers", is_flag=True,
-              help="Also keep the tiers this system wrote (prompts, robot speech, ...).")
+@click.option(
+    "--coder", default=None, help="Who coded (default: the tiers' annotator in the file)."
+)
+@click.option(
+    "--all-tiers",
+    is_flag=True,
+    help="Also keep the tiers this system wrote (prompts, robot speech, ...).",
+)
 def import_eaf(files: tuple[Path, ...], session_id: int | None, coder: str | None,
                all_tiers: bool) -> None:  # fmt: skip
     """Read coders' ELAN annotations of exported sessions back, for inter-rater

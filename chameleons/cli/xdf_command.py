@@ -17,8 +17,11 @@ from chameleons.cli.common import load_settings
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--session", "session_id", type=int, required=True,
               help="The session the recording was made beside.")  # fmt: skip
-@click.option("--include-own", is_flag=True,
-              help="Also keep this system's own streams (its markers and faces).")
+@click.option(
+    "--include-own",
+    is_flag=True,
+    help="Also keep this system's own streams (its markers and faces).",
+)
 def import_xdf_command(file: Path, session_id: int, include_own: bool) -> None:
     """Attach the other instruments' streams of an XDF recording (EMG, eye tracking,
     physiology, other tools' markers) to a session, aligned through this system's LSL

@@ -85,8 +85,7 @@ def test_each_session_becomes_an_eaf_with_the_seven_tiers(
     assert [(s[1] - s[0], s[2]) for s in speech] == [(3300, "greeting")]
     assert speech[0][0] - prompts[0][0] == 200
     assert [a[2] for a in eaf.get_annotation_data_for_tier("wizard notes")] == ["P laughed"]
-    assert [a[2] for a in eaf.get_annotation_data_for_tier("typed speech")] == [
-        "Take your time."]
+    assert [a[2] for a in eaf.get_annotation_data_for_tier("typed speech")] == ["Take your time."]
     assert [a[2] for a in eaf.get_annotation_data_for_tier("rankings")] == ["water > map"]
     conditions = eaf.get_annotation_data_for_tier("condition")
     assert [c[2].split(": ")[0] for c in conditions] == ["1", "2", "3"]
@@ -130,12 +129,18 @@ def test_coders_files_come_back_with_their_agreement(
     assert tier["fleiss_kappa"] == pytest.approx((0.8 - 0.42) / 0.58, abs=1e-4)
     assert tier["krippendorff_alpha"] == pytest.approx(1 - 0.2 / (1 - 4100 / 9900), abs=1e-4)
     text = CliRunner().invoke(cli, ["reliability"], env=env)
-    assert "smiles: 2 coders, 1 session(s), 50 units of 100 ms; Cohen's kappa A vs B 0.667" \
+    assert (
+        "smiles: 2 coders, 1 session(s), 50 units of 100 ms; Cohen's kappa A vs B 0.667"
         in text.output
+    )
     export = CliRunner().invoke(cli, ["export", "--out", str(out), "--format", "eaf"], env=env)
     assert export.exit_code == 0, export.output
-    assert (out / "eaf" / "reliability.csv").read_text().splitlines()[1].startswith(
-        "smiles,A|B,1,50,A|B,0.6667")
+    assert (
+        (out / "eaf" / "reliability.csv")
+        .read_text()
+        .splitlines()[1]
+        .startswith("smiles,A|B,1,50,A|B,0.6667")
+    )
 
 
 def test_a_file_that_is_not_elan_is_refused(

@@ -50,6 +50,9 @@ def test_a_missing_liblsl_is_said_in_one_sentence(monkeypatch: pytest.MonkeyPatc
         raise RuntimeError("LSL binary library file was not found.")
 
     monkeypatch.setattr(pylsl, "library_version", missing)
-    with pytest.raises(RuntimeError, match=r"^LSL is on \(CHAMELEONS_LSL or --lsl\) but liblsl "
-                                           r"cannot be loaded: reinstall the pylsl package"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"^LSL is on \(CHAMELEONS_LSL or --lsl\) but liblsl "
+        r"cannot be loaded: reinstall the pylsl package",
+    ):
         require_pylsl()

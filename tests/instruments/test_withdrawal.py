@@ -23,8 +23,17 @@ def test_withdrawal_deletes_the_instrument_streams_and_codes(
     recorded = recorded_session(db_session, tmp_path)
     result = import_xdf(db_session, recorded.session_id, recorded.path, data)
     files = [data / row.path for row in result.streams]
-    db_session.add(CodedAnnotation(session_id=recorded.session_id, coder="A", tier="prompts",
-                                   start_ms=0, end_ms=10, value="x", source_file="a.eaf"))
+    db_session.add(
+        CodedAnnotation(
+            session_id=recorded.session_id,
+            coder="A",
+            tier="prompts",
+            start_ms=0,
+            end_ms=10,
+            value="x",
+            source_file="a.eaf",
+        )
+    )
     db_session.commit()
     assert all(path.is_file() for path in files)
     session = db_session.get(Session, recorded.session_id)

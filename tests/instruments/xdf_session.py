@@ -64,8 +64,17 @@ def recorded_session(db: DbSession, tmp_path: Path, *, session_markers: bool = T
                     [[1.0 if abs(t - target) < 0.1 else 0.0, 0.25] for t in server_times],
                     labels=["zygomaticus", "corrugator"], source_id="biosemi-1",
                     offset=EMG_OFFSET)  # fmt: skip
-    stimulus = XdfStream(3, "PsychoPy", "Markers", "string", 0.0, [on_emg(target)],
-                         [["stimulus_on"]], source_id="psychopy", offset=EMG_OFFSET)
+    stimulus = XdfStream(
+        3,
+        "PsychoPy",
+        "Markers",
+        "string",
+        0.0,
+        [on_emg(target)],
+        [["stimulus_on"]],
+        source_id="psychopy",
+        offset=EMG_OFFSET,
+    )
     face = XdfStream(4, f"chameleons-{session.booth}-participant", "Face", "float32", 0.0,
                      [on_emg(zero + 1.0), on_emg(zero + 2.0)], [[0.5] * 61, [0.5] * 61],
                      source_id="face", offset=EMG_OFFSET)  # fmt: skip
