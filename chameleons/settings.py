@@ -183,6 +183,12 @@ class Settings(BaseSettings):
     sync_enabled: bool = True
     sync_drain_s: float = Field(default=60.0, ge=0)
 
+    # The lab's other instruments (issue 33, docs/instruments.md). Lab Streaming Layer
+    # outlets, off by default: the server publishes each booth's timeline as a Markers
+    # stream (chameleons-<booth>-events), and `chameleons worker` its faces (or --lsl).
+    # Turn it on in one server process only (each would publish the same markers).
+    lsl: bool = False
+
     # Prompt catalogue: one folder per actor (manifest.csv, actor.yaml, audio/, lipsync/).
     # None: <data_dir>/prompts when it holds actors, else the repository's prompts/.
     prompts_dir: Path | None = None

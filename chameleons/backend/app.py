@@ -44,6 +44,7 @@ from chameleons.backend.events.pg_fanout import fan_out
 from chameleons.backend.export import endpoints as export_endpoints
 from chameleons.backend.health import endpoints as health_endpoints
 from chameleons.backend.input_guard import InputGuardMiddleware
+from chameleons.backend.instruments import pages as instrument_pages
 from chameleons.backend.phone import endpoints as phone_endpoints
 from chameleons.backend.phone import pages as phone_pages
 from chameleons.backend.planning import pages as planning_pages
@@ -107,6 +108,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 )
             if settings.bridge_enabled:
                 await stack.enter_async_context(worker_link(app, settings))
+            if settings.lsl:  # LSL markers of each booth's timeline (docs/instruments.md)
+                from chameleons.backend.instruments.markers import publishing
+
+                await stack.enter_async_context(publishing(app))
             yield
         engine.dispose()
 
@@ -129,6 +134,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.bridge = None  # set while the worker link runs (lifespan)
     app.state.typed_speech = None  # the start-up's espeak-ng check (lifespan)
     app.state.live_fanout = None  # PostgreSQL: set while the server runs (lifespan)
+    app.state.lsl_markers = None  # settings.lsl: set while the server runs (lifespan)
     app.state.login_throttle = LoginThrottle(
         settings.login_max_failures, settings.login_lockout_seconds
     )
@@ -194,6 +200,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         typed_speech.router,
         booth_check.router,
         synchrony_pages.router,
+        instrument_pages.router,
     ):
         app.include_router(router)
     return app

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 import click
 from sqlalchemy.exc import SQLAlchemyError
+from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.export.selection import StudyNotFoundError
@@ -30,9 +32,15 @@ from chameleons.prompts.locations import prompts_root
 @click.option(
     "--format",
     "formats",
-    type=click.Choice(FORMATS),
+    type=click.Choice((*FORMATS, "eaf")),
     multiple=True,
-    help="Extra format besides CSV (CSV is always written); repeat for several.",
+    help="Extra format besides CSV (CSV is always written); repeat for several. eaf: one "
+    "ELAN file per session under eaf/ (docs/instruments.md).",
+)
+@click.option(
+    "--instruments",
+    is_flag=True,
+    help="Also the streams attached with import-xdf, as Parquet under instruments/.",
 )
 @click.option("--include-rehearsal", is_flag=True, help="Include sessions marked as rehearsals.")
 @click.option("--study", "study_id", type=int, help="Study id (default: the newest active).")
@@ -44,7 +52,8 @@ from chameleons.prompts.locations import prompts_root
 )
 def export(
     out: Path,
-    formats: tuple[ExportFormat, ...],
+    formats: tuple[ExportFormat | Literal["eaf"], ...],
+    instruments: bool,
     include_rehearsal: bool,
     study_id: int | None,
     raw_csv: bool,
@@ -54,7 +63,7 @@ def export(
     engine = build_engine(settings.effective_database_url)
     request = ExportRequest(
         study_id=study_id,
-        formats=("csv", *formats),
+        formats=("csv", *(f for f in formats if f != "eaf")),
         include_rehearsal=include_rehearsal,
         raw_csv=raw_csv,
         prompts_dir=prompts_root(settings),
@@ -62,6 +71,8 @@ def export(
     try:
         with build_sessionmaker(engine)() as db:
             plan = export_to_directory(db, request, out)
+            extra = _instruments(db, plan.study.id, include_rehearsal, settings.data_dir, out,
+                                 eaf="eaf" in formats, streams=instruments)  # fmt: skip
     except StudyNotFoundError as exc:
         raise click.ClickException(str(exc)) from exc
     except SQLAlchemyError as exc:
@@ -69,4 +80,19 @@ def export(
     finally:
         engine.dispose()
     counts = ", ".join(f"{name} {count[0]}" for name, count in plan.row_counts.items())
-    click.echo(f"exported study {plan.study.id} ({plan.study.name}) to {out}: {counts} rows")
+    click.echo(f"exported study {plan.study.id} ({plan.study.name}) to {out}: {counts} rows"
+               f"{extra}")  # fmt: skip
+
+
+def _instruments(db: DbSession, study_id: int, include_rehearsal: bool, data_dir: Path,
+                 out: Path, *, eaf: bool, streams: bool) -> str:  # fmt: skip
+    """The ELAN files and instrument streams asked for; what was written, for the report."""
+    from chameleons.backend.instruments.export import export_eaf, export_instruments
+
+    said = ""
+    if eaf:
+        said += f"; {export_eaf(db, study_id, include_rehearsal, out)} ELAN file(s) in eaf/"
+    if streams:
+        count = export_instruments(db, study_id, include_rehearsal, Path(data_dir), out)
+        said += f"; {count} instrument stream(s) in instruments/"
+    return said

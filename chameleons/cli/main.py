@@ -32,6 +32,13 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                    "Live Link Face take: ARKit's 52 values and head and eye rotations in "
                    "radians, the video's time as the timecode, frames without a face left "
                    "out."),
+    "import-eaf": ("eaf_command", "import_eaf",
+                   "Read coders' ELAN annotations of exported sessions back, for inter-rater "
+                   "reliability (a coder's earlier import of the same session is replaced)."),
+    "import-xdf": ("xdf_command", "import_xdf_command",
+                   "Attach the other instruments' streams of an XDF recording (EMG, eye "
+                   "tracking, physiology, other tools' markers) to a session, aligned through "
+                   "this system's LSL markers."),
     "keys": ("keys_command", "keys",
              "CURVE keys that authenticate and encrypt the link between server and workers."),
     "plan": ("plan_command", "plan_command",
@@ -47,6 +54,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "rehearse": ("rehearse_command", "rehearse",
                  "Run whole sessions with a scripted wizard and participant, marked as "
                  "rehearsals."),
+    "reliability": ("eaf_command", "reliability",
+                    "Inter-rater reliability of the coders' ELAN annotations per tier: Cohen's "
+                    "kappa per pair of coders, Fleiss' kappa and Krippendorff's alpha."),
     "serve": ("serve_command", "serve",
               "Run the web server (wizard console, phone pages, PI dashboard, API)."),
     "simulate-face": ("simulate_face_command", "simulate_face",

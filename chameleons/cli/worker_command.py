@@ -70,6 +70,9 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
               help="Ask for real-time scheduling (SCHED_FIFO) for the renderer.")  # fmt: skip
 @click.option("--renderer-cpu", type=int, default=None,
               help="Pin the renderer to this CPU (implies --renderer-process).")  # fmt: skip
+@click.option("--lsl/--no-lsl", default=None,
+              help="Publish the participant's and the robot's faces as Lab Streaming Layer "
+                   "streams (docs/instruments.md). [CHAMELEONS_LSL, off]")  # fmt: skip
 @click.option("-v", "--verbose", is_flag=True, help="Log at debug level.")
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
@@ -77,7 +80,8 @@ def worker(
     facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
     keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
-    renderer_process: bool, realtime: bool, renderer_cpu: int | None, verbose: bool,
+    renderer_process: bool, realtime: bool, renderer_cpu: int | None, lsl: bool | None,
+    verbose: bool,
 ) -> None:  # fmt: skip
     """Run the realtime worker of one booth (capture -> behaviour -> renderer -> robot).
 
@@ -97,7 +101,7 @@ def worker(
             facecapturex_port=facecapturex_port,
             behaviour=behaviour, copy_delay=copy_delay, natural_path=natural_path,
             control=control, telemetry=telemetry, keys_dir=keys_dir, tick_rate=tick_rate,
-            face_rate=face_rate,
+            face_rate=face_rate, lsl=lsl,
         )  # fmt: skip
         if realtime or renderer_cpu is not None:
             renderer_process = True  # both are about the renderer's own process
@@ -165,6 +169,7 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         render=render,
         crossfade_seconds=float(_setting(settings, "worker_crossfade_seconds", 0.3)),
         curve=_curve(settings, options),
+        lsl=bool(pick("lsl", "lsl", False)),
     )  # fmt: skip
 
 

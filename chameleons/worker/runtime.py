@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from types import FrameType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import zmq
 
@@ -43,6 +43,9 @@ from chameleons.worker.render_process import (
 from chameleons.worker.render_stage import DriverFactory, RendererStage
 from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints, ParticipantBus
+
+if TYPE_CHECKING:
+    from chameleons.worker.lsl_stage import LslStage
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
@@ -99,6 +102,8 @@ class WorkerConfig:
     renderer_process: bool = False
     renderer_realtime: bool = False
     renderer_cpu: int | None = None
+    # LSL outlets of the participant's and the robot's faces (docs/instruments.md).
+    lsl: bool = False
 
     def initial_params(self) -> dict[str, Any]:
         if self.behaviour == "copy":
@@ -185,6 +190,16 @@ class Worker:
         self._renderer_ready = renderer.ready
         self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
+        self.lsl: LslStage | None = None
+        if config.lsl:
+            from chameleons.instruments.lsl import require_pylsl
+            from chameleons.worker.lsl_stage import LslStage
+
+            require_pylsl()  # before any thread starts: a clear error, not a stage crash
+
+            self.lsl = LslStage(self.context, self.endpoints, booth=config.booth,
+                                tick_rate=config.render.tick_rate)  # fmt: skip
+            self.stages.insert(-1, self.lsl)
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self) -> Worker:

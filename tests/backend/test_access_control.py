@@ -27,7 +27,7 @@ VALUES = {
     "study_id": "1", "session_id": "1", "token": "not-a-token", "code": "P001",
     "measure": "trust", "fmt": "svg", "recording_id": "1", "booth": "booth-1",
     "actor": "m1", "relative": "audio/x.mp3", "name": "0123abcd.wav", "account_id": "1",
-    "device": "0123456789abcdef", "interaction_id": "1",
+    "device": "0123456789abcdef", "interaction_id": "1", "stream_id": "1",
 }  # fmt: skip
 # Well-formed bodies, so the token check (not validation) is what answers.
 BODIES = {

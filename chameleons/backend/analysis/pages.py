@@ -27,6 +27,7 @@ from chameleons.backend.dashboard.context import page_context, study_or_404
 from chameleons.backend.dependencies import DbSession as Db
 from chameleons.backend.dependencies import Templates
 from chameleons.backend.export.selection import StudyNotFoundError
+from chameleons.backend.instruments.reliability import study_reliability
 from chameleons.backend.routing import make_router
 from chameleons.experiment.stats import (
     DEFAULT_RULE,
@@ -149,6 +150,7 @@ def analysis_page(
         fmt_p=fmt_p,
         posthoc_text=posthoc_text,
         rounding_rule=RULE,
+        reliability=study_reliability(db, found.id),  # coders' ELAN agreement (issue 33)
     )
     return templates.TemplateResponse(request, "pi/analysis.html", context)
 

@@ -17,6 +17,7 @@ from chameleons.backend.dependencies import AppSettings, DbSession, Templates
 from chameleons.backend.export.preview import PREVIEW_ROWS
 from chameleons.backend.export.preview import preview as export_preview
 from chameleons.backend.export.selection import StudyNotFoundError, resolve_study
+from chameleons.backend.instruments.xdf_import import streams_of
 from chameleons.backend.models import Recording, Session, Study
 from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.states import END_REASONS
@@ -120,6 +121,7 @@ def session_page(
         "overview",
         detail=detail,
         synchrony=synchrony_repository.stored(db, ids),
+        instruments=streams_of(db, session_id),
         spec=spec,
         flag_labels=FLAG_LABELS,
         bad_flags=BAD_FLAGS,

@@ -4,6 +4,7 @@ from chameleons.backend.models.base import Base
 from chameleons.backend.models.booth_check import BoothCheck
 from chameleons.backend.models.display_link import DisplayLink
 from chameleons.backend.models.event import Event
+from chameleons.backend.models.instrument import CodedAnnotation, InstrumentStream
 from chameleons.backend.models.interaction import Interaction
 from chameleons.backend.models.interaction_synchrony import InteractionSynchrony
 from chameleons.backend.models.participant import Participant
@@ -19,8 +20,10 @@ from chameleons.backend.models.suggestion import Suggestion
 __all__ = [
     "Base",
     "BoothCheck",
+    "CodedAnnotation",
     "DisplayLink",
     "Event",
+    "InstrumentStream",
     "Interaction",
     "InteractionSynchrony",
     "Participant",

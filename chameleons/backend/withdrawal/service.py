@@ -20,6 +20,7 @@ from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.analysis.cache import analyses
 from chameleons.backend.events.repository import announce_gone
+from chameleons.backend.instruments.retention import forget_instruments
 from chameleons.backend.models import (
     BoothCheck,
     Event,
@@ -108,6 +109,7 @@ def withdraw_participant(
     resynchronise = forget_synchrony(
         db, study_id, [r for r, _ in recordings], [*interaction_ids, *replays]
     )
+    instrument_files = forget_instruments(db, session_ids, data_dir)  # XDF streams, ELAN codes
     _delete_rows(db, participant, session_ids, interaction_ids)
     forget_replays(db, replays)
     redacted = redact_events(db, study_id, withdrawn)
@@ -132,6 +134,9 @@ def withdraw_participant(
             f"what {redacted} event{_s(redacted)} of other sessions said about them "
             "(each keeps its kind and time, not its content)"
         )
+    if instrument_files:
+        removed.append(f"{instrument_files} file{_s(instrument_files)} of other instruments "
+                       "(streams attached with import-xdf)")  # fmt: skip
     others = len(set(resynchronise) - set(interaction_ids))
     if others > 0:
         removed.append(
