@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import zmq
 
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
-from chameleons.worker.control import MARK_HEAD_REST, RESET_PAIRING
+from chameleons.worker.control import CALIBRATE_WEBCAM, MARK_HEAD_REST, RESET_PAIRING
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DEFAULT_URL, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
@@ -80,6 +80,7 @@ class WorkerConfig:
     livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
     facecapturex_port: int | None = 19977
     camera: str | None = None  # a local camera (or a video file) the worker tracks itself
+    browser_capture: bool = True  # the capture page's webcam frames, relayed by the server
     livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
@@ -173,6 +174,7 @@ class Worker:
                 driver_factory or partial(make_driver, config),
                 config.render,
             )
+        self.browser = self._browser_receiver()
         self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth,
                                       processing=config.head_processing())  # fmt: skip
         self.hub = ControlHub(self.context, self.endpoints, HubConfig(
@@ -181,10 +183,28 @@ class Worker:
                   "head": config.head_processing()}, curve=config.curve,
         ), ingest_stats=self.ingest_stats,
             local={RESET_PAIRING: lambda _body: self.pairing.reset(),
-                   MARK_HEAD_REST: self.mark_head_rest})  # fmt: skip
+                   MARK_HEAD_REST: self.mark_head_rest,
+                   CALIBRATE_WEBCAM: self.calibrate_webcam},
+            capture=self.browser.offer if self.browser is not None else None)  # fmt: skip
         self._renderer_ready = renderer.ready
         self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
+
+    def _browser_receiver(self) -> Any:
+        if not self.config.browser_capture:
+            return None
+        from chameleons.worker.ingest.browser import BrowserReceiver
+        from chameleons.worker.ingest.transform import FrameTransform
+
+        return BrowserReceiver(publish_endpoint=self.endpoints.capture, context=self.context,
+                               transform=FrameTransform(0.0, self.config.mirror))  # fmt: skip
+
+    def calibrate_webcam(self, body: Mapping[str, Any]) -> dict[str, Any]:
+        """The capture page's neutral-face step (``calibrate_webcam``)."""
+        if self.browser is None:
+            return {"calibrated": False, "problem": "this worker takes no capture page"}
+        result: dict[str, Any] = self.browser.calibrate(body)
+        return result
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self) -> Worker:
@@ -235,6 +255,8 @@ class Worker:
         if cfg.facecapturex_port is not None:
             receiver = FaceCaptureXReceiver(port=cfg.facecapturex_port, **common)
             self.receivers["facecapturex"] = receiver.start()
+        if self.browser is not None:
+            self.receivers["webcam-browser"] = self.browser.start()
         if cfg.camera is not None:
             from chameleons.worker.ingest.webcam import CameraReceiver
 
@@ -256,7 +278,9 @@ class Worker:
         head_range = max(heads, key=lambda h: h["frames"]) if heads else None
         # Which input the face comes from: the busiest one, else the only one configured.
         busiest = max(snapshots, key=lambda n: snapshots[n].get("input_fps", 0.0), default=None)
+        page = snapshots.get("webcam-browser", {})
         active = busiest if busiest and snapshots[busiest].get("input_fps") else (
+            "webcam-browser" if page.get("connected") else
             "webcam" if "webcam" in snapshots else None)  # fmt: skip
         timecodes = [s["timecode"] for s in snapshots.values() if s.get("timecode")]
         untrusted = next((t for t in timecodes if t.get("problem")), None)

@@ -1,0 +1,128 @@
+"""``/ws/capture/<booth>?token=<key>``: the capture page's WebSocket (protocol: ``relay``).
+
+Face frames go on to the booth's worker through the bridge at once (no acks: a frame the
+worker cannot take now is dropped and counted); the calibration step is a command with an
+ack, answered to the page. When the page goes, the worker hears so (its capture source is
+then disconnected, as a phone that stopped sending).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import time
+from typing import Any
+
+from fastapi import WebSocket, WebSocketDisconnect
+from starlette.concurrency import run_in_threadpool
+
+from chameleons.backend.capture import links
+from chameleons.backend.capture.relay import (
+    MAX_BINARY,
+    CaptureLink,
+    CaptureProtocolError,
+    parse_text,
+)
+from chameleons.backend.db import session_scope
+from chameleons.backend.display.tokens import is_valid_booth
+from chameleons.backend.events import guard
+from chameleons.backend.routing import make_router
+from chameleons.backend.wizard.worker_link import bridge_of, send_command
+from chameleons.worker.control import CALIBRATE_WEBCAM
+from chameleons.worker.envelope import Message
+
+router = make_router(tags=["capture"])
+log = logging.getLogger(__name__)
+REPORT_SECONDS = 1.0
+CALIBRATION_TIMEOUT = 3.0
+
+
+@router.websocket("/ws/capture/{booth}")
+async def capture_socket(websocket: WebSocket, booth: str, token: str | None = None) -> None:
+    allowed = is_valid_booth(booth) and token is not None and await run_in_threadpool(
+        _token_works, websocket, booth, token
+    )
+    if not allowed:
+        await websocket.close(code=guard.POLICY_VIOLATION)
+        return
+    await websocket.accept()
+    link = CaptureLink(booth)
+    async with guard.guarded(websocket):
+        await guard.send_text(websocket, json.dumps({"type": "hello", "booth": booth}))
+        try:
+            await _serve(websocket, link)
+        finally:
+            await _relay(websocket, link, link.status(None, time.monotonic(), connected=False))
+
+
+def _token_works(websocket: WebSocket, booth: str, token: str) -> bool:
+    with session_scope(websocket.app.state.sessionmaker) as db:
+        return links.token_works(db, websocket.app, booth, token)
+
+
+async def _relay(websocket: WebSocket, link: CaptureLink, message: Message) -> bool:
+    bridge = bridge_of(websocket.app.state)
+    sent = bridge is not None and await bridge.relay(link.booth, message)
+    if not sent:
+        link.unrelayed += 1
+    return bool(sent)
+
+
+async def _serve(websocket: WebSocket, link: CaptureLink) -> None:
+    rate = guard.MessageRate(guard.limits_of(websocket).rate, guard.limits_of(websocket).burst)
+    worker, next_report = False, time.monotonic() + REPORT_SECONDS
+    with contextlib.suppress(WebSocketDisconnect):
+        while True:
+            frame = await websocket.receive()
+            if frame["type"] == "websocket.disconnect":
+                return
+            if not rate.allow():
+                raise guard.SocketClosed(guard.POLICY_VIOLATION, "too many capture messages")
+            now = time.monotonic()
+            try:
+                reply = await _handle(websocket, link, frame, now)
+            except CaptureProtocolError as exc:
+                link.bad += 1
+                log.debug("capture page of %s: %s", link.booth, exc)
+                continue
+            if isinstance(reply, bool):
+                worker = reply
+            elif reply is not None:
+                await guard.send_text(websocket, json.dumps(reply))
+            if now >= next_report:
+                next_report = now + REPORT_SECONDS
+                await guard.send_text(websocket, json.dumps(link.report(worker)))
+
+
+async def _handle(websocket: WebSocket, link: CaptureLink, frame: dict[str, Any],
+                  now: float) -> dict[str, Any] | bool | None:  # fmt: skip
+    """A reply for the page, whether the worker took a relayed message, or None."""
+    data = frame.get("bytes")
+    if data is not None:
+        if len(data) > MAX_BINARY:
+            raise CaptureProtocolError("a face frame too large")
+        return await _relay(websocket, link, link.landmarks(data, now))
+    message = parse_text(str(frame.get("text") or ""))
+    kind = message["type"]
+    if kind == "no_face":
+        return await _relay(websocket, link, link.no_face_message(message, now))
+    if kind == "status":
+        return await _relay(websocket, link, link.status(message, now))
+    if kind == "ping":
+        return {"type": "pong", "t": message.get("t")}
+    if kind == "calibrate":
+        return await _calibrate(websocket, link, str(message["action"]))
+    raise CaptureProtocolError(f"unknown message type {kind!r}")
+
+
+async def _calibrate(websocket: WebSocket, link: CaptureLink, action: str) -> dict[str, Any]:
+    outcome = await asyncio.shield(send_command(
+        bridge_of(websocket.app.state), link.booth, CALIBRATE_WEBCAM, {"action": action},
+        timeout=CALIBRATION_TIMEOUT,
+    ))  # fmt: skip
+    if not outcome.sent:
+        return {"type": "calibration", "action": action, "calibrated": False,
+                "problem": outcome.detail}  # fmt: skip
+    return {"type": "calibration", "action": action, **(outcome.result or {})}
