@@ -28,9 +28,9 @@ import zmq
 
 from chameleons import __version__
 from chameleons.worker.control import (
+    CAPTURE_TOPIC,
     PLAY_PROMPT,
     RECENTRE_HEAD,
-    CAPTURE_TOPIC,
     RESET_DELAY_PROBE,
     RETRY_ROBOT,
     SET_BEHAVIOUR,

@@ -41,8 +41,10 @@ CALIBRATION_TIMEOUT = 3.0
 
 @router.websocket("/ws/capture/{booth}")
 async def capture_socket(websocket: WebSocket, booth: str, token: str | None = None) -> None:
-    allowed = is_valid_booth(booth) and token is not None and await run_in_threadpool(
-        _token_works, websocket, booth, token
+    allowed = (
+        is_valid_booth(booth)
+        and token is not None
+        and await run_in_threadpool(_token_works, websocket, booth, token)
     )
     if not allowed:
         await websocket.close(code=guard.POLICY_VIOLATION)

@@ -83,7 +83,7 @@ class CaptureLink:
         body: dict[str, Any] = self._times(captured, sent, now)
         body.update(width=int(width), height=int(height))
         self.frames += 1
-        return self._message("landmarks", body, now, bytes(data[HEADER.size:]))
+        return self._message("landmarks", body, now, bytes(data[HEADER.size :]))
 
     def no_face_message(self, message: dict[str, Any], now: float) -> Message:
         captured, sent = _number(message, "captured"), _number(message, "sent")

@@ -27,6 +27,7 @@ relay's own latency (well under a millisecond on a LAN) goes uncounted.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import queue
 import threading
@@ -85,10 +86,8 @@ class BrowserReceiver:
     def stop(self, timeout: float = 5.0) -> None:
         if self._thread is None:
             return
-        try:
+        with contextlib.suppress(queue.Full):
             self._queue.put(_STOP, timeout=timeout)
-        except queue.Full:
-            pass
         self._thread.join(timeout)
         if self._thread.is_alive():
             raise RuntimeError(f"browser capture receiver did not stop within {timeout} s")

@@ -86,7 +86,8 @@ def test_the_capture_page_streams_a_real_face_to_the_worker(
         assert snapshot["camera"], snapshot  # the fake camera's label
         yaw, pitch, roll = snapshot["head"]
         assert abs(roll - ROLL) < 5.0, snapshot["head"]  # right sign, within a few degrees
-        assert abs(yaw) < 10.0 and abs(pitch) < 15.0, snapshot["head"]
+        assert abs(yaw) < 10.0, snapshot["head"]
+        assert abs(pitch) < 15.0, snapshot["head"]
         # The worker's status (what the console and the booth check read) names the source.
         ingest = worker.ingest_stats()
         assert ingest["source"] == "webcam-browser"
@@ -95,4 +96,3 @@ def test_the_capture_page_streams_a_real_face_to_the_worker(
         wait_until(lambda: not receiver.snapshot()["connected"], 30, "the page's goodbye")
     finally:
         browser.close()
-
