@@ -73,29 +73,52 @@ async def _relay(websocket: WebSocket, link: CaptureLink, message: Message) -> b
 
 
 async def _serve(websocket: WebSocket, link: CaptureLink) -> None:
-    rate = guard.MessageRate(guard.limits_of(websocket).rate, guard.limits_of(websocket).burst)
-    worker, next_report = False, time.monotonic() + REPORT_SECONDS
-    with contextlib.suppress(WebSocketDisconnect):
+    tasks = {asyncio.create_task(_receive(websocket, link)),
+             asyncio.create_task(_report(websocket, link))}  # fmt: skip
+    try:
+        await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        guard.raise_closed(tasks)
+    finally:
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+
+
+def _worker_connected(websocket: WebSocket, booth: str) -> bool:
+    bridge = bridge_of(websocket.app.state)
+    info = None if bridge is None else bridge.workers().get(booth)
+    return info is not None and bool(info.connected(bridge.stale_after))
+
+
+async def _report(websocket: WebSocket, link: CaptureLink) -> None:
+    """Once a second: what reached the server, and whether the booth's worker is there."""
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
+        while True:
+            await asyncio.sleep(REPORT_SECONDS)
+            report = link.report(_worker_connected(websocket, link.booth))
+            await guard.send_text(websocket, json.dumps(report))
+
+
+async def _receive(websocket: WebSocket, link: CaptureLink) -> None:
+    limits = guard.limits_of(websocket)
+    rate = guard.MessageRate(limits.rate, limits.burst)
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             frame = await websocket.receive()
             if frame["type"] == "websocket.disconnect":
                 return
             if not rate.allow():
                 raise guard.SocketClosed(guard.POLICY_VIOLATION, "too many capture messages")
-            now = time.monotonic()
             try:
-                reply = await _handle(websocket, link, frame, now)
+                reply = await _handle(websocket, link, frame, time.monotonic())
             except CaptureProtocolError as exc:
                 link.bad += 1
                 log.debug("capture page of %s: %s", link.booth, exc)
                 continue
-            if isinstance(reply, bool):
-                worker = reply
-            elif reply is not None:
+            if isinstance(reply, dict):
                 await guard.send_text(websocket, json.dumps(reply))
-            if now >= next_report:
-                next_report = now + REPORT_SECONDS
-                await guard.send_text(websocket, json.dumps(link.report(worker)))
 
 
 async def _handle(websocket: WebSocket, link: CaptureLink, frame: dict[str, Any],

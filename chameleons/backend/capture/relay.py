@@ -14,8 +14,9 @@ Page -> server:
 - ``{"type": "ping", "t": ms}``.
 
 Server -> page: ``{"type": "hello", "booth"}``, ``{"type": "pong", "t"}``,
-``{"type": "relay", "frames", "no_face", "worker": bool}`` (once a second: whether the
-booth's worker takes the frames), ``{"type": "calibration", ...}`` (the worker's answer:
+``{"type": "relay", "frames", "no_face", "unrelayed", "refused", "worker": bool}`` (once
+a second: what arrived, what could not go on, what was malformed, and whether the booth's
+worker is connected), ``{"type": "calibration", ...}`` (the worker's answer:
 ``calibrated``, ``frames``, ``calibration`` or ``problem``).
 
 The page's clock is mapped onto the server's monotonic clock on the send times (the
@@ -105,7 +106,7 @@ class CaptureLink:
 
     def report(self, worker: bool) -> dict[str, Any]:
         return {"type": "relay", "frames": self.frames, "no_face": self.no_face,
-                "unrelayed": self.unrelayed, "worker": worker}  # fmt: skip
+                "unrelayed": self.unrelayed, "refused": self.bad, "worker": worker}  # fmt: skip
 
 
 def parse_text(text: str) -> dict[str, Any]:
