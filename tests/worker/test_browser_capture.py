@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import zmq
 
+from chameleons.backend.booth.check import face_stream
 from chameleons.backend.capture.relay import HEADER, CaptureLink, CaptureProtocolError
 from chameleons.facemesh.pose import canonical_landmarks
 from chameleons.worker.envelope import serialize
@@ -50,6 +51,30 @@ def page_frame(roll: float, captured_ms: float, sent_ms: float) -> bytes:
     return HEADER.pack(captured_ms, sent_ms, 640, 480, len(points)) + points.tobytes()
 
 
+def booth_check_face(peer: ControlPeer, wanted: str, status: dict[str, Any] | None = None
+                     ) -> str:  # fmt: skip
+    """The booth check's face step on the latest heartbeat with ``wanted`` in it; meanwhile
+    the page goes on saying ``status`` (or, without one, that it sees no face) twice a
+    second, as an open page does."""
+    link, sent = CaptureLink(BOOTH), [0.0]
+
+    def found() -> str | None:
+        now = time.monotonic()
+        if now - sent[0] > 0.5:
+            ms = now * 1000
+            relay(peer, link, link.status(status, now) if status is not None
+                  else link.no_face_message({"captured": ms, "sent": ms + 5}, now))  # fmt: skip
+            sent[0] = now
+        for message in reversed(peer.of_type("heartbeat")):
+            result = face_stream(message.body)
+            if result["status"] == "fail" and wanted in result["value"]:
+                return str(result["value"])
+        return None
+
+    value: str = peer.wait(found, timeout=30)
+    return value
+
+
 def relay(peer: ControlPeer, link: CaptureLink, message: Any) -> None:
     peer.send_raw(BOOTH, serialize(message))
 
@@ -82,6 +107,8 @@ def test_page_frames_are_mapped_published_and_recorded(
         assert page["camera"] == "Fake camera"
         assert page["head"][2] == pytest.approx(20.0, abs=0.5)  # the roll, its sign
         assert heartbeat(peer, lambda i: i["receivers"]["webcam-browser"]["no_face"] >= 3)
+        # The page stays open and sees nobody: the booth check's face step says so.
+        assert booth_check_face(peer, "no face") == "camera sees no face"
         files = peer.command(BOOTH, "stop_recording", {"interaction_id": 5}).result["files"]
         assert worker.browser is not None
     table = read_recording_table(files["participant"])
@@ -115,13 +142,14 @@ def test_the_page_calibrates_the_neutral_face_and_reports_camera_problems(
         peer.wait(lambda: browser.stats.frames >= 8, timeout=10)
         done = peer.command(BOOTH, "calibrate_webcam", {"action": "finish"})
         assert done.result == {"calibrated": True, "frames": 8, "calibration": "neutral"}
-        relay(peer, link, link.status({"problem": "camera busy: another program is using it",
-                                       "camera": ""}, time.monotonic()))  # fmt: skip
-        busy = heartbeat(peer, lambda i: "camera busy" in str(i.get("problem")))
-        assert busy["receivers"]["webcam-browser"]["calibration"] == "neutral"
-        relay(peer, link, link.status({"brightness": 12, "camera": "Cam"}, time.monotonic()))
-        dark = heartbeat(peer, lambda i: "too dark" in str(i.get("problem")))
-        assert "brightness 12 of 255" in dark["problem"]
+        busy = {"problem": "camera busy: another program is using it", "camera": ""}
+        relay(peer, link, link.status(busy, time.monotonic()))
+        seen = heartbeat(peer, lambda i: "camera busy" in str(i.get("problem")))
+        assert seen["receivers"]["webcam-browser"]["calibration"] == "neutral"
+        # Once the frames have stopped, the booth check's face step names the problem.
+        assert "another program" in booth_check_face(peer, "camera busy", busy)
+        dark = booth_check_face(peer, "too dark", {"brightness": 12, "camera": "Cam"})
+        assert "brightness 12 of 255" in dark
         relay(peer, link, link.status(None, time.monotonic(), connected=False))
         assert heartbeat(peer, lambda i: not i["receivers"]["webcam-browser"]["connected"])
 

@@ -6,11 +6,13 @@ from __future__ import annotations
 from fastapi import HTTPException, Request, status
 from fastapi.responses import HTMLResponse, Response
 
+from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.capture import links
 from chameleons.backend.dependencies import DbSession, Templates
 from chameleons.backend.display.tokens import is_valid_booth
 from chameleons.backend.routing import make_router
 from chameleons.backend.security_headers import CONTENT_SECURITY_POLICY
+from chameleons.backend.sessions.endpoints import qr_svg
 from chameleons.facemesh.assets import VERSION
 
 router = make_router(tags=["capture"])
@@ -39,3 +41,13 @@ def capture_page(
     response.headers["Content-Security-Policy"] = CAPTURE_CSP
     response.headers["Permissions-Policy"] = "camera=(self)"
     return response
+
+
+@router.get("/api/capture/{booth}/qr.svg")
+def capture_qr(request: Request, booth: str, _user: CurrentStaff) -> Response:
+    """Staff: the booth's capture link as a QR code (to open it on a laptop or tablet)."""
+    url = links.capture_url(request.app, booth) if is_valid_booth(booth) else None
+    if url is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, "No capture link for that booth.")
+    return Response(qr_svg(url, "Webcam capture link"), media_type="image/svg+xml",
+                    headers={"Cache-Control": "no-store"})  # fmt: skip

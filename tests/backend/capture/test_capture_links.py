@@ -20,6 +20,7 @@ from chameleons.backend.db import session_scope
 from chameleons.backend.display import links as display_links
 from chameleons.backend.display.tokens import capture_token, display_token, signing_key
 from chameleons.backend.logredact import redact
+from tests.backend.test_auth import add_user, login
 
 BOOTH = "booth-1"
 
@@ -94,3 +95,22 @@ def next_of(socket: Any, kind: str, wanted: Callable[[dict[str, Any]], bool] | N
         message: dict[str, Any] = json.loads(socket.receive_text())
         if message["type"] == kind and (wanted is None or wanted(message)):
             return message
+
+
+def test_the_booth_check_shows_the_capture_link_and_its_qr_code_to_staff(
+    client: TestClient, app: FastAPI, engine: Engine
+) -> None:
+    assert client.get(f"/api/capture/{BOOTH}/qr.svg", follow_redirects=False).status_code in (
+        303, 401, 403,
+    )  # fmt: skip
+    add_user(engine, "wiz", "a long wizard password", "wizard")
+    login(client, "wiz", "a long wizard password")
+    page = client.get(f"/booths/{BOOTH}/check").text
+    url = f"{app.state.settings.effective_public_url}{current_capture_path(app, BOOTH)}"
+    assert f'<a id="capture-link" href="{url}">' in page
+    assert "camera busy" in page
+    qr = client.get(f"/api/capture/{BOOTH}/qr.svg")
+    assert qr.status_code == 200
+    assert qr.headers["content-type"] == "image/svg+xml"
+    assert b"Webcam capture link" in qr.content
+    assert client.get("/api/capture/bad booth/qr.svg").status_code == 404
