@@ -81,6 +81,7 @@ class WorkerConfig:
     facecapturex_port: int | None = 19977
     camera: str | None = None  # a local camera (or a video file) the worker tracks itself
     browser_capture: bool = True  # the capture page's webcam frames, relayed by the server
+    webcam_map: Path | None = None  # an iPhone-taught map (chameleons webcam-calibrate)
     livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
@@ -197,7 +198,23 @@ class Worker:
         from chameleons.worker.ingest.transform import FrameTransform
 
         return BrowserReceiver(publish_endpoint=self.endpoints.capture, context=self.context,
-                               transform=FrameTransform(0.0, self.config.mirror))  # fmt: skip
+                               transform=FrameTransform(0.0, self.config.mirror),
+                               mapper=self._webcam_mapper())  # fmt: skip
+
+    def _webcam_mapper(self) -> Any:
+        """A webcam's mapper: the geometric defaults, or the booth's iPhone-taught map."""
+        from chameleons.facemesh.mapping import Calibration
+        from chameleons.facemesh.teacher import map_from_json
+        from chameleons.worker.ingest.webcam import LandmarkMapper
+
+        path = self.config.webcam_map
+        if path is None:
+            return LandmarkMapper()
+        try:
+            mapping = map_from_json(Path(path).read_text("utf-8"))
+        except (OSError, ValueError, KeyError) as exc:
+            raise ValueError(f"Cannot use the webcam map {path}: {exc}") from exc
+        return LandmarkMapper(Calibration(mapping=mapping))
 
     def calibrate_webcam(self, body: Mapping[str, Any]) -> dict[str, Any]:
         """The capture page's neutral-face step (``calibrate_webcam``)."""
@@ -261,7 +278,8 @@ class Worker:
             from chameleons.worker.ingest.webcam import CameraReceiver
 
             camera = CameraReceiver(device=cfg.camera, publish_endpoint=self.endpoints.capture,
-                                    context=self.context, transform=common["transform"])
+                                    context=self.context, transform=common["transform"],
+                                    mapper=self._webcam_mapper())  # fmt: skip
             self.receivers["webcam"] = camera.start()
 
     def ingest_stats(self) -> dict[str, Any]:
