@@ -77,7 +77,8 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
     livelink_port: int | None, capture_sender: str | None, camera: str | None,
-    webcam_map: Path | None, facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
+    webcam_map: Path | None, facecapturex_port: int | None, behaviour: str,
+    copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
     keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
     renderer_process: bool, realtime: bool, renderer_cpu: int | None, verbose: bool,
