@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from types import FrameType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import zmq
 
@@ -43,6 +43,10 @@ from chameleons.worker.render_process import (
 from chameleons.worker.render_stage import DriverFactory, RendererStage
 from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints, ParticipantBus
+
+if TYPE_CHECKING:
+    from chameleons.worker.ingest.browser import BrowserReceiver
+    from chameleons.worker.ingest.webcam import LandmarkMapper
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
@@ -191,30 +195,30 @@ class Worker:
         self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
 
-    def _browser_receiver(self) -> Any:
+    def _browser_receiver(self) -> BrowserReceiver | None:
         if not self.config.browser_capture:
             return None
-        from chameleons.worker.ingest.browser import BrowserReceiver
+        from chameleons.worker.ingest.browser import BrowserReceiver as Receiver
         from chameleons.worker.ingest.transform import FrameTransform
 
-        return BrowserReceiver(publish_endpoint=self.endpoints.capture, context=self.context,
+        return Receiver(publish_endpoint=self.endpoints.capture, context=self.context,
                                transform=FrameTransform(0.0, self.config.mirror),
                                mapper=self._webcam_mapper())  # fmt: skip
 
-    def _webcam_mapper(self) -> Any:
+    def _webcam_mapper(self) -> LandmarkMapper:
         """A webcam's mapper: the geometric defaults, or the booth's iPhone-taught map."""
         from chameleons.facemesh.mapping import Calibration
         from chameleons.facemesh.teacher import map_from_json
-        from chameleons.worker.ingest.webcam import LandmarkMapper
+        from chameleons.worker.ingest.webcam import LandmarkMapper as Mapper
 
         path = self.config.webcam_map
         if path is None:
-            return LandmarkMapper()
+            return Mapper()
         try:
             mapping = map_from_json(Path(path).read_text("utf-8"))
         except (OSError, ValueError, KeyError) as exc:
             raise ValueError(f"Cannot use the webcam map {path}: {exc}") from exc
-        return LandmarkMapper(Calibration(mapping=mapping))
+        return Mapper(Calibration(mapping=mapping))
 
     def calibrate_webcam(self, body: Mapping[str, Any]) -> dict[str, Any]:
         """The capture page's neutral-face step (``calibrate_webcam``)."""

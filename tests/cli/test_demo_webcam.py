@@ -30,7 +30,9 @@ def page_frame(ms: float) -> bytes:
 
 def input_check(pi: StaffApi) -> dict[str, Any]:
     booths = pi.get("/api/pi/monitor")["booths"]
-    checks = next((b["health"]["checks"] for b in booths if b["booth"] == BOOTH), [])
+    checks: list[dict[str, Any]] = next(
+        (b["health"]["checks"] for b in booths if b["booth"] == BOOTH), []
+    )
     return next((c for c in checks if c["id"] == "input"), {})
 
 

@@ -13,6 +13,7 @@ import contextlib
 import json
 import logging
 import time
+from collections.abc import Mapping
 from typing import Any
 
 from fastapi import WebSocket, WebSocketDisconnect
@@ -88,7 +89,9 @@ async def _serve(websocket: WebSocket, link: CaptureLink) -> None:
 
 def _worker_connected(websocket: WebSocket, booth: str) -> bool:
     bridge = bridge_of(websocket.app.state)
-    info = None if bridge is None else bridge.workers().get(booth)
+    if bridge is None:
+        return False
+    info = bridge.workers().get(booth)
     return info is not None and bool(info.connected(bridge.stale_after))
 
 
@@ -121,7 +124,7 @@ async def _receive(websocket: WebSocket, link: CaptureLink) -> None:
                 await guard.send_text(websocket, json.dumps(reply))
 
 
-async def _handle(websocket: WebSocket, link: CaptureLink, frame: dict[str, Any],
+async def _handle(websocket: WebSocket, link: CaptureLink, frame: Mapping[str, Any],
                   now: float) -> dict[str, Any] | bool | None:  # fmt: skip
     """A reply for the page, whether the worker took a relayed message, or None."""
     data = frame.get("bytes")

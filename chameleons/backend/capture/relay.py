@@ -94,11 +94,10 @@ class CaptureLink:
     def status(self, message: dict[str, Any] | None, now: float,
                connected: bool = True) -> Message:  # fmt: skip
         message = message or {}
-        brightness = message.get("brightness")
         problem, camera = message.get("problem"), message.get("camera")
         body = {
             "connected": connected,
-            "brightness": float(brightness) if _finite(brightness) else None,
+            "brightness": _finite_number(message.get("brightness")),
             "problem": problem[:200] if isinstance(problem, str) and problem else None,
             "camera": camera[:200] if isinstance(camera, str) else "",
         }
@@ -123,12 +122,15 @@ def parse_text(text: str) -> dict[str, Any]:
     return message
 
 
-def _finite(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+def _finite_number(value: Any) -> float | None:
+    """``value`` as a float when it is a finite JSON number, else None."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
 
 
 def _number(message: dict[str, Any], name: str) -> float:
-    value = message.get(name)
-    if not _finite(value):
+    value = _finite_number(message.get(name))
+    if value is None:
         raise CaptureProtocolError(f"{name} is not a number")
-    return float(value)
+    return value

@@ -78,7 +78,8 @@ def test_the_capture_page_streams_a_real_face_to_the_worker(
         expect(page.get_by_role("heading", name=f"Webcam capture: {BOOTH}")).to_be_visible()
         wait_for_js(page, "window.capturePage.sent >= 3", timeout=120_000)
         expect(page.locator("#face-state")).to_have_attribute("data-state", "ok")
-        receiver = worker.receivers["webcam-browser"]
+        receiver = worker.browser
+        assert receiver is not None
         snapshot = wait_until(
             lambda: (s := receiver.snapshot())["frames"] >= 3 and s, 60, "frames at the worker"
         )
