@@ -373,7 +373,8 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
         faulthandler.register(dump_signal, all_threads=True)
     try:
         worker.start()
-        ports = ", ".join(f"{n} port {r.port}" for n, r in worker.receivers.items())
+        ports = ", ".join(f"{n} port {r.port}" if r.port else n  # webcams: no port
+                          for n, r in worker.receivers.items())  # fmt: skip
         echo(f"worker {config.booth}: driver {config.driver}, behaviour {config.behaviour}, "
              f"{ports or 'no capture'}; control {config.command_endpoint}; "
              "Ctrl-C stops")  # fmt: skip
