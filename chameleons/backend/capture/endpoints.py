@@ -37,17 +37,15 @@ from chameleons.worker.envelope import Message
 router = make_router(tags=["capture"])
 log = logging.getLogger(__name__)
 REPORT_SECONDS = 1.0
+RECHECK_SECONDS = 2.0  # a rotated or retired link closes open pages within this long
 CALIBRATION_TIMEOUT = 3.0
 
 
 @router.websocket("/ws/capture/{booth}")
 async def capture_socket(websocket: WebSocket, booth: str, token: str | None = None) -> None:
-    allowed = (
-        is_valid_booth(booth)
-        and token is not None
-        and await run_in_threadpool(_token_works, websocket, booth, token)
-    )
-    if not allowed:
+    if token is None or not (
+        is_valid_booth(booth) and await run_in_threadpool(_token_works, websocket, booth, token)
+    ):
         await websocket.close(code=guard.POLICY_VIOLATION)
         return
     await websocket.accept()
@@ -55,7 +53,7 @@ async def capture_socket(websocket: WebSocket, booth: str, token: str | None = N
     async with guard.guarded(websocket):
         await guard.send_text(websocket, json.dumps({"type": "hello", "booth": booth}))
         try:
-            await _serve(websocket, link)
+            await _serve(websocket, link, token)
         finally:
             await _relay(websocket, link, link.status(None, time.monotonic(), connected=False))
 
@@ -73,9 +71,9 @@ async def _relay(websocket: WebSocket, link: CaptureLink, message: Message) -> b
     return bool(sent)
 
 
-async def _serve(websocket: WebSocket, link: CaptureLink) -> None:
+async def _serve(websocket: WebSocket, link: CaptureLink, token: str) -> None:
     tasks = {asyncio.create_task(_receive(websocket, link)),
-             asyncio.create_task(_report(websocket, link))}  # fmt: skip
+             asyncio.create_task(_report(websocket, link, token))}  # fmt: skip
     try:
         await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         guard.raise_closed(tasks)
@@ -95,11 +93,19 @@ def _worker_connected(websocket: WebSocket, booth: str) -> bool:
     return info is not None and bool(info.connected(bridge.stale_after))
 
 
-async def _report(websocket: WebSocket, link: CaptureLink) -> None:
-    """Once a second: what reached the server, and whether the booth's worker is there."""
+async def _report(websocket: WebSocket, link: CaptureLink, token: str) -> None:
+    """Once a second: what reached the server, and whether the booth's worker is there;
+    every :data:`RECHECK_SECONDS` whether the link still works (the PI may have issued a
+    new one or retired the booth: the page is then closed with 1008)."""
+    checked = time.monotonic()
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             await asyncio.sleep(REPORT_SECONDS)
+            if time.monotonic() - checked >= RECHECK_SECONDS:
+                checked = time.monotonic()
+                if not await run_in_threadpool(_token_works, websocket, link.booth, token):
+                    raise guard.SocketClosed(guard.POLICY_VIOLATION,
+                                             "capture link rotated or retired")  # fmt: skip
             report = link.report(_worker_connected(websocket, link.booth))
             await guard.send_text(websocket, json.dumps(report))
 

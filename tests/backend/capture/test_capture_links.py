@@ -114,3 +114,21 @@ def test_the_booth_check_shows_the_capture_link_and_its_qr_code_to_staff(
     assert qr.headers["content-type"] == "image/svg+xml"
     assert b"Webcam capture link" in qr.content
     assert client.get("/api/capture/bad booth/qr.svg").status_code == 404
+
+
+def test_an_open_page_is_closed_when_its_link_is_rotated(client: TestClient, app: FastAPI) -> None:
+    token = capture_token(signing_key(app), BOOTH)
+    with client.websocket_connect(f"/ws/capture/{BOOTH}?token={token}") as socket:
+        assert json.loads(socket.receive_text())["type"] == "hello"
+        next_of(socket, "relay")  # served: the reports come
+        with session_scope(app.state.sessionmaker) as db:
+            display_links.rotate(db, BOOTH)
+        with pytest.raises(WebSocketDisconnect) as closed:
+            read_until_closed(socket)
+    assert closed.value.code == 1008
+
+
+def read_until_closed(socket: Any) -> None:
+    """The reports, until the server closes the socket (raises WebSocketDisconnect)."""
+    while True:
+        socket.receive_text()
