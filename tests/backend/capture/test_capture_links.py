@@ -132,3 +132,13 @@ def read_until_closed(socket: Any) -> None:
     """The reports, until the server closes the socket (raises WebSocketDisconnect)."""
     while True:
         socket.receive_text()
+
+
+def test_the_display_links_page_lists_each_booths_capture_link(
+    client: TestClient, app: FastAPI, engine: Engine
+) -> None:
+    add_user(engine, "wiz2", "a long wizard password", "wizard")
+    login(client, "wiz2", "a long wizard password")
+    page = client.get("/display").text
+    url = f"{app.state.settings.effective_public_url}{current_capture_path(app, BOOTH)}"
+    assert f'<a href="{url}" data-capture="{BOOTH}">' in page
