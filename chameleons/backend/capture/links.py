@@ -6,7 +6,7 @@ the display link rotates this one, retiring the booth retires both.
 
 from __future__ import annotations
 
-from fastapi import FastAPI
+from fastapi import FastAPI, Request
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.db import session_scope
@@ -28,7 +28,16 @@ def current_capture_path(app: FastAPI, booth: str) -> str | None:
     return None if current is None else capture_path(signing_key(app), booth, current)
 
 
-def capture_url(app: FastAPI, booth: str) -> str | None:
-    """The full link (the server's public URL + the path) to print, show and scan."""
+def capture_url(app: FastAPI, booth: str, base: str | None = None) -> str | None:
+    """The full link to print, show and scan: ``base`` (default: the server's public URL)
+    + the path."""
     path = current_capture_path(app, booth)
-    return None if path is None else app.state.settings.effective_public_url + path
+    base = base if base is not None else app.state.settings.effective_public_url
+    return None if path is None else base + path
+
+
+def request_base(request: Request) -> str:
+    """The configured public URL, else the one this page was asked for (a QR code shown on
+    a page must hold an address the page's own computer reached)."""
+    configured = request.app.state.settings.public_url
+    return str(configured or request.base_url).rstrip("/")

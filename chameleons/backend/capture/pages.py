@@ -46,7 +46,8 @@ def capture_page(
 @router.get("/api/capture/{booth}/qr.svg")
 def capture_qr(request: Request, booth: str, _user: CurrentStaff) -> Response:
     """Staff: the booth's capture link as a QR code (to open it on a laptop or tablet)."""
-    url = links.capture_url(request.app, booth) if is_valid_booth(booth) else None
+    valid = is_valid_booth(booth)
+    url = links.capture_url(request.app, booth, links.request_base(request)) if valid else None
     if url is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, "No capture link for that booth.")
     return Response(qr_svg(url, "Webcam capture link"), media_type="image/svg+xml",
