@@ -116,8 +116,12 @@ def data_dir(tmp_path: Path) -> Path:
     return tmp_path / "data"
 
 
-def _start(data_dir: Path, simulate_face: bool, extra_args: tuple[str, ...] = (),
-           **env_overrides: str) -> Demo:  # fmt: skip
+def _start(data_dir: Path, simulate_face: bool, **env_overrides: str) -> Demo:
+    return _launch(data_dir, simulate_face, (), env_overrides)
+
+
+def _launch(data_dir: Path, simulate_face: bool, extra_args: tuple[str, ...],
+            env_overrides: dict[str, str]) -> Demo:  # fmt: skip
     port = _free_port(socket.SOCK_STREAM)
     env = {
         **os.environ,

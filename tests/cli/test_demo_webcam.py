@@ -17,7 +17,7 @@ from websockets.sync.client import connect
 from chameleons.backend.capture.relay import HEADER
 from chameleons.backend.sessions.bot import StaffApi
 from chameleons.facemesh.pose import canonical_landmarks
-from tests.cli.test_demo_command import Demo, _start, _stop
+from tests.cli.test_demo_command import Demo, _launch, _stop
 from tests.cli.test_demo_command import demos as demos  # the fixture: ends what a test left
 
 BOOTH = "booth-1"
@@ -41,7 +41,7 @@ def test_the_webcam_demo_prints_the_capture_link_and_its_worker_takes_the_frames
 ) -> None:
     data_dir = tmp_path / "data"
     data_dir.mkdir()
-    demo = _start(data_dir, simulate_face=True, extra_args=("--webcam",))
+    demo = _launch(data_dir, True, ("--webcam",), {})
     demos.append(demo)
     demo.read_welcome()
     demo.wait_healthy()
