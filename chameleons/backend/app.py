@@ -27,6 +27,8 @@ from chameleons.backend.auth.dependencies import LoginRequiredError, PIRequiredE
 from chameleons.backend.auth.throttle import LoginThrottle
 from chameleons.backend.booth import check_endpoints as booth_check
 from chameleons.backend.bridge.wiring import worker_link
+from chameleons.backend.capture import endpoints as capture_endpoints
+from chameleons.backend.capture import pages as capture_pages
 from chameleons.backend.dashboard import monitor as dashboard_monitor
 from chameleons.backend.dashboard import pages as dashboard_pages
 from chameleons.backend.db import (
@@ -201,6 +203,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         booth_check.router,
         synchrony_pages.router,
         instrument_pages.router,
+        capture_pages.router,
+        capture_endpoints.router,
     ):
         app.include_router(router)
     return app

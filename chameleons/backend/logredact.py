@@ -12,6 +12,8 @@ _PATTERNS = (
     (re.compile(r"(/(?:ws/)?p/|/api/phone/)[^/?#\s\"]+"), r"\1<token>"),
     # /display/<booth>/<token>: the booth screen's link
     (re.compile(r"(/display/[^/?#\s\"]+/)[^/?#\s\"]+"), r"\1<token>"),
+    # /capture/<booth>/<key>: the booth's webcam capture page
+    (re.compile(r"(/capture/[^/?#\s\"]+/)[^/?#\s\"]+"), r"\1<token>"),
     (re.compile(r"([?&](?:token|key)=)[^&#\s\"]+"), r"\1<redacted>"),
 )
 LOGGERS = ("uvicorn.access", "uvicorn.error")

@@ -12,6 +12,7 @@ from fastapi import FastAPI
 from sqlalchemy.exc import SQLAlchemyError
 
 from chameleons.backend.app import create_app
+from chameleons.backend.capture import capture_url
 from chameleons.backend.display.links import current_path
 from chameleons.backend.wizard import typed_speech
 from chameleons.cli.common import load_settings
@@ -33,7 +34,12 @@ from chameleons.settings import Settings
 
 
 def _print_welcome(
-    base: str, data: DemoData, display_url: str, ports: ChosenPorts, simulate_face: bool
+    base: str,
+    data: DemoData,
+    display_url: str,
+    ports: ChosenPorts,
+    simulate_face: bool,
+    webcam_url: str | None = None,
 ) -> None:
     phone_url = f"{base}/p/{data.phone_token}"
     settings = ports.settings
@@ -42,6 +48,10 @@ def _print_welcome(
     click.echo(f"  wizard console   {base}/wizard/sessions/{data.session_id}")
     click.echo(f"  robot display    {display_url}")
     click.echo("                   (click it once so the browser lets it play the robot's voice)")
+    if webcam_url is not None:
+        click.echo(f"  webcam capture   {webcam_url}")
+        click.echo("                   (on the computer with the webcam: allow the camera, then"
+                   " calibrate the neutral face)")  # fmt: skip
     click.echo(f"  PI dashboard     {base}/pi")
     click.echo(f"  participant      {phone_url}   (participant {data.participant_code};")
     click.echo(f"                   or type the phone code of the wizard console at {base}/join)")
@@ -59,8 +69,13 @@ def _print_welcome(
     for username, password in data.credentials.items():
         click.echo(f"  {username:<8} password: {password}")
     _print_ports(ports)
+    if webcam_url is not None:
+        click.echo("\nWebcam capture link as a QR code (for a laptop or tablet with a camera):")
+        segno.make(webcam_url, error="m").terminal(compact=True)
     face = (
-        "A simulated face stream stands in for the iPhone."
+        "The webcam on the capture page is the face source (no iPhone needed)."
+        if webcam_url is not None
+        else "A simulated face stream stands in for the iPhone."
         if simulate_face
         else "Waiting for a real iPhone (Live Link Face or FaceCaptureX)."
     )
@@ -106,16 +121,24 @@ def _loopback(base: str) -> bool:
     show_default=True,
     help="Send a synthetic face to the local worker (off: use a real iPhone).",
 )
-def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
+@click.option(
+    "--webcam",
+    is_flag=True,
+    help="The face comes from a webcam on the booth's capture page (its link is printed); "
+    "no simulated face.",
+)
+def demo(host: str | None, port: int | None, simulate_face: bool, webcam: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
-    study and plan, a local worker driving the virtual robot, and a simulated face."""
+    study and plan, a local worker driving the virtual robot, and a simulated face (or,
+    with --webcam, the webcam capture page's link)."""
     # Ctrl-C and SIGTERM end it with 130 / 143 once the server, its worker and the face
     # simulator have stopped, whenever they come (chameleons.cli.interrupts).
     with interrupts() as stops:
-        _run(stops, host, port, simulate_face)
+        _run(stops, host, port, simulate_face and not webcam, webcam)
 
 
-def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: bool) -> None:
+def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: bool,
+         webcam: bool = False) -> None:  # fmt: skip
     # Everything that can fail is done before the welcome is printed, so a failure is the
     # first (and only) thing the user reads: the settings, the data directory, the ports,
     # the database, and the server's start-up (worker link, local worker) inside uvicorn.
@@ -131,8 +154,10 @@ def _run(stops: Interrupts, host: str | None, port: int | None, simulate_face: b
         display_url = base + path if path else "(retired: issue a new link on /display)"
         simulator: list[subprocess.Popen[bytes]] = []
 
+        webcam_url = capture_url(app, settings.embedded_worker_booth) if webcam else None
+
         def started() -> None:
-            _print_welcome(base, data, display_url, ports, simulate_face)
+            _print_welcome(base, data, display_url, ports, simulate_face, webcam_url)
             _warn_typed_speech(app)
             if simulate_face:  # it follows the booth check's moves (the check passes on the demo)
                 simulator.append(start_face_simulator(settings, follow_cues=True))

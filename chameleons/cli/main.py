@@ -23,7 +23,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "demo": ("demo_command", "demo",
              "Start the whole system on its embedded default: the server on SQLite with the "
              "demo study and plan, a local worker driving the virtual robot, and a simulated "
-             "face."),
+             "face (or, with --webcam, the webcam capture page's link)."),
     "export": ("export_command", "export",
                "Export participants, interactions, suggestions, questionnaire, scores and "
                "events."),
@@ -67,6 +67,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                   "following the participant, the participant following the robot, and their "
                   "surrogate baseline."),
     "user": ("user_commands", "user", "Staff accounts (PI and wizards)."),
+    "webcam-calibrate": ("webcam_calibrate_command", "webcam_calibrate",
+                         "Teach a booth's webcam with its iPhone: fit, per ARKit channel, the "
+                         "map from the webcam's landmark features to the iPhone's values and "
+                         "write it for `chameleons worker --webcam-map`."),
     "worker": ("worker_command", "worker",
                "Run the realtime worker of one booth (capture -> behaviour -> renderer -> "
                "robot)."),

@@ -42,6 +42,9 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
               help="Track the participant's face with a local camera instead of (or beside) "
                    "an iPhone: /dev/video0 (Linux), 0 (macOS), video=<name> (Windows), or a "
                    "video file standing in for a camera.")  # fmt: skip
+@click.option("--webcam-map", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              default=None, help="The booth's iPhone-taught webcam map (chameleons "
+              "webcam-calibrate) for the capture page and --camera.")  # fmt: skip
 @click.option("--capture-sender", default=None, metavar="ADDRESS",
               help="Accept face capture only from this phone (IP address or host name); "
                    "default: the first phone that sends after each session start.")  # fmt: skip
@@ -77,7 +80,8 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
     livelink_port: int | None, capture_sender: str | None, camera: str | None,
-    facecapturex_port: int | None, behaviour: str, copy_delay: float | None,
+    webcam_map: Path | None, facecapturex_port: int | None, behaviour: str,
+    copy_delay: float | None,
     natural_path: Path | None, control: str | None, telemetry: str | None,
     keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
     renderer_process: bool, realtime: bool, renderer_cpu: int | None, lsl: bool | None,
@@ -107,7 +111,7 @@ def worker(
             renderer_process = True  # both are about the renderer's own process
         config = dataclasses.replace(config, renderer_process=renderer_process,
                                      renderer_realtime=realtime,
-                                     renderer_cpu=renderer_cpu)  # fmt: skip
+                                     renderer_cpu=renderer_cpu, webcam_map=webcam_map)  # fmt: skip
         if check:
             report = run_check(config.robot_url, config.robot_key, config.furhat_faces)
             for line in report.lines():

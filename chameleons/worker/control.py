@@ -52,6 +52,11 @@ RECENTRE_HEAD: Final = "recentre_head"
 # The booth check: the resting head pose is the mean of the last ``rest_seconds``; the head's
 # movement from now on is reported against it (the capture's ``head_range``).
 MARK_HEAD_REST: Final = "mark_head_rest"
+# The capture page's neutral-face step (chameleons.worker.ingest.browser): ``action`` start
+# collects the features of the frames that follow, finish takes their medians.
+CALIBRATE_WEBCAM: Final = "calibrate_webcam"
+# Server -> worker, no ack: the capture page's frames (chameleons.worker.ingest.browser).
+CAPTURE_TOPIC: Final = "capture"
 
 _NUMBER = (int, float)
 # command -> field -> (accepted types, required)
@@ -80,6 +85,7 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
     RESET_DELAY_PROBE: {},
     RECENTRE_HEAD: {"seconds": (_NUMBER, False)},
     MARK_HEAD_REST: {"rest_seconds": (_NUMBER, True)},
+    CALIBRATE_WEBCAM: {"action": ((str,), True)},
     SPEECH_EVENT: {"event": ((str,), True), "prompt_id": ((str, type(None)), False),
                    "play_id": ((str, type(None)), False), "time": (_NUMBER, False)},
 }  # fmt: skip

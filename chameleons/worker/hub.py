@@ -28,6 +28,7 @@ import zmq
 
 from chameleons import __version__
 from chameleons.worker.control import (
+    CAPTURE_TOPIC,
     PLAY_PROMPT,
     RECENTRE_HEAD,
     RESET_DELAY_PROBE,
@@ -71,6 +72,8 @@ ROUTES: dict[str, str] = {
 ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
 StatsSource = Callable[[], Mapping[str, Any]]
 LocalHandler = Callable[[Mapping[str, Any]], Mapping[str, Any]]  # body -> result
+CaptureSink = Callable[[Message], None]  # the capture page's relayed frames (no ack)
+_CAPTURE = CAPTURE_TOPIC.encode()
 STAGE_WAIT = 2.0  # seconds a command waits for its stage to connect
 RETRY_INTERVAL = 0.01
 FINAL_DRAIN_MS = 100  # the hub's last reads: until the stages' sockets are quiet this long
@@ -94,11 +97,12 @@ class ControlHub:
     def __init__(
         self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints, config: HubConfig,
         *, ingest_stats: StatsSource | None = None,
-        local: Mapping[str, LocalHandler] | None = None,
+        local: Mapping[str, LocalHandler] | None = None, capture: CaptureSink | None = None,
     ) -> None:  # fmt: skip
         self.context, self.endpoints, self.config = context, endpoints, config
         # Commands the hub answers itself (the capture receivers are not a stage).
         self.local: dict[str, LocalHandler] = dict(local or {})
+        self.capture = capture
         self.instance = uuid.uuid4().hex[:12]
         self.started = time.monotonic()
         self.ingest_stats = ingest_stats
@@ -184,6 +188,9 @@ class ControlHub:
     def _on_command(
         self, frames: list[bytes], server: zmq.Socket[bytes], stages: zmq.Socket[bytes]
     ) -> None:
+        if frames and frames[0] == _CAPTURE:
+            self._on_capture(frames)
+            return
         try:
             command = parse_command(frames)
             if command.type == STATUS:
@@ -203,6 +210,15 @@ class ControlHub:
             self.errors[f"command_{exc.reason}"] += 1
             self.commands["failed"] += 1
             send_message(server, make_error_ack(exc, source=self.name))
+
+    def _on_capture(self, frames: list[bytes]) -> None:
+        if self.capture is None:
+            self.errors["capture_unexpected"] += 1
+            return
+        try:
+            self.capture(deserialize(frames))
+        except EnvelopeError as exc:
+            self.errors[f"capture_{exc.reason}"] += 1
 
     def _forward(self, command: Command, frames: list[bytes], stages: zmq.Socket[bytes]) -> None:
         stage = ROUTES[command.type]

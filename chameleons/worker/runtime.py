@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import zmq
 
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
-from chameleons.worker.control import MARK_HEAD_REST, RESET_PAIRING
+from chameleons.worker.control import CALIBRATE_WEBCAM, MARK_HEAD_REST, RESET_PAIRING
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DEFAULT_URL, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
@@ -46,6 +46,8 @@ from chameleons.worker.stage import Endpoints, ParticipantBus
 
 if TYPE_CHECKING:
     from chameleons.worker.lsl_stage import LslStage
+    from chameleons.worker.ingest.browser import BrowserReceiver
+    from chameleons.worker.ingest.webcam import LandmarkMapper
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
@@ -83,6 +85,8 @@ class WorkerConfig:
     livelink_port: int | None = 11111  # None: no Live Link receiver (0: any free port)
     facecapturex_port: int | None = 19977
     camera: str | None = None  # a local camera (or a video file) the worker tracks itself
+    browser_capture: bool = True  # the capture page's webcam frames, relayed by the server
+    webcam_map: Path | None = None  # an iPhone-taught map (chameleons webcam-calibrate)
     livelink_rotation_scale: str = "radians"
     mounting_rotation_deg: float = 0.0
     mirror: bool = True
@@ -178,6 +182,7 @@ class Worker:
                 driver_factory or partial(make_driver, config),
                 config.render,
             )
+        self.browser = self._browser_receiver()
         self.recorder = RecorderStage(self.context, self.endpoints, booth=config.booth,
                                       processing=config.head_processing())  # fmt: skip
         self.hub = ControlHub(self.context, self.endpoints, HubConfig(
@@ -186,7 +191,9 @@ class Worker:
                   "head": config.head_processing()}, curve=config.curve,
         ), ingest_stats=self.ingest_stats,
             local={RESET_PAIRING: lambda _body: self.pairing.reset(),
-                   MARK_HEAD_REST: self.mark_head_rest})  # fmt: skip
+                   MARK_HEAD_REST: self.mark_head_rest,
+                   CALIBRATE_WEBCAM: self.calibrate_webcam},
+            capture=self.browser.offer if self.browser is not None else None)  # fmt: skip
         self._renderer_ready = renderer.ready
         self.stages: list[Stage] = [self.bus, self.behaviour, self.playback, renderer,
                                     self.recorder, self.hub]  # fmt: skip
@@ -200,6 +207,38 @@ class Worker:
             self.lsl = LslStage(self.context, self.endpoints, booth=config.booth,
                                 tick_rate=config.render.tick_rate)  # fmt: skip
             self.stages.insert(-1, self.lsl)
+
+    def _browser_receiver(self) -> BrowserReceiver | None:
+        if not self.config.browser_capture:
+            return None
+        from chameleons.worker.ingest.browser import BrowserReceiver as Receiver
+        from chameleons.worker.ingest.transform import FrameTransform
+
+        return Receiver(publish_endpoint=self.endpoints.capture, context=self.context,
+                               transform=FrameTransform(0.0, self.config.mirror),
+                               mapper=self._webcam_mapper())  # fmt: skip
+
+    def _webcam_mapper(self) -> LandmarkMapper:
+        """A webcam's mapper: the geometric defaults, or the booth's iPhone-taught map."""
+        from chameleons.facemesh.mapping import Calibration
+        from chameleons.facemesh.teacher import map_from_json
+        from chameleons.worker.ingest.webcam import LandmarkMapper as Mapper
+
+        path = self.config.webcam_map
+        if path is None:
+            return Mapper()
+        try:
+            mapping = map_from_json(Path(path).read_text("utf-8"))
+        except (OSError, ValueError, KeyError) as exc:
+            raise ValueError(f"Cannot use the webcam map {path}: {exc}") from exc
+        return Mapper(Calibration(mapping=mapping))
+
+    def calibrate_webcam(self, body: Mapping[str, Any]) -> dict[str, Any]:
+        """The capture page's neutral-face step (``calibrate_webcam``)."""
+        if self.browser is None:
+            return {"calibrated": False, "problem": "this worker takes no capture page"}
+        result: dict[str, Any] = self.browser.calibrate(body)
+        return result
 
     # --- lifecycle -------------------------------------------------------------------------
     def start(self) -> Worker:
@@ -250,11 +289,14 @@ class Worker:
         if cfg.facecapturex_port is not None:
             receiver = FaceCaptureXReceiver(port=cfg.facecapturex_port, **common)
             self.receivers["facecapturex"] = receiver.start()
+        if self.browser is not None:
+            self.receivers["webcam-browser"] = self.browser.start()
         if cfg.camera is not None:
             from chameleons.worker.ingest.webcam import CameraReceiver
 
             camera = CameraReceiver(device=cfg.camera, publish_endpoint=self.endpoints.capture,
-                                    context=self.context, transform=common["transform"])
+                                    context=self.context, transform=common["transform"],
+                                    mapper=self._webcam_mapper())  # fmt: skip
             self.receivers["webcam"] = camera.start()
 
     def ingest_stats(self) -> dict[str, Any]:
@@ -271,7 +313,9 @@ class Worker:
         head_range = max(heads, key=lambda h: h["frames"]) if heads else None
         # Which input the face comes from: the busiest one, else the only one configured.
         busiest = max(snapshots, key=lambda n: snapshots[n].get("input_fps", 0.0), default=None)
+        page = snapshots.get("webcam-browser", {})
         active = busiest if busiest and snapshots[busiest].get("input_fps") else (
+            "webcam-browser" if page.get("connected") else
             "webcam" if "webcam" in snapshots else None)  # fmt: skip
         timecodes = [s["timecode"] for s in snapshots.values() if s.get("timecode")]
         untrusted = next((t for t in timecodes if t.get("problem")), None)
@@ -342,7 +386,8 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
         faulthandler.register(dump_signal, all_threads=True)
     try:
         worker.start()
-        ports = ", ".join(f"{n} port {r.port}" for n, r in worker.receivers.items())
+        ports = ", ".join(f"{n} port {r.port}" if r.port else n  # webcams: no port
+                          for n, r in worker.receivers.items())  # fmt: skip
         echo(f"worker {config.booth}: driver {config.driver}, behaviour {config.behaviour}, "
              f"{ports or 'no capture'}; control {config.command_endpoint}; "
              "Ctrl-C stops")  # fmt: skip

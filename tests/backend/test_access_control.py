@@ -17,7 +17,9 @@ from tests.backend.test_auth import add_user, csrf_from, login
 # routes, which are called here with a wrong token.
 # A lab's robot head files are public like the static files: the display page loads them.
 PUBLIC = {"/healthz", "/login", "/join", "/favicon.ico", "/display-heads/{name}"}
-TOKEN_GUARDED = re.compile(r"^/(p/|api/phone/|display/\{booth\}/\{token\}|media/)")
+TOKEN_GUARDED = re.compile(
+    r"^/(p/|api/phone/|display/\{booth\}/\{token\}|capture/\{booth\}/\{token\}|media/)"
+)
 PI_ONLY = re.compile(r"^/(pi\b|api/pi/|api/staff/users)")
 # Wizards may read the study and its plan; changing them is the PI's.
 PI_ONLY_POSTS = {

@@ -117,6 +117,11 @@ def data_dir(tmp_path: Path) -> Path:
 
 
 def _start(data_dir: Path, simulate_face: bool, **env_overrides: str) -> Demo:
+    return _launch(data_dir, simulate_face, (), env_overrides)
+
+
+def _launch(data_dir: Path, simulate_face: bool, extra_args: tuple[str, ...],
+            env_overrides: dict[str, str]) -> Demo:  # fmt: skip
     port = _free_port(socket.SOCK_STREAM)
     env = {
         **os.environ,
@@ -130,7 +135,8 @@ def _start(data_dir: Path, simulate_face: bool, **env_overrides: str) -> Demo:
         **env_overrides,
     }
     flag = "--simulate-face" if simulate_face else "--no-simulate-face"
-    command = [sys.executable, "-m", "chameleons", "demo", "--port", str(port), flag]
+    command = [sys.executable, "-m", "chameleons", "demo", "--port", str(port), flag,
+               *extra_args]  # fmt: skip
     process = subprocess.Popen(
         command,
         env=env,

@@ -39,6 +39,7 @@ VALID = {
     "reset_delay_probe": {},
     "recentre_head": {"seconds": 2.0},
     "mark_head_rest": {"rest_seconds": 2.0},
+    "calibrate_webcam": {"action": "start"},
 }
 
 

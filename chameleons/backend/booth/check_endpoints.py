@@ -17,6 +17,7 @@ from chameleons.backend.auth.dependencies import CurrentStaff
 from chameleons.backend.booth import check, check_run
 from chameleons.backend.booth.check_store import store
 from chameleons.backend.booth.speech_test import say_test_prompt
+from chameleons.backend.capture.links import capture_url, request_base
 from chameleons.backend.dependencies import AppSettings, Templates
 from chameleons.backend.models import Session
 from chameleons.backend.routing import make_router
@@ -37,7 +38,8 @@ def check_page(
 ) -> Response:  # fmt: skip
     plan = _plan(request.app.state, booth, session_id, settings)
     context = {"user": user, "booth": booth, "session_id": session_id, "plan": plan.describe(),
-               "expected_head": check.expected_head()}  # fmt: skip
+               "expected_head": check.expected_head(),
+               "capture_url": capture_url(request.app, booth, request_base(request))}  # fmt: skip
     return templates.TemplateResponse(request, "booth/check.html", context)
 
 

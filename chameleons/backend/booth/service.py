@@ -24,6 +24,7 @@ import pyarrow.parquet as pq
 from sqlalchemy.orm import Session
 
 from chameleons.backend.booth import repository
+from chameleons.backend.booth.face_source import dominant_source, note_face_source
 from chameleons.backend.models import Recording
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR, in_recordings, recording_file
 from chameleons.worker.recording import (
@@ -168,9 +169,12 @@ def index_recordings(
             interaction_id=interaction_id, stream=stream, path=stored, frames=frames,
             size_bytes=size,
         )  # fmt: skip
+        if stream == "participant" and facts is not None:
+            row.face_source, row.face_calibration = dominant_source(path)
         db.add(row)
         known.add(stored)
         added.append(row)
+    note_face_source(db, interaction_id, added)
     db.flush()
     return added
 

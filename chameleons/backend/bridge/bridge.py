@@ -188,6 +188,23 @@ class Bridge:
             self._states.setdefault(booth, BoothState()).record(type, body or {})
         return ack
 
+    async def relay(self, booth: str, message: Message) -> bool:
+        """Send one envelope to a booth's worker without an ack (the capture page's frames:
+        a late frame is a lost frame); False when it could not go (no such worker, or its
+        queue is full: counted as ``relay_unreachable`` / ``relay_full``)."""
+        if self._router is None:
+            return False
+        try:
+            await self._router.send_multipart([booth.encode(), *serialize(message)],
+                                              flags=zmq.NOBLOCK)  # fmt: skip
+        except zmq.Again:
+            self._count("relay_full")
+            return False
+        except zmq.ZMQError:
+            self._count("relay_unreachable")
+            return False
+        return True
+
     # --- what the server reads ---------------------------------------------------------------
     def workers(self) -> dict[str, WorkerInfo]:
         return dict(self._workers)

@@ -16,6 +16,7 @@ from chameleons.backend.display.channel import get_display_channel
 from chameleons.backend.display.protocol import FACE_IDS
 from chameleons.backend.display.tokens import (
     BOOTH_PATTERN,
+    capture_path,
     display_path,
     is_valid_booth,
     signing_key,
@@ -90,7 +91,8 @@ def display_links(
         current = links.generation(db, b)
         renderer, head = links.defaults(db, b)
         url = None if current is None else base + display_path(key, b, current)
-        rows.append((b, url, renderer or "", head or ""))
+        capture = None if current is None else base + capture_path(key, b, current)
+        rows.append((b, url, renderer or "", head or "", capture))
     context = {
         "user": user,
         "links": rows,

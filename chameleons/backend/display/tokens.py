@@ -65,3 +65,14 @@ def check_token(expected: str, given: str | None) -> bool:
 def display_path(key: bytes, booth: str, generation: int = 0) -> str:
     """The booth screen's link (relative to the server's public URL)."""
     return f"/display/{booth}/{display_token(key, booth, generation)}"
+
+
+def capture_token(key: bytes, booth: str, generation: int = 0) -> str:
+    """The capture page's key: the display link's generation, another purpose (a display
+    link opens no camera, a capture link shows no robot)."""
+    return _sign(key, "capture", booth if generation == 0 else f"{booth}#{generation}")
+
+
+def capture_path(key: bytes, booth: str, generation: int = 0) -> str:
+    """The booth's webcam capture page (``chameleons.backend.capture``)."""
+    return f"/capture/{booth}/{capture_token(key, booth, generation)}"

@@ -263,6 +263,25 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "Why the face recording of this interaction failed or never started (e.g. a "
                 "full disk or a read-only recordings folder); empty when it was recorded.",
             ),
+            # Issue 29: what captured the participant (the analysis can split by it).
+            Column(
+                "face_source",
+                "string",
+                "The capture source most of the participant's recorded frames came from: "
+                "livelink (iPhone, Live Link Face), facecapturex (iPhone, FaceCaptureX), "
+                "webcam-browser (a webcam on the booth's capture page), webcam-python (a "
+                "webcam the worker tracked itself); empty when nothing was recorded.",
+                "livelink, facecapturex, webcam-browser, webcam-python",
+            ),
+            Column(
+                "face_calibration",
+                "string",
+                "How a webcam source was calibrated: geometric (the default mapping, not "
+                "calibrated), neutral (the participant's own neutral face), iphone:<hash> (the "
+                "lab's iPhone-taught map), neutral+iphone:<hash> (both); empty for an iPhone "
+                "source, which needs none.",
+                "geometric, neutral, iphone:<hash>, neutral+iphone:<hash>",
+            ),
             *synchrony_columns(),
         ),
     )

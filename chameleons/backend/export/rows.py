@@ -128,6 +128,8 @@ def interaction_rows(
             "natural_recording": interaction.natural_recording,
             "renderer": interaction.renderer,
             "recording_problem": problems.get(interaction.id),
+            "face_source": interaction.face_source,
+            "face_calibration": interaction.face_calibration,
             **synchrony.get(interaction.id, {}),
         }
 

@@ -15,7 +15,9 @@ class Interaction(Base):
     ``natural_source``/``natural_recording``: what the ``natural`` behaviour replayed in this
     interaction (clip, yoked or synthetic, and which recording), set when it first ran.
     ``renderer``: the face the virtual robot's display was told to paint (2d|3d) when the
-    study's condition chose one; None where the booth's default applied."""
+    study's condition chose one; None where the booth's default applied.
+    ``face_source``/``face_calibration``: what captured the participant, from the
+    participant's recording (see :class:`Recording`); None until one is indexed."""
 
     __tablename__ = "interaction"
     __table_args__ = (
@@ -42,5 +44,7 @@ class Interaction(Base):
     natural_source: Mapped[str | None] = mapped_column(String(16))
     natural_recording: Mapped[str | None] = mapped_column(String(255))
     renderer: Mapped[str | None] = mapped_column(String(8))
+    face_source: Mapped[str | None] = mapped_column(String(32))
+    face_calibration: Mapped[str | None] = mapped_column(String(64))
     started_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]

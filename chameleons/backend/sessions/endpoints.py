@@ -287,10 +287,10 @@ def phone_qr(session_id: int, request: Request, _u: CurrentStaff, db: DbSession)
     )
 
 
-def qr_svg(url: str) -> bytes:
+def qr_svg(url: str, title: str = "Phone link") -> bytes:
     buffer = io.BytesIO()
     segno.make_qr(url, error="m").save(
-        buffer, kind="svg", scale=6, border=2, xmldecl=False, title="Phone link"
+        buffer, kind="svg", scale=6, border=2, xmldecl=False, title=title
     )
     return buffer.getvalue()
 
