@@ -157,6 +157,7 @@ class Worker:
             initial_params=config.initial_params(), locations=config,
             rotation_factor=rotation_factor(config.livelink_rotation_scale),
             recentre_head=config.head_recentre, head_calibration_s=config.head_calibration_s,
+            mirror=config.mirror,
         ))  # fmt: skip
         self.playback = PlaybackStage(
             self.context, self.endpoints, speaks_text=speaks_text(config.driver)

@@ -72,13 +72,18 @@ def test_a_condition_without_behaviour_runs_the_behaviour_of_its_name(tmp_path: 
     assert [c.behaviour for c in study.conditions] == ["still", "natural", "copy"]
 
 
+DELAY = ("a number of seconds in 0..11.5 or a distribution ({uniform: [low, high]} or "
+         "{normal: {mean: m, sd: s}})")
+
+
 @pytest.mark.parametrize(
     ("params", "message"),
     [
-        ({"delay": 20.0}, "conditions.copy.params.delay: must be a number in 0..11.5, got 20.0"),
-        ({"delay": "4 s"}, "conditions.copy.params.delay: must be a number in 0..11.5, got '4 s'"),
+        ({"delay": 20.0}, f"conditions.copy.params.delay: must be {DELAY}, got 20.0"),
+        ({"delay": "4 s"}, f"conditions.copy.params.delay: must be {DELAY}, got '4 s'"),
         ({"dealy": 4.0}, "conditions.copy.params.dealy: unknown parameter (this behaviour "
-                         "takes: delay)"),
+                         "takes: channels, coexpress, delay, delay_resample_s, gain, "
+                         "intermittent, mirror, only, seed)"),
     ],
 )  # fmt: skip
 def test_bad_parameters_are_refused_at_their_line(
