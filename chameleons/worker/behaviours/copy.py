@@ -94,12 +94,11 @@ def checked(params: Mapping[str, Any], history_seconds: float) -> dict[str, Any]
 class CopyBehaviour(Behaviour):
     parameters = COPY_PARAMETERS
 
-    def __init__(self, context: BehaviourContext, delay: float = DEFAULT_DELAY,
-                 **params: Any) -> None:  # fmt: skip
+    def __init__(self, context: BehaviourContext, delay: Any = None, **params: Any) -> None:
+        """``delay`` and ``params`` as a study gives them (absent: the defaults)."""
         super().__init__(context)
-        if isinstance(delay, int | float) and (not math.isfinite(delay) or delay < 0):
-            raise BehaviourError(f"delay must be a non-negative number, got {delay}")
-        self.params = checked({"delay": delay, **params}, context.history_seconds)
+        given = params if delay is None else {"delay": delay, **params}
+        self.params = checked(given, context.history_seconds)
         s = cp.settings_of(self.params)
         self.settings = s
         seed = int(s["seed"] or 0)
@@ -144,7 +143,7 @@ class CopyBehaviour(Behaviour):
     @classmethod
     def from_params(cls, context: BehaviourContext, params: Mapping[str, Any]) -> Behaviour:
         rest = {k: v for k, v in params.items() if k != "delay"}
-        return cls(context, params.get("delay", DEFAULT_DELAY), **rest)
+        return cls(context, params.get("delay"), **rest)
 
     def start(self, t: float) -> None:
         self._start = t
