@@ -73,21 +73,28 @@ def test_bad_values_are_located_errors(
     assert problem.startswith(f"conditions.copy.params.{field}: ")
     assert message in problem
     (located,) = caught.value.located
-    assert located.startswith(f"{path}:") and message in located
+    assert located.startswith(f"{path}:")
+    assert message in located
 
 
 def test_the_settings_are_said_in_words() -> None:
-    assert in_words({"delay": 4.0}, booth_mirror=True) == "copies everything, 4 s late, mirror image"
+    assert in_words({"delay": 4.0}, booth_mirror=True) == (
+        "copies everything, 4 s late, mirror image"
+    )
     assert in_words({"channels": "head", "delay": 4.0, "gain": 0.5}) == (
         "copies head, 4 s late, gain x0.5"
     )
     assert in_words({"only": ["nods"], "coexpress": True, "delay": 0.0, "mirror": False}) == (
         "copies only nods (head pitch >= 5 deg), at zero lag (co-expression), same side"
     )
-    jittered = {"delay": {"uniform": [0.5, 1.0]}, "seed": 3,
-                "intermittent": {"rate_per_s": 0.2, "bout_s": 3.0, "rest": "natural"}}
+    jittered = {
+        "delay": {"uniform": [0.5, 1.0]},
+        "seed": 3,
+        "intermittent": {"rate_per_s": 0.2, "bout_s": 3.0, "rest": "natural"},
+    }
     assert in_words(jittered) == (
         "copies everything, 0.5-1 s late (uniform, redrawn per bout), "
         "in 3 s bouts at 0.2/s, rest natural, seed 3"
     )
-    assert settings_of({})["delay"] == 4.0 and settings_of({"coexpress": True})["delay"] == 0.0
+    assert settings_of({})["delay"] == 4.0
+    assert settings_of({"coexpress": True})["delay"] == 0.0

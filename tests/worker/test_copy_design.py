@@ -100,27 +100,32 @@ def last_copy(context: Context, params: Mapping[str, Any], **options: Any) -> np
 def test_head_only_copies_the_head_turn_but_not_the_brows(zmq_context: Context) -> None:
     out = last_copy(zmq_context, {"channels": "head"})
     assert out[YAW] == pytest.approx(20.0)
-    assert out[BROW] == 0.0 and out[SMILE] == 0.0  # the robot's neutral
+    assert out[BROW] == 0.0
+    assert out[SMILE] == 0.0
 
 
 def test_face_only_copies_the_brows_but_not_the_head_turn(zmq_context: Context) -> None:
     out = last_copy(zmq_context, {"channels": "face"})
     assert out[YAW] == 0.0
-    assert out[BROW] == pytest.approx(0.8) and out[SMILE] == pytest.approx(0.5)
+    assert out[BROW] == pytest.approx(0.8)
+    assert out[SMILE] == pytest.approx(0.5)
 
 
 def test_an_explicit_list_copies_just_those_channels(zmq_context: Context) -> None:
     out = last_copy(zmq_context, {"channels": ["HeadYaw", "mouthSmileLeft"]})
-    assert out[YAW] == pytest.approx(20.0) and out[SMILE] == pytest.approx(0.5)
+    assert out[YAW] == pytest.approx(20.0)
+    assert out[SMILE] == pytest.approx(0.5)
     assert out[BROW] == 0.0
 
 
 def test_gain_scales_every_channel_or_each_its_own(zmq_context: Context) -> None:
     half = last_copy(zmq_context, {"gain": 0.5})
-    assert half[YAW] == pytest.approx(10.0) and half[BROW] == pytest.approx(0.4)
+    assert half[YAW] == pytest.approx(10.0)
+    assert half[BROW] == pytest.approx(0.4)
     mixed = last_copy(zmq_context, {"gain": {"head": 2.0, "brows": 0.25}})
     assert mixed[YAW] == pytest.approx(40.0)
-    assert mixed[BROW] == pytest.approx(0.2) and mixed[SMILE] == pytest.approx(0.5)
+    assert mixed[BROW] == pytest.approx(0.2)
+    assert mixed[SMILE] == pytest.approx(0.5)
     capped = last_copy(zmq_context, {"gain": 3.0})
     assert capped[BROW] == 1.0  # a blendshape stays within 0..1
 
@@ -129,15 +134,19 @@ def test_a_condition_may_copy_the_same_side_where_the_booth_mirrors(zmq_context:
     # The booth mirrors (frames arrive mirrored); this condition wants the same side back.
     out = last_copy(zmq_context, {"mirror": False}, mirror=True)
     assert out[YAW] == pytest.approx(-20.0)
-    assert out[BROW_RIGHT] == pytest.approx(0.6) and out[BROW_LEFT] == 0.0
+    assert out[BROW_RIGHT] == pytest.approx(0.6)
+    assert out[BROW_LEFT] == 0.0
     same = last_copy(zmq_context, {"mirror": True}, mirror=True)  # as the booth: unchanged
-    assert same[YAW] == pytest.approx(20.0) and same[BROW_LEFT] == pytest.approx(0.6)
+    assert same[YAW] == pytest.approx(20.0)
+    assert same[BROW_LEFT] == pytest.approx(0.6)
 
 
 def test_only_smiles_copies_the_smile_and_nothing_else(zmq_context: Context) -> None:
     out = last_copy(zmq_context, {"only": ["smiles"]})
     assert out[SMILE] == pytest.approx(0.5)
-    assert out[YAW] == 0.0 and out[BROW] == 0.0
+    assert out[YAW] == 0.0
+    assert out[BROW] == 0.0
+
     # A smile below the threshold (0.3) is not copied.
     def faint(now: float) -> FaceFrame:
         frame = turned_face(now)
@@ -150,7 +159,8 @@ def test_only_smiles_copies_the_smile_and_nothing_else(zmq_context: Context) -> 
 def test_coexpress_copies_at_zero_lag(zmq_context: Context) -> None:
     keyframes, stage = run_copy(zmq_context, {"coexpress": True}, enough=settled(20))
     assert [m.body["lag"] for m in keyframes if m.body["input_time"] is not None][-1] == 0.0
-    assert isinstance(stage.router.current, CopyBehaviour) and stage.router.current.delay == 0.0
+    assert isinstance(stage.router.current, CopyBehaviour)
+    assert stage.router.current.delay == 0.0
 
 
 def test_intermittent_copies_in_bouts_on_the_seeded_schedule(zmq_context: Context) -> None:
@@ -171,7 +181,9 @@ def test_intermittent_copies_in_bouts_on_the_seeded_schedule(zmq_context: Contex
         checked += 1
         inside += weight == 1.0
         outside += weight == 0.0
-    assert checked > 300 and inside > 10 and outside > 10  # both bouts and rests came out
+    assert checked > 300
+    assert inside > 10
+    assert outside > 10
 
 
 def test_bout_statistics_match_the_configured_rate_and_length() -> None:
@@ -188,13 +200,15 @@ def test_bout_statistics_match_the_configured_rate_and_length() -> None:
     # The ramp at a bout's edges is inside the bout: full weight from RAMP on.
     schedule = BoutSchedule(rate, bout, seed=3)
     onset = schedule.bouts(until=10.0)[0][0]
-    assert schedule.weight(onset + RAMP) == 1.0 and schedule.weight(onset - 1e-6) == 0.0
+    assert schedule.weight(onset + RAMP) == 1.0
+    assert schedule.weight(onset - 1e-6) == 0.0
 
 
 def test_jittered_delays_are_seeded_and_within_the_distribution() -> None:
     uniform = DelaySchedule({"uniform": [0.5, 1.0]}, seed=1, resample_s=10.0, maximum=11.5)
     draws = np.array([uniform.draw(k) for k in range(4000)])
-    assert draws.min() >= 0.5 and draws.max() <= 1.0
+    assert draws.min() >= 0.5
+    assert draws.max() <= 1.0
     assert draws.mean() == pytest.approx(0.75, abs=0.01)
     again = DelaySchedule({"uniform": [0.5, 1.0]}, seed=1, resample_s=10.0, maximum=11.5)
     other = DelaySchedule({"uniform": [0.5, 1.0]}, seed=2, resample_s=10.0, maximum=11.5)
@@ -208,4 +222,5 @@ def test_jittered_delays_are_seeded_and_within_the_distribution() -> None:
     # A new draw takes over every resample_s seconds, crossfaded from the previous one.
     assert uniform.at(25.0) == (draws[2], draws[2], 1.0)
     delay, previous, weight = uniform.at(20.15)
-    assert (delay, previous) == (draws[2], draws[1]) and weight == pytest.approx(0.5)
+    assert (delay, previous) == (draws[2], draws[1])
+    assert weight == pytest.approx(0.5)

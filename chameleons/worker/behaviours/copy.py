@@ -48,7 +48,9 @@ _MOUTH_JAW = np.array(MOUTH_JAW_INDICES)
 def _mirror_param(value: object) -> tuple[Any, str | None]:
     if value is None or isinstance(value, bool):
         return value, None
-    return None, f"must be true (mirror image), false (same side) or null (the booth's), got {value!r}"
+    return None, (
+        f"must be true (mirror image), false (same side) or null (the booth's), got {value!r}"
+    )
 
 
 COPY_PARAMETERS = Declared({

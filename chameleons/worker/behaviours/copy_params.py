@@ -121,13 +121,15 @@ def check_gain(value: object) -> tuple[Any, str | None]:
             if name is None:
                 return None, f"{key!r} is not a channel (a group, ARKit name or head axis)"
             if _bad_number(number, 0.0, MAX_GAIN):
-                return None, f"the gain of {key} must be a number in 0..{MAX_GAIN:g}, got {number!r}"
+                return None, f"the gain of {key} must be in 0..{MAX_GAIN:g}, got {number!r}"
             gains[name] = float(number)
         if not gains:
             return None, "must name at least one channel"
         return gains, None
     if _bad_number(value, 0.0, MAX_GAIN):
-        return None, f"must be a number in 0..{MAX_GAIN:g} or a mapping channel: gain, got {value!r}"
+        return None, (
+            f"must be a number in 0..{MAX_GAIN:g} or a mapping channel: gain, got {value!r}"
+        )
     return float(value), None  # type: ignore[arg-type]
 
 
@@ -139,15 +141,25 @@ def check_delay(value: object) -> tuple[Any, str | None]:
         return float(value), None  # type: ignore[arg-type]
     if len(value) != 1:
         return None, f"must be {_DELAY_SHAPE} (one distribution), got {dict(value)!r}"
-    (kind, body), = value.items()
+    ((kind, body),) = value.items()
     if kind == "uniform":
-        if (not isinstance(body, list) or len(body) != 2
-                or any(_bad_number(v, 0.0, MAX_DELAY) for v in body) or body[0] > body[1]):
-            return None, f"uniform must be [low, high] seconds within 0..{MAX_DELAY:g}, got {body!r}"
+        if (
+            not isinstance(body, list)
+            or len(body) != 2
+            or any(_bad_number(v, 0.0, MAX_DELAY) for v in body)
+            or body[0] > body[1]
+        ):
+            return None, (
+                f"uniform must be [low, high] seconds within 0..{MAX_DELAY:g}, got {body!r}"
+            )
         return {"uniform": [float(body[0]), float(body[1])]}, None
     if kind == "normal":
-        if (not isinstance(body, Mapping) or set(body) != {"mean", "sd"}
-                or _bad_number(body["mean"], 0.0, MAX_DELAY) or _bad_number(body["sd"], 0.0, 5.0)):
+        if (
+            not isinstance(body, Mapping)
+            or set(body) != {"mean", "sd"}
+            or _bad_number(body["mean"], 0.0, MAX_DELAY)
+            or _bad_number(body["sd"], 0.0, 5.0)
+        ):
             return None, (f"normal must be {{mean: seconds in 0..{MAX_DELAY:g}, sd: seconds "
                           f"in 0..5}}, got {body!r}")  # fmt: skip
         return {"normal": {"mean": float(body["mean"]), "sd": float(body["sd"])}}, None
@@ -155,10 +167,14 @@ def check_delay(value: object) -> tuple[Any, str | None]:
 
 
 def check_intermittent(value: object) -> tuple[Any, str | None]:
-    shape = f"{{rate_per_s: bouts per second, bout_s: seconds >= {MIN_BOUT}, rest: neutral|natural}}"
-    if not isinstance(value, Mapping) or not {"rate_per_s", "bout_s"} <= set(value) or not set(
-        value
-    ) <= {"rate_per_s", "bout_s", "rest"}:
+    shape = (
+        f"{{rate_per_s: bouts per second, bout_s: seconds >= {MIN_BOUT}, rest: neutral|natural}}"
+    )
+    if (
+        not isinstance(value, Mapping)
+        or not {"rate_per_s", "bout_s"} <= set(value)
+        or not set(value) <= {"rate_per_s", "bout_s", "rest"}
+    ):
         return None, f"must be {shape}, got {value!r}"
     if _bad_number(value["rate_per_s"], 0.0, 10.0) or value["rate_per_s"] <= 0:
         return None, f"rate_per_s must be a number in 0..10 above 0, got {value['rate_per_s']!r}"
@@ -231,7 +247,7 @@ def in_words(params: Mapping[str, Any], booth_mirror: bool | None = None) -> str
         what = "only " + ", ".join(EXPRESSIONS[e].words for e in s["only"])
     else:
         channels = s["channels"]
-        what = (f"{channels}" if isinstance(channels, str) else ", ".join(channels))
+        what = f"{channels}" if isinstance(channels, str) else ", ".join(channels)
         what = "everything" if what == "all" else what
     parts = [f"copies {what}"]
     delay = s["delay"]
