@@ -101,7 +101,7 @@ class WorkerConfig:
     renderer_cpu: int | None = None
 
     def initial_params(self) -> dict[str, Any]:
-        if self.behaviour == "copy":
+        if self.behaviour == "copy" and not self.behaviour_params.get("coexpress"):
             return {"delay": self.copy_delay, **self.behaviour_params}
         return dict(self.behaviour_params)
 
