@@ -47,8 +47,10 @@ from chameleons.prompts.locations import (
     prompts_root,
     resolve_marked_path,
 )
+from chameleons.worker.behaviours.copy_params import in_words, needs_seed
 
 NATURAL = "natural"
+COPY = "copy"
 DEFAULT_CLIP = "demo-natural"  # the natural behaviour's default clip parameter
 # <prompts>/_natural/<name>.npz; the demo clip is made by scripts/make_demo_natural_clip.py
 NATURAL_CLIPS = Path("_natural")
@@ -74,11 +76,26 @@ def robot_behaviour(db: Session, state: Any, interaction_id: int, condition: str
     spec = spec_of(located.study(db))
     declared = spec.condition(condition)
     if declared.behaviour != NATURAL:
-        return RobotBehaviour(declared.behaviour, dict(declared.params))
+        params = dict(declared.params)
+        if declared.behaviour == COPY and needs_seed(params) and params.get("seed") is None:
+            params["seed"] = interaction_id  # a different, recorded draw per interaction
+        return RobotBehaviour(declared.behaviour, params)
     replaying = {c.id for c in spec.conditions if c.behaviour == NATURAL}
     yokeable = [c.id for c in spec.conditions if c.id not in replaying]
     source = natural_source(db, state, located, declared.params, yokeable)
     return RobotBehaviour(NATURAL, natural_wire_params(declared.params, source), source)
+
+
+def behaviour_words(chosen: RobotBehaviour, booth_mirror: bool | None) -> str:
+    """What the robot does in this interaction, in words, for the export and the console."""
+    if chosen.name == COPY:
+        return in_words(chosen.params, booth_mirror)
+    if chosen.name == NATURAL and chosen.natural_source is not None:
+        return "replays " + describe_source(chosen.natural_source)
+    if chosen.name == "still":
+        return "holds still (neutral face)"
+    params = ", ".join(f"{k} {v}" for k, v in sorted(chosen.params.items()))
+    return chosen.name + (f" ({params})" if params else "")
 
 
 def natural_wire_params(params: dict[str, Any], source: dict[str, Any]) -> dict[str, Any]:

@@ -15,7 +15,10 @@ class Interaction(Base):
     ``natural_source``/``natural_recording``: what the ``natural`` behaviour replayed in this
     interaction (clip, yoked or synthetic, and which recording), set when it first ran.
     ``renderer``: the face the virtual robot's display was told to paint (2d|3d) when the
-    study's condition chose one; None where the booth's default applied."""
+    study's condition chose one; None where the booth's default applied.
+    ``behaviour_params``/``behaviour_words``: the parameters the worker was sent for the
+    interaction's behaviour (with the seed the server chose) and the same in words
+    (``copies head, 4 s late, mirror image``), set when the robot is set up."""
 
     __tablename__ = "interaction"
     __table_args__ = (
@@ -42,5 +45,7 @@ class Interaction(Base):
     natural_source: Mapped[str | None] = mapped_column(String(16))
     natural_recording: Mapped[str | None] = mapped_column(String(255))
     renderer: Mapped[str | None] = mapped_column(String(8))
+    behaviour_params: Mapped[dict[str, Any] | None]
+    behaviour_words: Mapped[str | None] = mapped_column(String(512))
     started_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]
