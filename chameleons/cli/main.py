@@ -56,6 +56,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                   "Compute the synchrony of the recorded faces per interaction: the robot "
                   "following the participant, the participant following the robot, and their "
                   "surrogate baseline."),
+    # issue 31: start a lab's own study from a shipped template
+    "study": ("study_command", "study",
+              "Start a lab's own study from a shipped template (chameleons study templates)."),
     "user": ("user_commands", "user", "Staff accounts (PI and wizards)."),
     "worker": ("worker_command", "worker",
                "Run the realtime worker of one booth (capture -> behaviour -> renderer -> "

@@ -284,3 +284,16 @@ def _redraw(s: Mapping[str, Any]) -> str:
 def needs_seed(params: Mapping[str, Any]) -> bool:
     """Whether the copy draws random numbers (a jittered delay or bouts)."""
     return isinstance(params.get("delay"), dict) or bool(params.get("intermittent"))
+
+
+def nominal_delay(params: Mapping[str, Any]) -> float:
+    """The copy's delay as one number: fixed, the mean of a distribution, 0 for coexpress
+    (the booth check's movement delay, the synchrony analysis' expected lag)."""
+    if params.get("coexpress"):
+        return 0.0
+    delay = params.get("delay", DEFAULT_DELAY)
+    if isinstance(delay, Mapping):
+        if "uniform" in delay:
+            return (float(delay["uniform"][0]) + float(delay["uniform"][1])) / 2
+        return float(delay["normal"]["mean"])
+    return float(delay)
