@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from chameleons.cli.main import cli
 from chameleons.cli.study_command import templates
 from chameleons.experiment.design import plan
+from chameleons.experiment.prereg import PlanFacts, preregistration
 from chameleons.experiment.study import load_study
 
 DESIGN_TEMPLATES = {
@@ -65,3 +66,15 @@ def test_study_new_copies_a_template_and_refuses_what_it_cannot(tmp_path: Path) 
     unknown = runner.invoke(cli, ["study", "new", "--template", "nope", str(tmp_path / "x")])
     assert unknown.exit_code == 2
     assert "no template 'nope'" in unknown.output
+
+
+def test_the_preregistration_states_what_each_copy_condition_copies() -> None:
+    study = load_study(templates()["channels"])
+    text = preregistration(study, PlanFacts(seed=0, rows=12, config_hash="x", created="2026-12-06"))
+    assert "(`head`): The participant's head movements, mirrored 4 s later; the face stays " in text
+    assert "The robot copies head, 4 s late, mirrored as the booth's mirror setting says." in text
+    partial = load_study(templates()["partial_full"])
+    text = preregistration(
+        partial, PlanFacts(seed=0, rows=12, config_hash="x", created="2026-12-06")
+    )
+    assert "The robot copies only nods (head pitch >= 5 deg), 4 s late" in text
