@@ -72,8 +72,10 @@ def test_a_condition_without_behaviour_runs_the_behaviour_of_its_name(tmp_path: 
     assert [c.behaviour for c in study.conditions] == ["still", "natural", "copy"]
 
 
-DELAY = ("a number of seconds in 0..11.5 or a distribution ({uniform: [low, high]} or "
-         "{normal: {mean: m, sd: s}})")
+DELAY = (
+    "a number of seconds in 0..11.5 or a distribution ({uniform: [low, high]} or "
+    "{normal: {mean: m, sd: s}})"
+)
 
 
 @pytest.mark.parametrize(
@@ -107,7 +109,8 @@ def test_an_unknown_behaviour_and_a_bad_choice_are_refused(tmp_path: Path) -> No
     assert problems == [
         "conditions.natural.params.source: must be one of clip, yoked, synthetic, got 'recorded'",
         "conditions.natural.params.loop: must be true or false, got 'yes'",
-        "conditions.copy.behaviour: unknown behaviour 'mimic' (available: copy, natural, still)",
+        "conditions.copy.behaviour: unknown behaviour 'mimic' (available: copy, natural, "
+        "still, yoked_copy)",
     ]
 
 

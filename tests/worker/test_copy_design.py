@@ -6,6 +6,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -46,12 +47,13 @@ def turned_face(now: float) -> FaceFrame:
 def run_copy(
     context: Context, params: Mapping[str, Any], *, enough: Callable[[list[Message]], bool],
     face: Callable[[float], FaceFrame] = turned_face, mirror: bool = True, timeout: float = 20.0,
+    behaviour: str = "copy",
 ) -> tuple[list[Message], BehaviourStage]:  # fmt: skip
     """Send the participant's face every 10 ms to a behaviour stage running ``copy`` with
     ``params`` until ``enough`` of its keyframes have come out."""
     endpoints = Endpoints.inproc(f"copy-design-{time.monotonic_ns()}")
     stage = BehaviourStage(context, endpoints, BehaviourStageConfig(
-        initial="copy", initial_params=params, recentre_head=False, mirror=mirror,
+        initial=behaviour, initial_params=params, recentre_head=False, mirror=mirror,
         crossfade_seconds=0.0))  # fmt: skip
     participant = context.socket(zmq.PUB)
     participant.bind(endpoints.participant)
@@ -224,3 +226,34 @@ def test_jittered_delays_are_seeded_and_within_the_distribution() -> None:
     delay, previous, weight = uniform.at(20.15)
     assert (delay, previous) == (draws[2], draws[1])
     assert weight == pytest.approx(0.5)
+
+
+def test_yoked_copy_replays_another_participant_at_the_same_delay(
+    zmq_context: Context, tmp_path: Path
+) -> None:
+    """The recording's head sways around 5 deg yaw and smiles; the live participant holds a
+    20 deg turn. Head only, 0.3 s late: the robot shows the recording's sway (re-centred on
+    its own mean), never the live participant's turn, and not the recording's smile."""
+    times = np.arange(0, 60, 1 / 30)
+    head = np.zeros((len(times), 3))
+    head[:, 0] = 5 + 10 * np.sin(np.pi * times)
+    shapes = np.zeros((len(times), N_BLENDSHAPES))
+    shapes[:, SMILE] = 0.4
+    path = tmp_path / "other.npz"
+    np.savez(path, times=times, blendshapes=shapes, head=head)
+    params = {"path": str(path), "delay": 0.3, "channels": "head"}
+    keyframes, stage = run_copy(zmq_context, params, behaviour="yoked_copy",
+                                enough=lambda ks: len(ks) >= 250)  # fmt: skip
+    start = stage.router.current._start
+    checked = 0
+    for message in keyframes:
+        u = message.body["t"] - start
+        assert message.body["input_time"] is None  # not contingent on this participant
+        out = message.array()
+        assert out[SMILE] == 0.0
+        if u < 0.3:
+            assert out[YAW] == 0.0  # the delay: neutral until the recording's first frame
+            continue
+        assert out[YAW] == pytest.approx(10 * np.sin(np.pi * (u - 0.3)), abs=0.1)
+        checked += 1
+    assert checked > 150

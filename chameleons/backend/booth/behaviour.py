@@ -51,6 +51,7 @@ from chameleons.worker.behaviours.copy_params import in_words, needs_seed
 
 NATURAL = "natural"
 COPY = "copy"
+YOKED_COPY = "yoked_copy"
 DEFAULT_CLIP = "demo-natural"  # the natural behaviour's default clip parameter
 # <prompts>/_natural/<name>.npz; the demo clip is made by scripts/make_demo_natural_clip.py
 NATURAL_CLIPS = Path("_natural")
@@ -75,6 +76,20 @@ def robot_behaviour(db: Session, state: Any, interaction_id: int, condition: str
         raise LookupError(f"there is no interaction {interaction_id}")
     spec = spec_of(located.study(db))
     declared = spec.condition(condition)
+    if declared.behaviour == YOKED_COPY:
+        copies = [c.id for c in spec.conditions if c.behaviour == COPY]
+        params = {k: v for k, v in declared.params.items() if k != "clip"}
+        if needs_seed(params) and params.get("seed") is None:
+            params["seed"] = interaction_id
+        # Another participant's copy interaction, else (the first participants) the clip.
+        wanted = {"source": "yoked", "clip": declared.params.get("clip", DEFAULT_CLIP)}
+        source = natural_source(db, state, located, wanted, copies)
+        wire = (
+            {"seed": source["seed"]}
+            if source["source"] == "synthetic"
+            else {"path": source["path"]}
+        )
+        return RobotBehaviour(YOKED_COPY, {**params, **wire}, source)
     if declared.behaviour != NATURAL:
         params = dict(declared.params)
         if declared.behaviour == COPY and needs_seed(params) and params.get("seed") is None:
@@ -90,6 +105,10 @@ def behaviour_words(chosen: RobotBehaviour, booth_mirror: bool | None) -> str:
     """What the robot does in this interaction, in words, for the export and the console."""
     if chosen.name == COPY:
         return in_words(chosen.params, booth_mirror)
+    if chosen.name == YOKED_COPY and chosen.natural_source is not None:
+        params = {k: v for k, v in chosen.params.items() if k != "path"}
+        replayed = describe_source(chosen.natural_source)
+        return in_words(params, booth_mirror).replace("copies", f"replays {replayed}: ", 1)
     if chosen.name == NATURAL and chosen.natural_source is not None:
         return "replays " + describe_source(chosen.natural_source)
     if chosen.name == "still":

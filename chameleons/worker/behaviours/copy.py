@@ -36,12 +36,12 @@ from chameleons.worker.frames import MIRROR_PERMUTATION, MOUTH_JAW_INDICES, N_BL
 DEFAULT_DELAY = cp.DEFAULT_DELAY
 MAX_DELAY = cp.MAX_DELAY
 _H = N_BLENDSHAPES
-# The mirror image of a face vector: out = vector[_MIRROR] * _MIRROR_SIGN.
-_MIRROR = np.concatenate([MIRROR_PERMUTATION, [_H, _H + 1, _H + 2],
+# The mirror image of a face vector: out = vector[MIRROR_INDEX] * MIRROR_SIGN.
+MIRROR_INDEX = np.concatenate([MIRROR_PERMUTATION, [_H, _H + 1, _H + 2],
                           _H + 3 + np.array([3, 4, 5, 0, 1, 2])])  # fmt: skip
-_MIRROR_SIGN = np.ones(VECTOR_SIZE, dtype=np.float32)
-_MIRROR_SIGN[[_H, _H + 2]] = -1
-_MIRROR_SIGN[_H + 3 :] = np.array([-1, 1, -1, -1, 1, -1], dtype=np.float32)
+MIRROR_SIGN = np.ones(VECTOR_SIZE, dtype=np.float32)
+MIRROR_SIGN[[_H, _H + 2]] = -1
+MIRROR_SIGN[_H + 3 :] = np.array([-1, 1, -1, -1, 1, -1], dtype=np.float32)
 _MOUTH_JAW = np.array(MOUTH_JAW_INDICES)
 
 
@@ -95,6 +95,7 @@ def checked(params: Mapping[str, Any], history_seconds: float) -> dict[str, Any]
 @register_behaviour("copy")
 class CopyBehaviour(Behaviour):
     parameters = COPY_PARAMETERS
+    contingent = True  # copies this participant (yoked_copy: another one's recording)
 
     def __init__(self, context: BehaviourContext, delay: Any = None, **params: Any) -> None:
         """``delay`` and ``params`` as a study gives them (absent: the defaults)."""
@@ -159,7 +160,7 @@ class CopyBehaviour(Behaviour):
         if context.recentre_head:
             context.head_neutral.relative(out[HEAD_SLICE])
         if self.flip:
-            out[:] = out[_MIRROR] * _MIRROR_SIGN
+            out[:] = out[MIRROR_INDEX] * MIRROR_SIGN
         return used
 
     def sample(self, t: float, out: F32Array) -> float:
@@ -181,7 +182,7 @@ class CopyBehaviour(Behaviour):
         used = self._copied(t - delay, out)
         if math.isnan(used):
             out[:] = neutral
-            return used
+            return NO_INPUT
         if w_delay < 1.0 and not math.isnan(self._copied(t - previous, self._prev)):
             out -= self._prev
             out *= np.float32(w_delay)
@@ -195,7 +196,7 @@ class CopyBehaviour(Behaviour):
             out -= self._rest
             out *= np.float32(w_bout)
             out += self._rest
-        return used
+        return used if self.contingent else NO_INPUT
 
     def _scale_for(self, deviation: F32Array) -> F32Array:
         """Per channel: the gain where copied, 0 where not (``only``: its expressions'

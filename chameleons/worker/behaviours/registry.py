@@ -27,6 +27,7 @@ _BUILTIN_MODULES = (
     "chameleons.worker.behaviours.still",
     "chameleons.worker.behaviours.copy",
     "chameleons.worker.behaviours.natural",
+    "chameleons.worker.behaviours.yoked_copy",
 )
 _registry: dict[str, type[Behaviour]] = {}
 _discovered = False
