@@ -77,3 +77,28 @@ def test_the_parameters_are_sent_logged_recorded_and_exported(
     codebook = (tmp_path / "codebook.csv").read_text(encoding="utf-8")
     assert "behaviour_params" in codebook
     assert "behaviour_words" in codebook
+
+
+@pytest.mark.usefixtures("worker")
+def test_yoked_copy_replays_the_study_clip_until_another_participant_was_recorded(
+    app: FastAPI, wizard: WizardBot, bridge: Any
+) -> None:
+    document = default_document()
+    document["conditions"] = {
+        "copy": {"label": "Copy", "behaviour": "copy", "params": {"delay": 0.7}},
+        "yoked": {"label": "Yoked", "behaviour": "yoked_copy",
+                  "params": {"delay": 0.7, "channels": "head"}},
+        "still": {"label": "Still", "behaviour": "still"},
+    }  # fmt: skip
+    study = study_with_plan(wizard.staff, 6, yaml=study_yaml(document))
+    wizard = WizardBot.create(wizard.staff, study)
+    wizard.switch_condition("yoked", 1)
+    result = wizard.staff.post(f"{api(wizard)}/robot/apply")
+    assert result["kind"] == "robot.applied", result
+    sent = bridge.state(BOOTH).behaviour
+    assert sent == {"name": "yoked_copy", "params": {
+        "delay": 0.7, "channels": "head", "path": "prompts:_natural/demo-natural.npz"}}  # fmt: skip
+    assert result["behaviour_words"].startswith(
+        "replays clip demo-natural (yoked: no recording of another participant yet; "
+    )
+    assert result["behaviour_words"].endswith(": head, 0.7 s late, mirror image")
