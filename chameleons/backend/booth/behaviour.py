@@ -233,7 +233,7 @@ def demo_clip_conditions(state: Any, spec: Study) -> list[str]:
     return [
         condition.id
         for condition in spec.conditions
-        if condition.behaviour == NATURAL
+        if condition.behaviour in (NATURAL, YOKED_COPY)  # yoked_copy: its clip at first
         and condition.params.get("source", "clip") in ("clip", "yoked")
         and is_synthetic_demo(clip_file(state, str(condition.params.get("clip", DEFAULT_CLIP))))
     ]
