@@ -244,7 +244,9 @@ def test_yoked_copy_replays_another_participant_at_the_same_delay(
     params = {"path": str(path), "delay": 0.3, "channels": "head"}
     keyframes, stage = run_copy(zmq_context, params, behaviour="yoked_copy",
                                 enough=lambda ks: len(ks) >= 250)  # fmt: skip
-    start = stage.router.current._start
+    behaviour = stage.router.current
+    assert isinstance(behaviour, CopyBehaviour)  # yoked_copy is one, replaying a recording
+    start = behaviour._start
     checked = 0
     for message in keyframes:
         u = message.body["t"] - start

@@ -106,9 +106,9 @@ def behaviour_words(chosen: RobotBehaviour, booth_mirror: bool | None) -> str:
     if chosen.name == COPY:
         return in_words(chosen.params, booth_mirror)
     if chosen.name == YOKED_COPY and chosen.natural_source is not None:
-        params = {k: v for k, v in chosen.params.items() if k != "path"}
+        shaped = {k: v for k, v in chosen.params.items() if k != "path"}
         replayed = describe_source(chosen.natural_source)
-        return in_words(params, booth_mirror).replace("copies", f"replays {replayed}:", 1)
+        return in_words(shaped, booth_mirror).replace("copies", f"replays {replayed}:", 1)
     if chosen.name == NATURAL and chosen.natural_source is not None:
         return "replays " + describe_source(chosen.natural_source)
     if chosen.name == "still":
