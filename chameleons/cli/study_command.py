@@ -11,13 +11,7 @@ from pathlib import Path
 import click
 
 from chameleons.experiment.study import StudyError, load_study
-
-STUDIES = Path(__file__).resolve().parents[1] / "experiment" / "studies"
-
-
-def templates() -> dict[str, Path]:
-    """Template name -> its study file, every folder under studies/ with a study.yaml."""
-    return {p.parent.name: p for p in sorted(STUDIES.glob("*/study.yaml"))}
+from chameleons.experiment.templates import study_templates as templates
 
 
 @click.group()
