@@ -11,10 +11,10 @@ import pytest
 from click.testing import CliRunner
 
 from chameleons.cli.main import cli
-from chameleons.cli.study_command import templates
 from chameleons.experiment.design import plan
 from chameleons.experiment.prereg import PlanFacts, preregistration
 from chameleons.experiment.study import load_study
+from chameleons.experiment.templates import study_templates as templates
 
 DESIGN_TEMPLATES = {
     "delay_sweep": ["copy_fast", "copy_slow", "yoked"],
