@@ -108,8 +108,10 @@ def _design(study: Study, plan: PlanFacts, labels: dict[str, str]) -> str:
             f"Within-subjects: each participant has {k} interactions with the robot, one per "
             "condition:",
             "",
-            *(f"- **{c.label}** (`{c.id}`): {c.description}{_robot_words(c)}"
-              for c in study.conditions),
+            *(
+                f"- **{c.label}** (`{c.id}`): {c.description}{_robot_words(c)}"
+                for c in study.conditions
+            ),
             "",
             f"Per interaction the participant ranks {study.item_sets.set_size} survival-task "
             f"items; the robot then makes {study.suggestions_per_interaction} suggestions, "
