@@ -66,6 +66,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                   "Compute the synchrony of the recorded faces per interaction: the robot "
                   "following the participant, the participant following the robot, and their "
                   "surrogate baseline."),
+    # issue 31: start a lab's own study from a shipped template
+    "study": ("study_command", "study",
+              "Start a lab's own study from a shipped template (chameleons study templates)."),
     "user": ("user_commands", "user", "Staff accounts (PI and wizards)."),
     "webcam-calibrate": ("webcam_calibrate_command", "webcam_calibrate",
                          "Teach a booth's webcam with its iPhone: fit, per ARKit channel, the "

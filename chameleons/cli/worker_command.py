@@ -9,12 +9,16 @@ from pathlib import Path
 from typing import Any
 
 import click
+import yaml
 
 from chameleons.cli.common import load_settings
 from chameleons.cli.interrupts import interrupts
 from chameleons.settings import Settings
 from chameleons.worker import curve
+from chameleons.worker.behaviours.base import BehaviourError
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
+from chameleons.worker.behaviours.registry import create_behaviour
+from chameleons.worker.behaviours.router import build_context
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DRIVER_NAMES
 from chameleons.worker.drivers.furhat_check import run_check
@@ -53,6 +57,10 @@ def _setting(settings: Settings, name: str, default: Any) -> Any:
 @click.option(
     "--copy-delay", type=float, default=None, help=f"Copy delay in seconds. [{DEFAULT_DELAY}]"
 )
+@click.option("--param", "params", multiple=True, metavar="NAME=VALUE",
+              help="A parameter of the starting behaviour (repeatable), checked like a study "
+                   "condition's params; VALUE is YAML: --param channels=head, "
+                   "--param 'delay={uniform: [0.5, 1.0]}', --param gain=0.5.")  # fmt: skip
 @click.option("--natural", "natural_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None,
               help="Recording `natural` replays (take CSV, Parquet, .npz); "
@@ -81,7 +89,7 @@ def worker(
     booth: str | None, driver: str | None, robot_url: str | None, furhat_faces: tuple[str, ...],
     livelink_port: int | None, capture_sender: str | None, camera: str | None,
     webcam_map: Path | None, facecapturex_port: int | None, behaviour: str,
-    copy_delay: float | None,
+    copy_delay: float | None, params: tuple[str, ...],
     natural_path: Path | None, control: str | None, telemetry: str | None,
     keys_dir: Path | None, tick_rate: float | None, face_rate: float | None, check: bool,
     renderer_process: bool, realtime: bool, renderer_cpu: int | None, lsl: bool | None,
@@ -104,6 +112,7 @@ def worker(
             capture_sender=capture_sender, camera=camera,
             facecapturex_port=facecapturex_port,
             behaviour=behaviour, copy_delay=copy_delay, natural_path=natural_path,
+            params=params,
             control=control, telemetry=telemetry, keys_dir=keys_dir, tick_rate=tick_rate,
             face_rate=face_rate, lsl=lsl,
         )  # fmt: skip
@@ -142,6 +151,12 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         params["path"] = str(options["natural_path"])
     elif options["behaviour"] == "natural":
         params["seed"] = 0  # standalone without a recording: the synthetic face
+    given = parse_params(options.get("params") or ())
+    if given:
+        params.update(given)
+        if options["behaviour"] == "copy" and options.get("copy_delay") is not None:
+            params.setdefault("delay", delay)  # an explicit --copy-delay is checked with them
+        check_behaviour(options["behaviour"], params, delay)
     render = RenderConfig(
         tick_rate=float(pick("tick_rate", "worker_tick_rate", 125.0)),
         face_rate=float(pick("face_rate", "worker_face_rate", 25.0)),
@@ -175,6 +190,37 @@ def build_config(settings: Settings, **options: Any) -> WorkerConfig:
         curve=_curve(settings, options),
         lsl=bool(pick("lsl", "lsl", False)),
     )  # fmt: skip
+
+
+def parse_params(entries: tuple[str, ...] | list[str]) -> dict[str, Any]:
+    """``("gain=0.5", "channels=[head, brows]")`` -> ``{"gain": 0.5, "channels": [...]}``:
+    each VALUE read as YAML, as it would be written in the study file."""
+    params: dict[str, Any] = {}
+    for entry in entries:
+        name, sep, text = entry.partition("=")
+        name = name.strip()
+        if not (sep and name and text.strip()):
+            raise click.BadParameter(f"{entry!r} is not NAME=VALUE", param_hint="--param")
+        try:
+            params[name] = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise click.BadParameter(
+                f"the value of {name} is not valid YAML ({exc.__class__.__name__})",
+                param_hint="--param",
+            ) from None
+    return params
+
+
+def check_behaviour(name: str, params: dict[str, Any], delay: float) -> None:
+    """Build the behaviour once, as the worker will (the same checks as a study's
+    params): a bad name or value is an error now, not when the worker starts."""
+    wire = {"delay": delay, **params} if name == "copy" else params
+    if name == "copy" and "delay" not in params and params.get("coexpress"):
+        wire.pop("delay")
+    try:
+        create_behaviour(name, wire, build_context())
+    except BehaviourError as exc:
+        raise click.BadParameter(str(exc), param_hint="--param") from None
 
 
 def _curve(settings: Settings, options: dict[str, Any]) -> ClientKeys | None:

@@ -15,10 +15,11 @@ from typing import Any
 
 from chameleons import __version__
 from chameleons.experiment.blocks import balance_period
-from chameleons.experiment.model import Study
+from chameleons.experiment.model import Condition, Study
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES
 from chameleons.experiment.stats.power_render import power_markdown
 from chameleons.experiment.suggestions import FALLBACK_WORDS
+from chameleons.worker.behaviours.copy_params import in_words
 
 MEASURE_WORDS = {
     "accepted": "the number of robot suggestions the participant accepts in an interaction",
@@ -107,7 +108,10 @@ def _design(study: Study, plan: PlanFacts, labels: dict[str, str]) -> str:
             f"Within-subjects: each participant has {k} interactions with the robot, one per "
             "condition:",
             "",
-            *(f"- **{c.label}** (`{c.id}`): {c.description}" for c in study.conditions),
+            *(
+                f"- **{c.label}** (`{c.id}`): {c.description}{_robot_words(c)}"
+                for c in study.conditions
+            ),
             "",
             f"Per interaction the participant ranks {study.item_sets.set_size} survival-task "
             f"items; the robot then makes {study.suggestions_per_interaction} suggestions, "
@@ -259,3 +263,14 @@ def _measure_words(study: Study, measure: str) -> str:
         return MEASURE_WORDS[measure]
     q = study.questionnaire(measure)
     return f"the {q.title.lower()} score participants give the robot ({q.points}-point scale)"
+
+
+def _robot_words(condition: Condition) -> str:
+    """What a ``copy`` condition's robot copies, how late, how much and how often, as the
+    study file sets it (issue 31; the parameters themselves are in the study's config)."""
+    if condition.behaviour != "copy":
+        return ""
+    words = in_words(condition.params)
+    if condition.params.get("mirror") is None:
+        words += ", mirrored as the booth's mirror setting says"
+    return f" The robot {words}."

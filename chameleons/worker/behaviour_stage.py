@@ -59,6 +59,7 @@ class BehaviourStageConfig:
     rotation_factor: float | None = None  # of Live Link take CSVs replayed as clips
     recentre_head: bool = True  # the booth's head_recentre setting (copy re-centres the head)
     head_calibration_s: float = 20.0  # the neutral head pose: mean of this many seconds
+    mirror: bool = True  # the booth's mirror setting (frames arrive mirrored); copy's default
 
 
 class BehaviourStage:
@@ -75,7 +76,8 @@ class BehaviourStage:
         behaviours = build_context(self.config.history_seconds, locations=self.config.locations,
                                    rotation_factor=self.config.rotation_factor,
                                    recentre_head=self.config.recentre_head,
-                                   head_calibration_s=self.config.head_calibration_s)  # fmt: skip
+                                   head_calibration_s=self.config.head_calibration_s,
+                                   input_mirrored=self.config.mirror)  # fmt: skip
         self.router = BehaviourRouter(
             behaviours,
             self.config.crossfade_seconds,

@@ -110,7 +110,7 @@ class WorkerConfig:
     lsl: bool = False
 
     def initial_params(self) -> dict[str, Any]:
-        if self.behaviour == "copy":
+        if self.behaviour == "copy" and not self.behaviour_params.get("coexpress"):
             return {"delay": self.copy_delay, **self.behaviour_params}
         return dict(self.behaviour_params)
 
@@ -166,6 +166,7 @@ class Worker:
             initial_params=config.initial_params(), locations=config,
             rotation_factor=rotation_factor(config.livelink_rotation_scale),
             recentre_head=config.head_recentre, head_calibration_s=config.head_calibration_s,
+            mirror=config.mirror,
         ))  # fmt: skip
         self.playback = PlaybackStage(
             self.context, self.endpoints, speaks_text=speaks_text(config.driver)

@@ -72,13 +72,20 @@ def test_a_condition_without_behaviour_runs_the_behaviour_of_its_name(tmp_path: 
     assert [c.behaviour for c in study.conditions] == ["still", "natural", "copy"]
 
 
+DELAY = (
+    "a number of seconds in 0..11.5 or a distribution ({uniform: [low, high]} or "
+    "{normal: {mean: m, sd: s}})"
+)
+
+
 @pytest.mark.parametrize(
     ("params", "message"),
     [
-        ({"delay": 20.0}, "conditions.copy.params.delay: must be a number in 0..11.5, got 20.0"),
-        ({"delay": "4 s"}, "conditions.copy.params.delay: must be a number in 0..11.5, got '4 s'"),
+        ({"delay": 20.0}, f"conditions.copy.params.delay: must be {DELAY}, got 20.0"),
+        ({"delay": "4 s"}, f"conditions.copy.params.delay: must be {DELAY}, got '4 s'"),
         ({"dealy": 4.0}, "conditions.copy.params.dealy: unknown parameter (this behaviour "
-                         "takes: delay)"),
+                         "takes: channels, coexpress, delay, delay_resample_s, gain, "
+                         "intermittent, mirror, only, seed)"),
     ],
 )  # fmt: skip
 def test_bad_parameters_are_refused_at_their_line(
@@ -102,7 +109,8 @@ def test_an_unknown_behaviour_and_a_bad_choice_are_refused(tmp_path: Path) -> No
     assert problems == [
         "conditions.natural.params.source: must be one of clip, yoked, synthetic, got 'recorded'",
         "conditions.natural.params.loop: must be true or false, got 'yes'",
-        "conditions.copy.behaviour: unknown behaviour 'mimic' (available: copy, natural, still)",
+        "conditions.copy.behaviour: unknown behaviour 'mimic' (available: copy, natural, "
+        "still, yoked_copy)",
     ]
 
 

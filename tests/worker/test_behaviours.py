@@ -62,7 +62,7 @@ def test_unknown_behaviour_and_bad_params_are_clear_errors() -> None:
         create_behaviour("dance", {}, context)
     with pytest.raises(BehaviourError, match="delay"):
         create_behaviour("copy", {"delay": "soon"}, context)
-    with pytest.raises(BehaviourError, match="unknown parameters: speed"):
+    with pytest.raises(BehaviourError, match="speed: unknown parameter"):
         create_behaviour("copy", {"speed": 2}, context)
     with pytest.raises(BehaviourError, match="takes no parameters"):
         create_behaviour("still", {"x": 1}, context)

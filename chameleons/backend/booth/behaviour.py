@@ -47,8 +47,11 @@ from chameleons.prompts.locations import (
     prompts_root,
     resolve_marked_path,
 )
+from chameleons.worker.behaviours.copy_params import in_words, needs_seed
 
 NATURAL = "natural"
+COPY = "copy"
+YOKED_COPY = "yoked_copy"
 DEFAULT_CLIP = "demo-natural"  # the natural behaviour's default clip parameter
 # <prompts>/_natural/<name>.npz; the demo clip is made by scripts/make_demo_natural_clip.py
 NATURAL_CLIPS = Path("_natural")
@@ -73,12 +76,45 @@ def robot_behaviour(db: Session, state: Any, interaction_id: int, condition: str
         raise LookupError(f"there is no interaction {interaction_id}")
     spec = spec_of(located.study(db))
     declared = spec.condition(condition)
+    if declared.behaviour == YOKED_COPY:
+        copies = [c.id for c in spec.conditions if c.behaviour == COPY]
+        params = {k: v for k, v in declared.params.items() if k != "clip"}
+        if needs_seed(params) and params.get("seed") is None:
+            params["seed"] = interaction_id
+        # Another participant's copy interaction, else (the first participants) the clip.
+        wanted = {"source": "yoked", "clip": declared.params.get("clip", DEFAULT_CLIP)}
+        source = natural_source(db, state, located, wanted, copies)
+        wire = (
+            {"seed": source["seed"]}
+            if source["source"] == "synthetic"
+            else {"path": source["path"]}
+        )
+        return RobotBehaviour(YOKED_COPY, {**params, **wire}, source)
     if declared.behaviour != NATURAL:
-        return RobotBehaviour(declared.behaviour, dict(declared.params))
+        params = dict(declared.params)
+        if declared.behaviour == COPY and needs_seed(params) and params.get("seed") is None:
+            params["seed"] = interaction_id  # a different, recorded draw per interaction
+        return RobotBehaviour(declared.behaviour, params)
     replaying = {c.id for c in spec.conditions if c.behaviour == NATURAL}
     yokeable = [c.id for c in spec.conditions if c.id not in replaying]
     source = natural_source(db, state, located, declared.params, yokeable)
     return RobotBehaviour(NATURAL, natural_wire_params(declared.params, source), source)
+
+
+def behaviour_words(chosen: RobotBehaviour, booth_mirror: bool | None) -> str:
+    """What the robot does in this interaction, in words, for the export and the console."""
+    if chosen.name == COPY:
+        return in_words(chosen.params, booth_mirror)
+    if chosen.name == YOKED_COPY and chosen.natural_source is not None:
+        shaped = {k: v for k, v in chosen.params.items() if k != "path"}
+        replayed = describe_source(chosen.natural_source)
+        return in_words(shaped, booth_mirror).replace("copies", f"replays {replayed}:", 1)
+    if chosen.name == NATURAL and chosen.natural_source is not None:
+        return "replays " + describe_source(chosen.natural_source)
+    if chosen.name == "still":
+        return "holds still (neutral face)"
+    params = ", ".join(f"{k} {v}" for k, v in sorted(chosen.params.items()))
+    return chosen.name + (f" ({params})" if params else "")
 
 
 def natural_wire_params(params: dict[str, Any], source: dict[str, Any]) -> dict[str, Any]:
@@ -197,7 +233,7 @@ def demo_clip_conditions(state: Any, spec: Study) -> list[str]:
     return [
         condition.id
         for condition in spec.conditions
-        if condition.behaviour == NATURAL
+        if condition.behaviour in (NATURAL, YOKED_COPY)  # yoked_copy: its clip at first
         and condition.params.get("source", "clip") in ("clip", "yoked")
         and is_synthetic_demo(clip_file(state, str(condition.params.get("clip", DEFAULT_CLIP))))
     ]

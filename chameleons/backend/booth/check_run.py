@@ -47,6 +47,7 @@ from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import robot, worker_link
 from chameleons.backend.wizard.playback import read
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
+from chameleons.worker.behaviours.copy_params import nominal_delay
 from chameleons.worker.control import (
     MARK_HEAD_REST,
     RECENTRE_HEAD,
@@ -104,7 +105,7 @@ def plan_for(db: DbSession, booth: str, session: SessionRow | None, settings: An
         order = [c for c in condition_ids if c in conditions] + list(conditions)
         if order:
             condition = order[0]
-            delay = float(conditions[condition].params.get("delay", DEFAULT_DELAY))
+            delay = nominal_delay(conditions[condition].params)  # a distribution's mean
     return Plan(float(settings.booth_check_turn_seconds), float(settings.booth_check_nod_seconds),
                 delay, condition, study.id if study else None,
                 float(settings.booth_check_rest_seconds))  # fmt: skip

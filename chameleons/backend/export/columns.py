@@ -257,6 +257,21 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "own choice applied, or the robot is a Furhat).",
                 "2d, 3d",
             ),
+            # issue 31: the behaviour's design-space parameters, per interaction
+            Column(
+                "behaviour_params",
+                "string",
+                "The parameters the worker was sent for the interaction's behaviour, as JSON "
+                "with sorted keys (copy: delay in seconds or a distribution, channels, gain, "
+                "mirror, coexpress, intermittent, only, seed; absent keys have their defaults, "
+                "docs/design-space.md); empty before the robot was set up.",
+            ),
+            Column(
+                "behaviour_words",
+                "string",
+                "The same in words: what the robot copied, how late, how much and how often "
+                "(e.g. 'copies head, 4 s late, mirror image').",
+            ),
             Column(
                 "recording_problem",
                 "string",

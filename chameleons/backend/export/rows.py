@@ -127,6 +127,9 @@ def interaction_rows(
             "natural_source": interaction.natural_source,
             "natural_recording": interaction.natural_recording,
             "renderer": interaction.renderer,
+            # issue 31: what the robot's behaviour was told, and the same in words
+            "behaviour_params": _params_text(interaction.behaviour_params),
+            "behaviour_words": interaction.behaviour_words,
             "recording_problem": problems.get(interaction.id),
             "face_source": interaction.face_source,
             "face_calibration": interaction.face_calibration,
@@ -276,3 +279,10 @@ def _streamed(db: DbSession, query: Any) -> Iterator[Any]:
     also when the reader stops early (the export page previews only the first rows)."""
     with db.execute(query.execution_options(yield_per=BATCH)) as result:
         yield from result
+
+
+def _params_text(params: dict[str, Any] | None) -> str | None:
+    """The behaviour's parameters as canonical JSON (sorted keys), for one cell."""
+    if params is None:
+        return None
+    return json.dumps(params, sort_keys=True, separators=(",", ":"))

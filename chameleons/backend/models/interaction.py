@@ -17,7 +17,10 @@ class Interaction(Base):
     ``renderer``: the face the virtual robot's display was told to paint (2d|3d) when the
     study's condition chose one; None where the booth's default applied.
     ``face_source``/``face_calibration``: what captured the participant, from the
-    participant's recording (see :class:`Recording`); None until one is indexed."""
+    participant's recording (see :class:`Recording`); None until one is indexed.
+    ``behaviour_params``/``behaviour_words``: the parameters the worker was sent for the
+    interaction's behaviour (with the seed the server chose) and the same in words
+    (``copies head, 4 s late, mirror image``), set when the robot is set up."""
 
     __tablename__ = "interaction"
     __table_args__ = (
@@ -46,5 +49,7 @@ class Interaction(Base):
     renderer: Mapped[str | None] = mapped_column(String(8))
     face_source: Mapped[str | None] = mapped_column(String(32))
     face_calibration: Mapped[str | None] = mapped_column(String(64))
+    behaviour_params: Mapped[dict[str, Any] | None]
+    behaviour_words: Mapped[str | None] = mapped_column(String(512))
     started_at: Mapped[datetime | None]
     ended_at: Mapped[datetime | None]

@@ -17,6 +17,7 @@ from chameleons.backend.sessions.pausing import paused_view
 from chameleons.backend.sessions.states import allowed_sentence
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.model import Condition
+from chameleons.worker.behaviours.copy_params import in_words
 
 CONSOLE_VIEW = "console"
 
@@ -117,10 +118,11 @@ def _condition(condition: Condition) -> dict[str, Any]:
 
 
 def behaviour_summary(condition: Condition) -> str:
-    """A few words on what the robot does, e.g. "copy, 4 s delay" or "natural: clip"."""
+    """A few words on what the robot does, e.g. "copies head, 4 s late, same side" (every
+    copy parameter in words, chameleons.worker.behaviours.copy_params) or "natural: clip"."""
     params = condition.params
-    if condition.behaviour == "copy" and "delay" in params:
-        return f"copy, {params['delay']:g} s delay"
+    if condition.behaviour == "copy":
+        return in_words(params)
     if condition.behaviour == "natural":
         return f"natural: {params.get('source', 'clip')}"
     shown = ", ".join(f"{k} {v}" for k, v in sorted(params.items()))

@@ -18,6 +18,7 @@ from chameleons.backend.routing import make_router
 from chameleons.backend.studies import service
 from chameleons.backend.studies.endpoints import spec_from_yaml, study_read
 from chameleons.backend.studies.errors import FlowError
+from chameleons.experiment.templates import study_templates
 
 router = make_router(tags=["studies"])
 
@@ -29,7 +30,7 @@ def _render(
     return templates.TemplateResponse(
         request,
         "studies/studies.html",
-        {"user": user, "studies": studies, "error": error},
+        {"user": user, "studies": studies, "error": error, "templates": list(study_templates())},
         status_code=status.HTTP_200_OK if error is None else status.HTTP_409_CONFLICT,
     )
 
@@ -48,8 +49,14 @@ def create_study_form(
     db: WriteDb,
     templates: Templates,
     study_yaml: Annotated[str, Form(max_length=1_000_000)] = "",
+    template: Annotated[str, Form(max_length=64)] = "",
 ) -> Response:
     try:
+        if template:  # a shipped template (issue 31), unless YAML was pasted as well
+            found = study_templates().get(template)
+            if found is None:
+                return _render(request, templates, db, user, f"There is no template {template!r}.")
+            study_yaml = study_yaml.strip() or found.read_text(encoding="utf-8")
         spec = spec_from_yaml(study_yaml.strip() or None)
         service.create_study(db, spec)
     except HTTPException as exc:

@@ -19,6 +19,7 @@ from chameleons.experiment.stats import DEFAULT_VIEW, View
 from chameleons.experiment.stats.measures import study_measures
 from chameleons.experiment.stats.render_models import number_text, p_text
 from chameleons.experiment.study import study_from_config
+from chameleons.worker.behaviours.copy_params import nominal_delay
 
 router = make_router(tags=["synchrony"])
 
@@ -33,7 +34,7 @@ def synchrony_plot(interaction_id: int, _pi: CurrentPI, db: DbSession) -> Respon
     condition = study_from_config(found.study.config).condition(found.interaction.condition)
     delay = None
     if condition.behaviour == "copy":
-        delay = float(condition.params.get("delay", 4.0))
+        delay = nominal_delay(condition.params)
     title = (f"Interaction {found.interaction.position} ({found.interaction.condition}): "
              f"{row.surrogate_count} {row.surrogate_kind} surrogates")  # fmt: skip
     image = plot_synchrony(row.curves, title, delay=delay)

@@ -34,6 +34,7 @@ from chameleons.experiment.stats.synchrony import (
     measure_synchrony,
 )
 from chameleons.experiment.study import study_from_config
+from chameleons.worker.behaviours.copy_params import nominal_delay
 from chameleons.worker.recording import RecordingError
 
 log = logging.getLogger(__name__)
@@ -71,7 +72,7 @@ def compute(
         return None
     spec = study_from_config(found.study.config)
     condition = spec.condition(found.interaction.condition)
-    delay = float(condition.params.get("delay", 4.0)) if condition.behaviour == "copy" else None
+    delay = nominal_delay(condition.params) if condition.behaviour == "copy" else None
     params = _params_for(base or SyncParams(), delay, interaction_id)
     own = repository.recordings(db, [interaction_id]).get(interaction_id, {})
     row = InteractionSynchrony(interaction_id=interaction_id, params=params.to_dict())

@@ -21,7 +21,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from chameleons.backend.booth.behaviour import robot_behaviour
+from chameleons.backend.booth.behaviour import behaviour_words, robot_behaviour
 from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event, Interaction, Study
 from chameleons.backend.studies.errors import ConflictError, NotFoundError
@@ -49,6 +49,7 @@ class Target:
     params: dict[str, Any] | None = None
     natural_source: dict[str, Any] | None = None
     renderer: str | None = None  # the condition's display face (2d/3d); None: the booth's
+    words: str = ""  # the behaviour and its parameters in words (behaviour_words)
 
     def face_body(self) -> dict[str, Any]:
         body: dict[str, Any] = {"face_id": self.face}
@@ -92,12 +93,17 @@ def prepared(db: Session, state: Any, find: Finder) -> Target:
     interaction = db.get(Interaction, target.interaction_id)
     if interaction is not None and interaction.renderer != renderer:
         interaction.renderer = renderer
+    if interaction is not None and interaction.behaviour_params != chosen.params:
+        interaction.behaviour_params = dict(chosen.params)
+        mirror = getattr(getattr(state, "settings", None), "mirror", None)
+        interaction.behaviour_words = behaviour_words(chosen, mirror)[:512]
     return replace(
         target,
         behaviour=chosen.name,
         params=chosen.params,
         natural_source=chosen.natural_source,
         renderer=renderer,
+        words=interaction.behaviour_words or "" if interaction is not None else "",
     )
 
 
@@ -131,6 +137,8 @@ def record(
     }
     if target.params:
         payload["params"] = dict(target.params)
+    if target.words:
+        payload["behaviour_words"] = target.words
     head = (behaviour.result or {}).get("head")
     if isinstance(head, dict):  # how the worker processes the copied head (re-centring)
         payload["head"] = head

@@ -54,6 +54,9 @@ class BehaviourContext:
     # (the booth's ``head_recentre`` setting; :mod:`chameleons.worker.behaviours.neutral`).
     head_neutral: HeadNeutral = field(default_factory=HeadNeutral)
     recentre_head: bool = True
+    # Whether the booth's capture already mirrors the participant (the ``mirror`` setting):
+    # a ``copy`` condition's own ``mirror`` flips its output only where it differs.
+    input_mirrored: bool = True
 
 
 class Behaviour(ABC):

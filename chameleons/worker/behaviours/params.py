@@ -11,17 +11,22 @@ declarations without building a behaviour.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-ParamKind = Literal["number", "integer", "boolean", "text", "choice"]
+ParamKind = Literal["number", "integer", "boolean", "text", "choice", "structured"]
+# A structured parameter's own check: (the value as stored, None) or (None, the problem).
+Checker = Callable[[object], tuple[Any, str | None]]
 
 
 @dataclass(frozen=True)
 class Param:
     """One declared parameter. ``number``/``integer`` honour ``minimum``/``maximum``;
-    ``choice`` takes one of ``choices``; ``text`` any non-empty text."""
+    ``choice`` takes one of ``choices``; ``text`` any non-empty text; ``structured`` is
+    checked by ``checker`` (a number or a mapping, say) and described by ``shape``.
+    ``optional``: when the study leaves it out it is not filled in (absent means the
+    default), so a study written before the parameter existed stores the same params."""
 
     kind: ParamKind
     default: Any
@@ -29,6 +34,9 @@ class Param:
     minimum: float | None = None
     maximum: float | None = None
     choices: tuple[str, ...] = field(default_factory=tuple)
+    checker: Checker | None = None
+    shape: str = ""
+    optional: bool = False
 
     def check(self, value: object) -> tuple[Any, str | None]:
         """(the value as stored, None) or (None, what is wrong with it)."""
@@ -42,6 +50,8 @@ class Param:
             return f"a {self.kind} in {low}..{high}"
         if self.kind == "choice":
             return "one of " + ", ".join(self.choices)
+        if self.kind == "structured":
+            return self.shape or "a structured value"
         return "true or false" if self.kind == "boolean" else "a text"
 
 
@@ -75,13 +85,34 @@ def _choice(param: Param, value: object) -> tuple[Any, str | None]:
     return value, None
 
 
+def _structured(param: Param, value: object) -> tuple[Any, str | None]:
+    if param.checker is None:
+        return value, None
+    return param.checker(value)
+
+
 _CHECKERS = {
     "number": _number,
     "integer": _number,
     "boolean": _boolean,
     "text": _text,
     "choice": _choice,
+    "structured": _structured,
 }
+
+
+class Declared(dict[str, Param]):
+    """A behaviour's declared parameters with an optional check of their combination
+    (``together(values, given)`` -> ``(name, problem)`` pairs), run once every parameter
+    is valid on its own: ``coexpress`` with a ``delay``, say."""
+
+    def __init__(
+        self, params: Mapping[str, Param],
+        together: Callable[[dict[str, Any], Mapping[str, Any]], list[tuple[str, str]]]
+        | None = None,
+    ) -> None:  # fmt: skip
+        super().__init__(params)
+        self.together = together
 
 
 def check_params(
@@ -97,11 +128,15 @@ def check_params(
     values: dict[str, Any] = {}
     for name, param in declared.items():
         if name not in given:
-            values[name] = param.default
+            if not param.optional:
+                values[name] = param.default
             continue
         value, problem = param.check(given[name])
         if problem is None:
             values[name] = value
         else:
             problems.append((name, problem))
+    together = getattr(declared, "together", None)
+    if not problems and together is not None:
+        problems.extend(together(values, given))
     return values, problems

@@ -20,13 +20,14 @@ from importlib.metadata import entry_points
 from typing import Any, TypeVar
 
 from chameleons.worker.behaviours.base import Behaviour, BehaviourContext, BehaviourError
-from chameleons.worker.behaviours.params import Param
+from chameleons.worker.behaviours.params import Declared, Param
 
 ENTRY_POINT_GROUP = "chameleons.behaviours"
 _BUILTIN_MODULES = (
     "chameleons.worker.behaviours.still",
     "chameleons.worker.behaviours.copy",
     "chameleons.worker.behaviours.natural",
+    "chameleons.worker.behaviours.yoked_copy",
 )
 _registry: dict[str, type[Behaviour]] = {}
 _discovered = False
@@ -89,4 +90,6 @@ def create_behaviour(name: str, params: Mapping[str, Any], context: BehaviourCon
 
 def behaviour_parameters() -> dict[str, Mapping[str, Param]]:
     """Every registered behaviour's declared parameters (what a study may set)."""
-    return {name: dict(cls.parameters) for name, cls in available_behaviours().items()}
+    # A Declared mapping keeps its check of the combination (copy's coexpress and delay).
+    return {name: cls.parameters if isinstance(cls.parameters, Declared) else dict(cls.parameters)
+            for name, cls in available_behaviours().items()}  # fmt: skip

@@ -68,12 +68,14 @@ def build_context(
     rotation_factor: float | None = None,
     recentre_head: bool = True,
     head_calibration_s: float = DEFAULT_CALIBRATION_S,
+    input_mirrored: bool = True,
 ) -> BehaviourContext:
     capacity = math.ceil(history_seconds * max_input_rate)
     return BehaviourContext(FrameHistory(capacity), history_seconds=history_seconds,
                             locations=locations, rotation_factor=rotation_factor,
                             head_neutral=HeadNeutral(head_calibration_s),
-                            recentre_head=recentre_head)  # fmt: skip
+                            recentre_head=recentre_head,
+                            input_mirrored=input_mirrored)  # fmt: skip
 
 
 class BehaviourRouter:

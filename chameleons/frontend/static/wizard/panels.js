@@ -133,7 +133,7 @@ export function renderPrimary(state, api, perform) {
   $("primary-hint").textContent = state.session.allowed_sentence;
 }
 
-/** What the robot does in a condition, e.g. "copy, 4 s delay" (from the study). */
+/** What the robot does in a condition, e.g. "copies head, 4 s late" (from the study). */
 function conditionDetails(state, condition) {
   return (state.session.condition_details || []).find((c) => c.id === condition) || { id: condition, label: condition, summary: "" };
 }

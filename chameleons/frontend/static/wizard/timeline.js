@@ -52,7 +52,7 @@ export function describe(event, names) {
       return p.outcome && p.outcome !== "played" ? `Speech ${p.outcome} (${p.prompt_id})` : `Speech ended (${p.prompt_id})`;
     case "prompt.stopped": return p.sent ? "Stopped the prompt" : `Stop not sent: ${p.detail || p.reason}`;
     case "robot.applied": return p.behaviour && p.behaviour.unchanged && p.face_result && p.face_result.unchanged
-      ? `Robot runs ${p.condition}, face ${p.face} (set already)` : `Robot set to ${p.condition}, face ${p.face}`;
+      ? `Robot runs ${p.condition}, face ${p.face} (set already)` : `Robot set to ${p.condition}, face ${p.face}${p.behaviour_words ? `: ${p.behaviour_words}` : ""}`;
     case "robot.not_applied": return `Robot NOT set to ${p.condition}/${p.face}: ${[p.behaviour, p.face_result].filter((r) => !r.sent).map((r) => r.detail).join("; ")}`;
     case "wizard.note": return `Note: ${p.text}`;
     case "recording.started": return `Recording interaction ${p.position} (${Object.keys(p.files || {}).join(" and ") || "streams"})`;
