@@ -45,9 +45,9 @@ from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints, ParticipantBus
 
 if TYPE_CHECKING:
-    from chameleons.worker.lsl_stage import LslStage
     from chameleons.worker.ingest.browser import BrowserReceiver
     from chameleons.worker.ingest.webcam import LandmarkMapper
+    from chameleons.worker.lsl_stage import LslStage
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
