@@ -72,6 +72,8 @@ def test_the_first_phone_pairs_others_are_counted_and_the_wizard_pairs_afresh(
                      what="the sender on the Face stream chip")  # fmt: skip
 
         answer = pi.post(f"/api/wizard/sessions/{wizard.session_id}/capture/reset-pairing")
+        # The worker has forgotten the phone when it answers (a failure here names why).
+        assert answer["sent"] is True, answer
         again = send(worker, INTRUDER, 20)  # now the first to send after the reset: paired
         until(lambda: stats.frames == sent + again, what="the newly paired phone's frames")
         send(worker, PHONE, 10)
