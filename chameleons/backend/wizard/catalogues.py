@@ -58,6 +58,18 @@ def missing_in_language(state: Any, actor: str, language: str) -> list[str]:
     return missing_groups(base, catalogue_for(state, actor, language))
 
 
+def is_loaded(state: Any, actor: str, language: str | None = None) -> bool:
+    """Whether ``catalogue_for(state, actor, language)`` would answer from memory (no file
+    read, no lock held by a loading thread): the event loop may then ask it itself."""
+    ready: dict[str, Catalogue] = getattr(state, "prompt_catalogues", None) or {}
+    base = ready.get(actor) or (getattr(state, "wizard_catalogues", None) or {}).get(actor)
+    if base is None:
+        return False
+    if language is None or language == base.profile.language:
+        return True
+    return (language, actor) in (getattr(state, "language_catalogues", None) or {})
+
+
 def _base_catalogue(state: Any, actor: str) -> Catalogue:
     ready: dict[str, Catalogue] | None = getattr(state, "prompt_catalogues", None)
     if ready is not None and actor in ready:

@@ -30,7 +30,7 @@ from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import health, typed_speech, worker_link
-from chameleons.backend.wizard.console_state import console_state
+from chameleons.backend.wizard.console_state import committed_console_state, console_state
 from chameleons.backend.wizard.playback import read
 
 router = make_router(tags=["wizard"])
@@ -120,6 +120,11 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
                 # Shielded: a read cut off by a disconnect still finishes (and gives its
                 # database connection back) before the handler returns.
                 new_events = _new_events(messages)
+                # The state the change committed, kept by the hub: built here at once.
+                known = committed_console_state(state, session_id, base_url, new_events or [])
+                if known is not None:
+                    await sender.send({"type": "console", **known})
+                    continue
                 reading = asyncio.ensure_future(
                     run_in_threadpool(
                         read, state, _state_message, state, session_id, base_url, new_events

@@ -1,0 +1,61 @@
+"""A console woken by a wizard's action takes the state that action committed on the event
+loop, without a trip through the thread pool (issue 34); a change whose state the hub does
+not keep (a note) is still read in a thread. Through a real uvicorn server and WebSocket."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import pytest
+from fastapi import FastAPI
+from websockets.sync.client import ClientConnection, connect
+
+from chameleons.backend.wizard import live as wizard_live
+from tests.support.bots import WizardBot
+from tests.support.live_server import LiveServer
+
+WAIT_S = 60.0
+
+
+def _console(live: LiveServer, wizard: WizardBot) -> ClientConnection:
+    cookies = "; ".join(f"{k}={v}" for k, v in wizard.staff.http.cookies.items())
+    return connect(f"ws://127.0.0.1:{live.port}/ws/wizard/sessions/{wizard.session_id}",
+                   open_timeout=WAIT_S, additional_headers={"Origin": live.url,
+                                                            "Cookie": cookies})  # fmt: skip
+
+
+def _state_after(socket: ClientConnection, version: int) -> dict[str, Any]:
+    """The next console state of ``version`` (health and event messages skipped)."""
+    while True:
+        message = json.loads(socket.recv(timeout=WAIT_S))
+        if message["type"] == "console" and message["session"]["version"] >= version:
+            return dict(message)
+
+
+def test_a_wizard_actions_state_reaches_the_console_without_a_thread_read(
+    app: FastAPI, wizard: WizardBot, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    reads: list[str] = []
+    real_read = wizard_live.read
+
+    def counted(state: Any, work: Any, *args: Any) -> Any:
+        if work is wizard_live._state_message:
+            reads.append("state")
+        return real_read(state, work, *args)
+
+    monkeypatch.setattr(wizard_live, "read", counted)
+    with LiveServer(app) as live, _console(live, wizard) as socket:
+        _state_after(socket, 0)
+        assert reads == ["state"]  # the first state: read
+        for version in (wizard.start()["version"],
+                        wizard.advance(1, "discussion")["version"],
+                        wizard.advance(1, "ranking")["version"]):  # fmt: skip
+            state = _state_after(socket, version)
+            assert reads == ["state"]  # the action's own state, kept: not read
+            assert state["events_delta"] is True
+            assert state["session"]["version"] == version
+        wizard.staff.post(f"/api/sessions/{wizard.session_id}/notes", {"text": "laughed"})
+        noted = _state_after(socket, version + 1)
+        assert noted["events"][-1]["kind"] == "wizard.note"
+        assert reads == ["state", "state"]  # a note keeps no state: read in a thread
