@@ -37,6 +37,9 @@ def catalogue_for(state: Any, actor: str, language: str | None = None) -> Catalo
     base = _base_catalogue(state, actor)
     if language is None or language == base.profile.language:
         return base
+    loaded = (getattr(state, "language_catalogues", None) or {}).get((language, actor))
+    if loaded is not None:  # without the lock: the event loop asks too (is_loaded)
+        return loaded
     root = prompts_root(state.settings)
     with _LOCK:
         cache: dict[tuple[str, str], Catalogue] | None = getattr(state, "language_catalogues", None)
@@ -74,6 +77,9 @@ def _base_catalogue(state: Any, actor: str) -> Catalogue:
     ready: dict[str, Catalogue] | None = getattr(state, "prompt_catalogues", None)
     if ready is not None and actor in ready:
         return ready[actor]
+    loaded = (getattr(state, "wizard_catalogues", None) or {}).get(actor)
+    if loaded is not None:  # without the lock, which a thread loading another may hold
+        return loaded
     with _LOCK:
         cache: dict[str, Catalogue] | None = getattr(state, "wizard_catalogues", None)
         if cache is None:
