@@ -37,7 +37,8 @@ def catalogue_for(state: Any, actor: str, language: str | None = None) -> Catalo
     base = _base_catalogue(state, actor)
     if language is None or language == base.profile.language:
         return base
-    loaded = (getattr(state, "language_catalogues", None) or {}).get((language, actor))
+    kept: dict[tuple[str, str], Catalogue] = getattr(state, "language_catalogues", None) or {}
+    loaded = kept.get((language, actor))
     if loaded is not None:  # without the lock: the event loop asks too (is_loaded)
         return loaded
     root = prompts_root(state.settings)
@@ -77,7 +78,8 @@ def _base_catalogue(state: Any, actor: str) -> Catalogue:
     ready: dict[str, Catalogue] | None = getattr(state, "prompt_catalogues", None)
     if ready is not None and actor in ready:
         return ready[actor]
-    loaded = (getattr(state, "wizard_catalogues", None) or {}).get(actor)
+    cached: dict[str, Catalogue] = getattr(state, "wizard_catalogues", None) or {}
+    loaded = cached.get(actor)
     if loaded is not None:  # without the lock, which a thread loading another may hold
         return loaded
     with _LOCK:

@@ -10,8 +10,10 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 from websockets.sync.client import ClientConnection, connect
+from websockets.sync.connection import Connection
 
 from chameleons.backend.wizard import live as wizard_live
+from chameleons.backend.wizard import playback
 from tests.support.bots import WizardBot
 from tests.support.live_server import LiveServer
 
@@ -25,7 +27,7 @@ def _console(live: LiveServer, wizard: WizardBot) -> ClientConnection:
                                                             "Cookie": cookies})  # fmt: skip
 
 
-def _state_after(socket: ClientConnection, version: int) -> dict[str, Any]:
+def _state_after(socket: Connection, version: int) -> dict[str, Any]:
     """The next console state of ``version`` (health and event messages skipped)."""
     while True:
         message = json.loads(socket.recv(timeout=WAIT_S))
@@ -37,12 +39,11 @@ def test_a_wizard_actions_state_reaches_the_console_without_a_thread_read(
     app: FastAPI, wizard: WizardBot, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     reads: list[str] = []
-    real_read = wizard_live.read
 
     def counted(state: Any, work: Any, *args: Any) -> Any:
         if work is wizard_live._state_message:
             reads.append("state")
-        return real_read(state, work, *args)
+        return playback.read(state, work, *args)
 
     monkeypatch.setattr(wizard_live, "read", counted)
     with LiveServer(app) as live, _console(live, wizard) as socket:

@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 from websockets.sync.client import ClientConnection, connect
+from websockets.sync.connection import Connection
 
 from chameleons.backend.bridge import Bridge
 from chameleons.backend.wizard import health
@@ -56,7 +57,7 @@ def _console(live: LiveServer, wizard: WizardBot) -> ClientConnection:
                                                             "Cookie": cookies})  # fmt: skip
 
 
-def _health_until_pong(socket: ClientConnection) -> list[dict[str, Any]]:
+def _health_until_pong(socket: Connection) -> list[dict[str, Any]]:
     """The health messages before the answer to a ping sent now (the socket's order)."""
     socket.send(json.dumps({"type": "ping"}))
     found = []
