@@ -1,4 +1,4 @@
-"""A console woken by a wizard's action takes the state that action committed on the event
+"""A console woken by a phone's answer takes the state that answer committed on the event
 loop, without a trip through the thread pool (issue 34); a change whose state the hub does
 not keep (a note) is still read in a thread. Through a real uvicorn server and WebSocket."""
 
@@ -14,10 +14,11 @@ from websockets.sync.connection import Connection
 
 from chameleons.backend.wizard import live as wizard_live
 from chameleons.backend.wizard import playback
-from tests.support.bots import WizardBot
+from tests.support.bots import ParticipantBot, WizardBot
 from tests.support.live_server import LiveServer
 
 WAIT_S = 60.0
+RANKED = "ranking.submitted"
 
 
 def _console(live: LiveServer, wizard: WizardBot) -> ClientConnection:
@@ -35,8 +36,16 @@ def _state_after(socket: Connection, version: int) -> dict[str, Any]:
             return dict(message)
 
 
-def test_a_wizard_actions_state_reaches_the_console_without_a_thread_read(
-    app: FastAPI, wizard: WizardBot, monkeypatch: pytest.MonkeyPatch
+def _state_with(socket: Connection, kind: str) -> dict[str, Any]:
+    """The first console state whose new events include one of ``kind``."""
+    while True:
+        state = _state_after(socket, 0)
+        if any(event["kind"] == kind for event in state["events"]):
+            return state
+
+
+def test_a_phones_answer_reaches_the_console_without_a_thread_read(
+    app: FastAPI, wizard: WizardBot, phone: ParticipantBot, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     reads: list[str] = []
 
@@ -46,17 +55,18 @@ def test_a_wizard_actions_state_reaches_the_console_without_a_thread_read(
         return playback.read(state, work, *args)
 
     monkeypatch.setattr(wizard_live, "read", counted)
+    wizard.start()
+    wizard.advance(1, "discussion")
+    wizard.advance(1, "ranking")
     with LiveServer(app) as live, _console(live, wizard) as socket:
         _state_after(socket, 0)
         assert reads == ["state"]  # the first state: read
-        for version in (wizard.start()["version"],
-                        wizard.advance(1, "discussion")["version"],
-                        wizard.advance(1, "ranking")["version"]):  # fmt: skip
-            state = _state_after(socket, version)
-            assert reads == ["state"]  # the action's own state, kept: not read
-            assert state["events_delta"] is True
-            assert state["session"]["version"] == version
+        ranking = list(wizard.interaction(1)["presented_order"])
+        phone.submit_ranking(1, ranking)
+        state = _state_with(socket, RANKED)
+        assert reads == ["state"]  # the state the answer committed, kept: not read
+        assert state["events_delta"] is True
+        assert state["session"]["interactions"][0]["initial_ranking"] == ranking
         wizard.staff.post(f"/api/sessions/{wizard.session_id}/notes", {"text": "laughed"})
-        noted = _state_after(socket, version + 1)
-        assert noted["events"][-1]["kind"] == "wizard.note"
+        _state_with(socket, "wizard.note")
         assert reads == ["state", "state"]  # a note keeps no state: read in a thread
