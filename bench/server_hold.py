@@ -38,8 +38,11 @@ class Window:
     deadline: float = math.inf
     started: float = 0.0
     cpu_before: float = 0.0
+    together: threading.Barrier | None = None  # the other server's window opens with this one
 
     def open(self) -> None:
+        if self.together is not None:
+            self.together.wait()
         self.started = time.monotonic()
         self.deadline = self.started + self.seconds
         self.cpu_before = cpu_seconds(self.pid)
@@ -71,11 +74,12 @@ def _with_barrier(barrier: threading.Barrier, figures: Figures, setup: Callable[
 
 
 def hold_real(database_url: str, phones: int, seconds: float, think_max: float, seed: int,
-              wizard_think: float) -> dict[str, Any]:  # fmt: skip
+              wizard_think: float,
+              together: threading.Barrier | None = None) -> dict[str, Any]:  # fmt: skip
     rows = phones * max(3, math.ceil(seconds / 4))  # sessions last longer than 4 s
     with Server.chameleons(database_url, sessions=rows) as (server, setup):
         real = RealServer.of(server, setup)
-        figures, window = Figures(), Window(seconds, server.process.pid)
+        figures, window = Figures(), Window(seconds, server.process.pid, together=together)
         barrier = threading.Barrier(phones, action=window.open)
         held: list[int] = []  # phones that were still there at the window's end
 
@@ -100,9 +104,11 @@ def hold_real(database_url: str, phones: int, seconds: float, think_max: float, 
         return window.close(figures, phones, len(held), real.sockets_opened)
 
 
-def hold_baseline(phones: int, seconds: float, think_max: float, seed: int) -> dict[str, Any]:
-    with Server.baseline() as server:
-        figures, window = Figures(), Window(seconds, server.process.pid)
+def hold_baseline(phones: int, seconds: float, think_max: float, seed: int,
+                  database_url: str | None = None,
+                  together: threading.Barrier | None = None) -> dict[str, Any]:  # fmt: skip
+    with Server.baseline(database_url) as server:
+        figures, window = Figures(), Window(seconds, server.process.pid, together=together)
         barrier = threading.Barrier(phones, action=window.open)
         held: list[int] = []
 
@@ -118,14 +124,34 @@ def hold_baseline(phones: int, seconds: float, think_max: float, seed: int) -> d
         return window.close(figures, phones, len(held), 2 * phones)
 
 
+def hold_both(database_url: str, baseline_url: str, phones: int, seconds: float,
+              think_max: float, seed: int, wizard_think: float,
+              ) -> tuple[dict[str, Any], dict[str, Any]]:  # fmt: skip
+    """The hold on the real server and on the baseline app at the same moment: each sets up
+    its phones, then both windows open together."""
+    together, found = threading.Barrier(2), {}
+
+    def real() -> None:
+        found["real"] = hold_real(database_url, phones, seconds, think_max, seed,
+                                  wizard_think, together)  # fmt: skip
+
+    def baseline() -> None:
+        found["baseline"] = hold_baseline(phones, seconds, think_max, seed, baseline_url,
+                                          together)  # fmt: skip
+
+    run_threads([real, baseline])
+    return found["real"], found["baseline"]
+
+
 def print_hold(name: str, ours: dict[str, Any], base: dict[str, Any]) -> None:
     print(
         f"\n{name}: hold, {ours['phones']} phones for {ours['seconds']:g} s "
         f"({ours['sockets_opened']} sockets opened; baseline {base['sockets_opened']})"
     )
     print(f"{'figure':<30} {'chameleons':>12} {'baseline':>10} {'ratio':>7}")
-    rows = [("submit -> console p50 ms", "update_p50_ms", "{:.1f}"),
-            ("submit -> console p99 ms", "update_p99_ms", "{:.1f}"),
+    rows = [("submit -> console state p50 ms", "state_p50_ms", "{:.1f}"),
+            ("submit -> console state p99 ms", "state_p99_ms", "{:.1f}"),
+            ("submit -> event p99 ms", "update_p99_ms", "{:.1f}"),
             ("HTTP p99 ms", "http_p99_ms", "{:.1f}"),
             ("server CPU ms / submission", "server_cpu_ms_per_submission", "{:.1f}"),
             ("server CPU, share of a core", "server_cpu_share", "{:.2f}"),

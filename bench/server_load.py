@@ -60,19 +60,22 @@ def percentile(values: list[float], q: float) -> float:
 @dataclass
 class Figures:
     http: list[float] = field(default_factory=list)
-    update: list[float] = field(default_factory=list)
+    update: list[float] = field(default_factory=list)  # submit -> its event message
+    state: list[float] = field(default_factory=list)  # submit -> the console state after it
     errors: Counter[str] = field(default_factory=Counter)
     dropped: Counter[str] = field(default_factory=Counter)  # sockets closed under the bench
     server_cpu_s: float = 0.0  # the server process's CPU time over the scenario
     seconds: float = 0.0  # the scenario's wall time
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
-    def add(self, *, http: float | None, update: float | None) -> None:
+    def add(self, *, http: float | None, update: float | None, state: float | None = None) -> None:
         with self._lock:
             if http is not None:
                 self.http.append(http)
             if update is not None:
                 self.update.append(update)
+            if state is not None:
+                self.state.append(state)
 
     def count_error(self, what: str) -> None:
         with self._lock:
@@ -88,7 +91,8 @@ class Figures:
     def summary(self) -> dict[str, Any]:
         with self._lock:
             ms = {f"{name}_{label}_ms": round(percentile(values, q) * 1000, 2)
-                  for name, values in (("http", self.http), ("update", self.update))
+                  for name, values in (("http", self.http), ("update", self.update),
+                                       ("state", self.state))
                   for label, q in (("p50", 0.5), ("p99", 0.99))}  # fmt: skip
             submissions = len(self.http) + sum(self.errors.values())
             cpu_ms = 1000 * self.server_cpu_s / submissions if submissions else 0.0
@@ -99,10 +103,13 @@ class Figures:
 
 class Listener:
     """A WebSocket whose reader thread notes when each event key first arrives: the
-    submission's client id, and ``kind:play_event_id`` for a prompt's speech events.
+    submission's client id, and ``kind:play_event_id`` for a prompt's speech events; and
+    when the first console state after that event arrives (``wait_for_state``: what the
+    wizard's console renders; the server sends a batch's events, then its state).
 
     Only event messages are parsed (the console's state messages can be large, and parsing
-    them would put the load generator's CPU into the figures). ``ended_codes`` are close
+    them would put the load generator's CPU into the figures: a state is known by its first
+    bytes). ``ended_codes`` are close
     codes that end the socket normally (the phone's 4410 when its session is over); any
     other close the bench did not ask for is a **dropped** socket."""
 
@@ -117,6 +124,8 @@ class Listener:
                                    max_size=None, open_timeout=60)  # fmt: skip
         self._ended_codes = ended_codes
         self._seen: dict[str, float] = {}
+        self._state_seen: dict[str, float] = {}
+        self._awaiting_state: list[str] = []  # events seen, their state not yet
         self._condition = threading.Condition()
         self._closed = self._closing = False
         self.messages = 0
@@ -132,13 +141,21 @@ class Listener:
             for raw in self._connection:
                 now = self.clock()
                 self.messages += 1
-                if not _is_event(raw):
+                if _is_type(raw, "console"):
+                    with self._condition:
+                        for key in self._awaiting_state:
+                            self._state_seen.setdefault(key, now)
+                        self._awaiting_state.clear()
+                        self._condition.notify_all()
+                    continue
+                if not _is_type(raw, "event"):
                     continue
                 keys = _event_keys(json.loads(raw))
                 if keys:
                     with self._condition:
                         for key in keys:
                             self._seen.setdefault(key, now)
+                        self._awaiting_state.extend(keys)
                         self._condition.notify_all()
         except (ConnectionClosed, OSError, ValueError):
             pass
@@ -151,6 +168,12 @@ class Listener:
         with self._condition:
             self._condition.wait_for(lambda: key in self._seen or self._closed, timeout)
             return self._seen.get(key)
+
+    def wait_for_state(self, key: str, timeout: float) -> float | None:
+        """When the first console state after the event ``key`` arrived."""
+        with self._condition:
+            self._condition.wait_for(lambda: key in self._state_seen or self._closed, timeout)
+            return self._state_seen.get(key)
 
     @property
     def dropped(self) -> bool:
@@ -168,9 +191,9 @@ class Listener:
 Console = Listener  # the wizard console's socket; the phone's is a Listener too
 
 
-def _is_event(raw: str | bytes) -> bool:
+def _is_type(raw: str | bytes, kind: str) -> bool:
     head = raw[:24] if isinstance(raw, str) else raw[:24].decode("utf-8", "replace")
-    return head.replace(" ", "").startswith('{"type":"event"')
+    return head.replace(" ", "").startswith(f'{{"type":"{kind}"')
 
 
 def _event_keys(message: Any) -> list[str]:
@@ -259,11 +282,14 @@ class Server:
 
     @classmethod
     @contextmanager
-    def baseline(cls) -> Iterator[Server]:
+    def baseline(cls, database_url: str | None = None) -> Iterator[Server]:
+        """``bench.baseline_app``; with ``database_url`` it stores each submission there."""
         port = free_port()
         command = [sys.executable, "-m", "uvicorn", "bench.baseline_app:app", "--host",
                    "127.0.0.1", "--port", str(port), "--log-level", "warning"]  # fmt: skip
-        with cls._running(command, dict(os.environ), port) as server:
+        env = {**os.environ, **({"BENCH_BASELINE_DATABASE_URL": database_url}
+                                if database_url else {})}  # fmt: skip
+        with cls._running(command, env, port) as server:
             yield server
 
     @classmethod

@@ -46,6 +46,7 @@ class Pace:
     phone_max: float
     wizard_max: float = 0.0
     deadline: float = math.inf
+    stop: threading.Event | None = None  # set: the scenario is over (as the deadline)
 
     def phone(self) -> None:
         self._pause(self.phone_max)
@@ -56,7 +57,7 @@ class Pace:
     def _pause(self, most: float) -> None:
         if most > 0:
             Listener.pause(self.rng.uniform(0, most))
-        if time.monotonic() >= self.deadline:
+        if time.monotonic() >= self.deadline or (self.stop is not None and self.stop.is_set()):
             raise TimeUpError
 
 
@@ -137,8 +138,14 @@ def submit_measured(figures: Figures, console: Listener, send: Send) -> Any:
     arrived = console.wait_for(client_id, timeout=UPDATE_TIMEOUT_S)
     if arrived is None:
         figures.count_error(f"no console update within {UPDATE_TIMEOUT_S:g} s")
+        return result
+    figures.add(http=None, update=arrived - start)
+    # What the wizard sees: the console state sent after the event (console.js renders it).
+    rendered = console.wait_for_state(client_id, timeout=UPDATE_TIMEOUT_S)
+    if rendered is None:
+        figures.count_error(f"no console state within {UPDATE_TIMEOUT_S:g} s")
     else:
-        figures.add(http=None, update=arrived - start)
+        figures.add(http=None, update=None, state=rendered - start)
     return result
 
 
@@ -233,7 +240,8 @@ class BaselinePhone:
         self.http = self.server.client()
 
     def send(self, client_id: str) -> Any:
-        response = self.http.post(f"/api/submit/{self.channel}", json={"client_id": client_id})
+        body = {"client_id": client_id, "answers": {"q1": 3, "q2": "a few words", "q3": [1, 2]}}
+        response = self.http.post(f"/api/submit/{self.channel}", json=body)
         if response.status_code >= 400:
             raise ApiError(response.status_code, response.text)
         return response.json()

@@ -3,7 +3,8 @@
 ``python -m bench.worker_bench [--quick] [--duration S] [--max-booths N] [--json FILE]``
 
 1. renderer tick-interval jitter (|interval - 8 ms|) p50/p99/max and missed ticks, worker
-   with a 60 fps Live Link input stream vs a bare fixed-rate loop doing nothing else;
+   with a 60 fps Live Link input stream vs a bare fixed-rate loop doing nothing else, run
+   at the same moment in a process of its own (the machine's load is then the same);
 2. added latency capture -> driver send, minus the intended delay (the head's FIR group
    delay is pre-compensated by the behaviour stage, so it is part of the intended delay),
    vs one bare pyzmq inproc hop;
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import socket
 import subprocess
@@ -85,7 +87,31 @@ def bare_loop_jitter(duration: float) -> Row:
     return {"jitter_ms": _ms(jitter), "missed": loop.stats.missed, "ticks": loop.stats.count}
 
 
-def worker_jitter(duration: float) -> Row:
+def _bare_child(start: Any, results: Any, duration: float) -> None:
+    """The bare loop in a process of its own, from the moment the worker is measured."""
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
+    if start.wait(300):
+        results.put(bare_loop_jitter(duration))
+
+
+def worker_and_bare_loop(duration: float) -> tuple[Row, Row]:
+    """Item 1: the worker's jitter and the bare loop's over the same seconds."""
+    context = multiprocessing.get_context("spawn")
+    start, results = context.Event(), context.Queue()
+    child = context.Process(target=_bare_child, args=(start, results, duration), daemon=True)
+    child.start()
+    try:
+        worker = worker_jitter(duration, on_start=start.set)
+        bare: Row = results.get(timeout=duration + 120)
+    finally:
+        child.join(10)
+        if child.is_alive():
+            child.terminate()
+            child.join()
+    return worker, bare
+
+
+def worker_jitter(duration: float, on_start: Callable[[], None] | None = None) -> Row:
     config = WorkerConfig(booth="bench", driver="null", behaviour="copy", livelink_port=0,
                           facecapturex_port=None, capture_host="127.0.0.1",
                           command_endpoint=NO_SERVER, telemetry_endpoint=NO_SERVER)  # fmt: skip
@@ -95,6 +121,8 @@ def worker_jitter(duration: float) -> Row:
             _wait_for(lambda: worker.behaviour.frames.count > 60, 30, "phone input")
             assert worker.renderer is not None  # the renderer is a thread of this process
             stats = worker.renderer.loop.stats
+            if on_start is not None:
+                on_start()
             first, missed0, frames0 = stats.count, stats.missed, worker.behaviour.frames.count
             cpu0, wall0 = time.process_time(), time.monotonic()
             time.sleep(duration)
@@ -191,8 +219,13 @@ def booths(count: int, duration: float, options: tuple[str, ...] = ()) -> Row:
         deadline, started = time.monotonic() + 90, None
         cpu0: list[float] = []
         while started is None or time.monotonic() < started + duration:
+            exited = [(p.args, p.returncode) for p in processes if p.poll() is not None]
+            if exited:  # a worker or phone died: say so now, not after the 90 s
+                raise RuntimeError(f"a booth's process exited early: {exited[0]}")
             if time.monotonic() > deadline:
-                raise RuntimeError(f"{count} booths did not all report within 90 s")
+                heard = {booth: len(v) for booth, v in beats.items()}
+                raise RuntimeError(f"{count} booths did not all report within 90 s "
+                                   f"(ready heartbeats per booth: {heard})")  # fmt: skip
             if not sub.poll(200):
                 continue
             body = deserialize(sub.recv_multipart()).body
@@ -229,8 +262,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     duration = args.duration
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)  # as in a worker process (runtime.run_worker)
     results: dict[str, Any] = {"load_before": os.getloadavg(), "cpus": os.cpu_count()}
-    results["bare_loop"] = bare_loop_jitter(duration)
-    results["worker"] = worker_jitter(duration)
+    results["worker"], results["bare_loop"] = worker_and_bare_loop(duration)
     results["hop"] = pyzmq_hop(2000 if not args.quick else 300)
     results["copy_4s"] = copy_latency(duration, 4.0)
     results["live_0s"] = copy_latency(max(3.0, duration / 3), 0.0)
@@ -241,9 +273,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if row["worst_booth_median_p99_ms"] >= 1.0:
             break
     # 6: the renderer (and driver) in a process of its own, then also real-time scheduled.
-    results["renderer_process"] = booths(1, args.booth_seconds, ("--renderer-process",))
-    results["renderer_realtime"] = booths(1, args.booth_seconds,
-                                          ("--renderer-process", "--realtime"))  # fmt: skip
+    # A failure here is reported in its row, not the end of the run.
+    for key, options in (("renderer_process", ("--renderer-process",)),
+                         ("renderer_realtime", ("--renderer-process", "--realtime"))):  # fmt: skip
+        try:
+            results[key] = booths(1, args.booth_seconds, options)
+        except RuntimeError as error:
+            results[key] = {"failed": str(error)}
     results["load_after"] = os.getloadavg()
     return results
 
@@ -284,6 +320,9 @@ def table(r: dict[str, Any]) -> str:
     for name, key in (("renderer process", "renderer_process"),
                       ("renderer process, real-time", "renderer_realtime")):  # fmt: skip
         row = r[key]
+        if "failed" in row:
+            rows.append((f"6 1 booth, {name}", "FAILED", row["failed"], ""))
+            continue
         rows.append((f"6 1 booth, {name}: median p99 / max p99 (ms)",
                      f"{row['worst_booth_median_p99_ms']:.3f} / {row['max_p99_ms']:.3f}",
                      f"{one:.3f} (in-process)",

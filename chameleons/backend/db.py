@@ -37,10 +37,13 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
 # threads, threads waiting for a connection could hold every thread token while the
 # requests holding the connections wait for a token (idle in transaction until the pool's
 # timeout: seen with 15 connections and 40 threads at 50 phones on PostgreSQL).
-# Five kept open when idle (SQLAlchemy's default), the rest opened under load and closed
-# when returned.
+# PostgreSQL: five kept open when idle (SQLAlchemy's default), the rest opened under load
+# and closed when returned. SQLite keeps all of them (``SQLITE_POOL``): a connection is a
+# file handle, and each new one ran its PRAGMAs again (about 6 % of a busy server's CPU,
+# issue 34: the overflow connections were opened and closed with every burst).
 POOL_SIZE = 5
 POOL_OVERFLOW = 35
+SQLITE_POOL = {"pool_size": POOL_SIZE + POOL_OVERFLOW, "max_overflow": 0}
 
 
 def write_transaction(db: Session) -> None:
@@ -88,7 +91,8 @@ def build_engine(url: str) -> Engine:
             Path(parsed.database or "").parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(url, connect_args={"check_same_thread": False,
                                                   "timeout": SQLITE_BUSY_TIMEOUT_S},
-                               hide_parameters=True, **({} if memory else pool))  # fmt: skip
+                               hide_parameters=True,
+                               **({} if memory else SQLITE_POOL))  # fmt: skip
         event.listen(engine, "connect", _sqlite_pragmas)
         write_gate.install(engine)
         return engine

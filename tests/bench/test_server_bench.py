@@ -1,6 +1,7 @@
 """The server benchmark runs (two phones, no think time, a two-second hold): every phone
-submission of a whole session reaches its console socket, with the phone's own socket open,
-against the real server and the baseline alike; and its goals fail on any error."""
+submission of a whole session reaches its console socket, as its event and then as the
+console state the wizard sees, with the phone's own socket open, against the real server
+and, at the same moment, the baseline app; and its goals fail on any error."""
 
 from __future__ import annotations
 
@@ -49,6 +50,8 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
         assert scenario["errors"] == {}
         assert scenario["dropped_sockets"] == {}
         assert scenario["update_p99_ms"] > 0
+        assert scenario["state_p99_ms"] >= scenario["update_p99_ms"]  # the state comes after
+        assert scenario["submissions"] > 0
         assert scenario["server_cpu_ms_per_submission"] >= 0  # clock ticks: a burst of 2 may be 0
     assert real["think_paced"]["server_cpu_ms_per_submission"] > 0  # two sessions cost CPU
     for hold in (real["hold"], baseline["hold"]):
@@ -56,12 +59,14 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
         assert hold["sockets_opened"] >= 4  # a phone socket and a console socket per phone
         assert hold["submissions"] > 0
         assert hold["update_p99_ms"] > 0
+        assert hold["state_p99_ms"] >= hold["update_p99_ms"]
         assert hold["rss_mib"] > 0
         assert hold["peak_rss_mib"] >= hold["rss_mib"]
         assert hold["errors"] == {}
         assert hold["dropped_sockets"] == {}
     for line in ("think, instant wizard (stress)", "think, human-paced wizard",
-                 "submit -> console update", "server CPU / submission", "hold, 2 phones",
+                 "submit -> console state", "server CPU / submission", "hold, 2 phones",
+                 "same moment", "load average",
                  "server RSS MiB (peak)", "goals:"):  # fmt: skip
         assert line in stdout
 
@@ -75,7 +80,8 @@ def _submissions_per_session() -> int:
 
 
 def _scenario(p99: float, errors: dict[str, int] | None = None) -> dict[str, Any]:
-    return {"update_p99_ms": p99, "errors": errors or {}, "dropped_sockets": {}}
+    return {"update_p99_ms": p99, "state_p99_ms": p99, "errors": errors or {},
+            "dropped_sockets": {}}  # fmt: skip
 
 
 def test_a_goal_fails_on_slow_updates_and_on_an_error_in_any_scenario() -> None:
@@ -116,6 +122,21 @@ def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
     assert split["server_cpu_ms_per_submission"] > 0
     assert "think, paced, phone processes" in stdout
     assert "think p99 <= 50 ms, phones on 1 more process(es)" in report["goals"]["PostgreSQL"]
+
+
+def test_the_goals_judge_the_console_state_and_the_cpu_beside_the_baseline() -> None:
+    """The wizard sees the state, not the event: a fast event with a slow state fails; the
+    burst's CPU per submission is judged against the baseline's of the same moment."""
+    fast = {name: _scenario(10.0) for name in SCENARIOS}
+    late = {**fast, "think_paced": {**_scenario(10.0), "state_p99_ms": 80.0}}
+    assert goals({"SQLite": late}, 0)["SQLite"]["think p99 <= 50 ms (human-paced wizard)"] is False
+    cpu = "burst CPU / submission <= 1.2x baseline"
+    for ours, met in ((11.0, True), (13.0, False)):
+        report = {"SQLite": {**fast, "burst": {**_scenario(10.0),
+                                               "server_cpu_ms_per_submission": ours}},
+                  "SQLite baseline": {"burst": {"server_cpu_ms_per_submission": 10.0}}}  # fmt: skip
+        assert goals(report, 0)["SQLite"][cpu] is met
+    assert cpu not in goals({"SQLite": fast}, 0)["SQLite"]  # no baseline: not judged
 
 
 def test_the_phone_processes_goal_is_checked_when_they_ran() -> None:

@@ -115,7 +115,18 @@ class LiveHub:
         """Deliver ``message`` to the channel's subscribers; safe from any thread."""
         self._on_loop(self._publish_here, channel, message)
 
-    def _on_loop(self, call: Callable[[str, Message], None], channel: str, value: Any) -> None:
+    def publish_all(self, messages: list[tuple[str, Message]]) -> None:
+        """``publish`` each ``(channel, message)`` in one turn of the loop: a subscriber woken
+        by the first finds the others queued (a commit's events reach a console as one
+        batch, whose newest event is the one its retained state is of)."""
+        if messages:
+            self._on_loop(self._publish_each, "", messages)
+
+    def _publish_each(self, _channel: str, messages: list[tuple[str, Message]]) -> None:
+        for channel, message in messages:
+            self._publish_here(channel, message)
+
+    def _on_loop(self, call: Callable[[str, Any], None], channel: str, value: Any) -> None:
         """``call(channel, value)`` on the hub's loop: at once when called there, else in
         the order of calls from any thread (a commit's retained views before its events)."""
         loop = self._loop

@@ -73,11 +73,9 @@ def _after_commit(session: Session) -> None:
     for channel, value in session.info.pop(RETAIN_KEY, {}).items():
         hub.retain(channel, value)
     published: list[Event] = session.info.pop(OUTBOX_KEY, [])
-    for event in published:
-        if event.session_id is not None:
-            hub.publish(
-                session_channel(event.session_id), {"type": "event", "event": to_dict(event)}
-            )
+    # In one turn of the loop: a console gets the commit's events as one batch (issue 34).
+    hub.publish_all([(session_channel(event.session_id), {"type": "event", "event": to_dict(event)})
+                     for event in published if event.session_id is not None])  # fmt: skip
     for session_id in session.info.pop(RESYNC_KEY, []):
         hub.forget(session_channel(session_id))
         hub.publish(session_channel(session_id), RESYNC)

@@ -37,6 +37,10 @@ def catalogue_for(state: Any, actor: str, language: str | None = None) -> Catalo
     base = _base_catalogue(state, actor)
     if language is None or language == base.profile.language:
         return base
+    kept: dict[tuple[str, str], Catalogue] = getattr(state, "language_catalogues", None) or {}
+    loaded = kept.get((language, actor))
+    if loaded is not None:  # without the lock: the event loop asks too (is_loaded)
+        return loaded
     root = prompts_root(state.settings)
     with _LOCK:
         cache: dict[tuple[str, str], Catalogue] | None = getattr(state, "language_catalogues", None)
@@ -58,10 +62,26 @@ def missing_in_language(state: Any, actor: str, language: str) -> list[str]:
     return missing_groups(base, catalogue_for(state, actor, language))
 
 
+def is_loaded(state: Any, actor: str, language: str | None = None) -> bool:
+    """Whether ``catalogue_for(state, actor, language)`` would answer from memory (no file
+    read, no lock held by a loading thread): the event loop may then ask it itself."""
+    ready: dict[str, Catalogue] = getattr(state, "prompt_catalogues", None) or {}
+    base = ready.get(actor) or (getattr(state, "wizard_catalogues", None) or {}).get(actor)
+    if base is None:
+        return False
+    if language is None or language == base.profile.language:
+        return True
+    return (language, actor) in (getattr(state, "language_catalogues", None) or {})
+
+
 def _base_catalogue(state: Any, actor: str) -> Catalogue:
     ready: dict[str, Catalogue] | None = getattr(state, "prompt_catalogues", None)
     if ready is not None and actor in ready:
         return ready[actor]
+    cached: dict[str, Catalogue] = getattr(state, "wizard_catalogues", None) or {}
+    loaded = cached.get(actor)
+    if loaded is not None:  # without the lock, which a thread loading another may hold
+        return loaded
     with _LOCK:
         cache: dict[str, Catalogue] | None = getattr(state, "wizard_catalogues", None)
         if cache is None:

@@ -19,7 +19,7 @@ from chameleons.backend.sessions.flow import load as load_flow
 from chameleons.backend.sessions.snapshot import committed, session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.backend.wizard import layout
-from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for
+from chameleons.backend.wizard.catalogues import MissingCatalogueError, catalogue_for, is_loaded
 
 TIMELINE_LIMIT = 5000
 
@@ -46,9 +46,37 @@ def console_state(
         snapshot = committed(hub, session_id, newest, base_url, phones)
     if snapshot is None:
         snapshot = session_snapshot(load_flow(db, session_id, lock=False), base_url, phones)
+    state = _around(app_state, snapshot)
+    if new_events is None:
+        timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
+        state["events"] = [events.to_dict(event) for event in timeline]
+        state["last_event_id"] = timeline[-1].id if timeline else 0
+        return state
+    return _with_delta(state, new_events)
+
+
+def committed_console_state(
+    app_state: Any, session_id: int, base_url: str, new_events: list[dict[str, Any]]
+) -> dict[str, Any] | None:
+    """``console_state`` after ``new_events`` without the database, when the live hub keeps
+    the state their commit made (``committed``) and its prompts are in memory: the event
+    loop builds it at once, without a trip through the thread pool (issue 34). None
+    otherwise: the caller reads it in a thread (``console_state``)."""
+    if not new_events:
+        return None
+    hub: LiveHub = app_state.live_hub
+    newest = max(int(event["id"]) for event in new_events)
+    snapshot = committed(hub, session_id, newest, base_url, devices.phones(hub, session_id))
+    if snapshot is None or not _prompts_in_memory(app_state, snapshot):
+        return None
+    return _with_delta(_around(app_state, snapshot), new_events)
+
+
+def _around(app_state: Any, snapshot: dict[str, Any]) -> dict[str, Any]:
+    """The console's state around the session's snapshot, without its timeline."""
     position = prompt_position(snapshot)
     groups, missing = _suggestion_prompts(app_state, snapshot, position)
-    state: dict[str, Any] = {
+    return {
         "session": snapshot,
         "prompt_position": position,
         "suggestion_prompts": groups,
@@ -56,14 +84,26 @@ def console_state(
         "suggestion_missing": missing,
         "worker": {"bridge": getattr(app_state, "bridge", None) is not None},
     }
-    if new_events is None:
-        timeline = events.for_session(db, session_id, limit=TIMELINE_LIMIT)
-        state["events"] = [events.to_dict(event) for event in timeline]
-        state["last_event_id"] = timeline[-1].id if timeline else 0
-    else:
-        state["events"] = sorted(new_events, key=lambda event: int(event["id"]))
-        state["events_delta"] = True
+
+
+def _with_delta(state: dict[str, Any], new_events: list[dict[str, Any]]) -> dict[str, Any]:
+    state["events"] = sorted(new_events, key=lambda event: int(event["id"]))
+    state["events_delta"] = True
     return state
+
+
+def _pending(snapshot: dict[str, Any], position: int) -> tuple[Any, Any]:
+    interaction = next(i for i in snapshot["interactions"] if i["position"] == position)
+    pending = next((s for s in interaction["suggestions"] if s["accepted"] is None), None)
+    return interaction, pending
+
+
+def _prompts_in_memory(app_state: Any, snapshot: dict[str, Any]) -> bool:
+    """The snapshot's suggestion prompts need no catalogue, or one already loaded."""
+    interaction, pending = _pending(snapshot, prompt_position(snapshot))
+    if pending is None or interaction["state"] != "negotiation":
+        return True
+    return is_loaded(app_state, interaction["actor"], snapshot.get("language"))
 
 
 def prompt_position(snapshot: dict[str, Any]) -> int:
@@ -82,8 +122,7 @@ def _suggestion_prompts(
     """Groups phrasing the pending suggestion of ``position``, best first, and when there
     is none the sentence naming the prompt the catalogue lacks (the wizard must not word a
     suggestion himself)."""
-    interaction = next(i for i in snapshot["interactions"] if i["position"] == position)
-    pending = next((s for s in interaction["suggestions"] if s["accepted"] is None), None)
+    interaction, pending = _pending(snapshot, position)
     if pending is None or interaction["state"] != "negotiation":
         return [], None
     language = snapshot.get("language")

@@ -3,9 +3,12 @@
 On connect ``{"type": "console", ...}`` (the whole console state); then, per batch of
 committed changes, each new event as ``{"type": "event", ...}`` followed by a fresh console
 state whose timeline holds only that batch's events (``events_delta``; the whole timeline
-again after a ``resync``); and once a second the robot's health as
-``{"type": "health", ...}``. When the session is deleted (its participant withdrawn),
-``{"type": "gone"}`` and the socket closes.
+again after a ``resync``); and the robot's health as ``{"type": "health", ...}`` on connect
+and then only when it changed (looked at once a second, the rate a person reads the strip:
+a failing check's ``failing_for`` and the heartbeat's ``speaking_age_s`` grow with the clock
+alone and do not count as a change; the console adds the time since the message). When
+the session is deleted (its participant withdrawn), ``{"type": "gone"}`` and the socket
+closes.
 """
 
 from __future__ import annotations
@@ -27,11 +30,11 @@ from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
 from chameleons.backend.wizard import health, typed_speech, worker_link
-from chameleons.backend.wizard.console_state import console_state
+from chameleons.backend.wizard.console_state import committed_console_state, console_state
 from chameleons.backend.wizard.playback import read
 
 router = make_router(tags=["wizard"])
-HEALTH_INTERVAL_SECONDS = 1.0
+HEALTH_INTERVAL_SECONDS = 1.0  # how often the health is looked at (sent only when changed)
 UNAUTHORIZED = 4401
 NOT_FOUND = 4404
 
@@ -117,6 +120,11 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
                 # Shielded: a read cut off by a disconnect still finishes (and gives its
                 # database connection back) before the handler returns.
                 new_events = _new_events(messages)
+                # The state the change committed, kept by the hub: built here at once.
+                known = committed_console_state(state, session_id, base_url, new_events or [])
+                if known is not None:
+                    await sender.send({"type": "console", **known})
+                    continue
                 reading = asyncio.ensure_future(
                     run_in_threadpool(
                         read, state, _state_message, state, session_id, base_url, new_events
@@ -176,8 +184,21 @@ def display_presence(state: Any, booth: str) -> tuple[bool, str] | None:
     return presence(booth) if callable(presence) else (False, "no robot display open")
 
 
+def health_content(snapshot: Message) -> Message:
+    """What a health message says apart from the clock: the snapshot without the durations
+    that grow by themselves (``failing_for`` of each check, ``speaking_age_s``), which the
+    console extrapolates from the message's arrival."""
+    checks = [{k: v for k, v in check.items() if k != "failing_for"}
+              for check in snapshot.get("checks", [])]  # fmt: skip
+    return {**{k: v for k, v in snapshot.items() if k != "speaking_age_s"}, "checks": checks}
+
+
 async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
+    """The booth's health now, then whenever it changes (looked at once a second): an
+    unchanged health sends nothing (it was a push to every console every second, about 12 %
+    of a busy server's CPU, issue 34)."""
     tracker = health.tracker_of(state)
+    last: Message | None = None
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
         while True:
             bridge = worker_link.bridge_of(state)
@@ -188,5 +209,8 @@ async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
             snapshot = tracker.snapshot(booth, telemetry, age, display=display,
                                         synthesiser=synthesiser)  # fmt: skip
             snapshot["bridge"] = bridge is not None
-            await sender.send(snapshot)
+            content = health_content(snapshot)
+            if content != last:
+                await sender.send(snapshot)
+                last = content
             await asyncio.sleep(HEALTH_INTERVAL_SECONDS)

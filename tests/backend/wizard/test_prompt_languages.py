@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from chameleons.backend.wizard.catalogues import catalogue_for, missing_in_language
+from chameleons.backend.wizard.catalogues import catalogue_for, is_loaded, missing_in_language
 from chameleons.prompts import load_catalogue
 from chameleons.prompts.languages import catalogue_languages
 from tests.backend.wizard.conftest import api
@@ -102,3 +102,17 @@ def test_typed_speech_of_a_swedish_session_uses_the_actors_swedish_voice(pi: Sta
     voice = load_catalogue(PROMPTS / "sv" / wizard.interaction(1)["actor"]).profile.voice
     key = json.dumps({"voice": dict(voice), "text": text}, sort_keys=True)
     assert played["payload"]["audio_digest"] == hashlib.sha256(key.encode()).hexdigest()[:24]
+
+
+def test_is_loaded_says_when_a_catalogue_answers_from_memory(tmp_path: Path) -> None:
+    """The event loop builds a console's state itself only when its prompts need no file
+    read (issue 34): ``is_loaded`` is false until the catalogue of that language is loaded."""
+    state = app_state(partial_language(tmp_path))
+    assert not is_loaded(state, "f1")
+    english = catalogue_for(state, "f1")
+    assert is_loaded(state, "f1")
+    assert is_loaded(state, "f1", english.profile.language)  # the base catalogue's language
+    assert not is_loaded(state, "f1", "de")
+    catalogue_for(state, "f1", "de")
+    assert is_loaded(state, "f1", "de")
+    assert not is_loaded(state, "m1")

@@ -423,6 +423,7 @@ const feed = connectLive(sessionId, {
     location.assign(`/login?next=${encodeURIComponent(location.pathname)}`);
   },
   onMessage(message) {
+    health.heard();
     if (message.type === "gone") showGone();
     else if (message.type === "console") {
       liveStates += 1;

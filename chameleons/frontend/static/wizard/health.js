@@ -7,10 +7,14 @@
 // heartbeat, the server's relay) and lagged the robot display by 1.5-2 s. Whichever is
 // newer wins: an event that arrived after the worker sampled the flag, else the flag
 // (which also covers an end that never came as an event).
+//
+// The server sends the health when it changes, not every second (issue 34): a failing
+// check's duration grows here from the message's arrival, and silence is judged from the
+// link (any message, the pongs of live.js's 5 s pings included), not from health messages.
 
 import { el, seconds } from "./dom.js";
 
-const SILENT_AFTER_MS = 3500;
+const SILENT_AFTER_MS = 8000; // pongs come every 5 s
 const STATES = { ok: "ok", unknown: "unknown", degraded: "degraded", alarm: "bad" };
 // The robot refused or never answered the login: the worker waits for the wizard's retry.
 const LOGIN_FAILED = /^login /;
@@ -26,7 +30,8 @@ export class HealthStrip {
     this.onRetry = onRetry;
     // The capture accepts one phone: offer to pair afresh when another phone is sending.
     this.onPair = onPair;
-    this.lastAt = 0;
+    this.lastAt = 0; // the last health message
+    this.heardAt = 0; // the last message of any kind on the console's socket
     this.mismatchSince = null;
     this.message = null;
     this.expected = null;
@@ -46,8 +51,14 @@ export class HealthStrip {
     return Boolean(chip && chip.dataset.speaking === "true");
   }
 
+  /** Any message arrived on the console's socket: the server is there. */
+  heard() {
+    this.heardAt = Date.now();
+  }
+
   update(message, expectedBehaviour) {
     this.lastAt = Date.now();
+    this.heardAt = this.lastAt;
     this.message = message;
     this.expected = expectedBehaviour;
     this.render();
@@ -67,7 +78,10 @@ export class HealthStrip {
     const message = this.message;
     const expectedBehaviour = this.expected;
     const running = message.telemetry && message.telemetry.behaviour;
-    const checks = message.checks.map((check) => (check.id === "speaking" ? this.speakingCheck(check) : check));
+    const elapsed = (Date.now() - this.lastAt) / 1000; // a failing check has failed longer by this
+    const checks = message.checks
+      .map((check) => (check.failing_for == null ? check : { ...check, failing_for: check.failing_for + elapsed }))
+      .map((check) => (check.id === "speaking" ? this.speakingCheck(check) : check));
     const mismatch = Boolean(expectedBehaviour && running && running !== expectedBehaviour);
     if (!mismatch) this.mismatchSince = null;
     else if (!this.mismatchSince) this.mismatchSince = Date.now();
@@ -128,14 +142,18 @@ export class HealthStrip {
   }
 
   silent() {
-    return Boolean(this.lastAt) && Date.now() - this.lastAt >= SILENT_AFTER_MS;
+    return Boolean(this.heardAt) && Date.now() - this.heardAt >= SILENT_AFTER_MS;
   }
 
   checkSilence() {
-    if (!this.silent()) return;
+    if (!this.silent()) {
+      // The server sends no message while nothing changes: a failing check's time ticks here.
+      if (this.message && this.message.checks.some((check) => check.failing_for != null)) this.render();
+      return;
+    }
     this.container.classList.add("failing");
     this.container.replaceChildren(
-      el("div", { class: "alarm", role: "alert", text: `No health data from the server for ${seconds((Date.now() - this.lastAt) / 1000)}.` }),
+      el("div", { class: "alarm", role: "alert", text: `No word from the server for ${seconds((Date.now() - this.heardAt) / 1000)}.` }),
     );
   }
 }
