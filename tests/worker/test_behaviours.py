@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from chameleons.worker.behaviours import (
     available_behaviours,
     create_behaviour,
     register_behaviour,
+    registry,
 )
 from chameleons.worker.behaviours.clips import MotionClip, load_clip
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY, CopyBehaviour
@@ -42,6 +44,20 @@ def test_builtins_are_registered() -> None:
     assert {"still", "natural", "copy"} <= set(available_behaviours())
 
 
+@pytest.fixture
+def registry_restored() -> Iterator[None]:
+    """The test's own behaviour leaves the process-wide registry as it found it: later
+    tests in the same worker (the study's behaviour list, the generated study reference)
+    see only the real behaviours."""
+    before = dict(registry._registry)
+    try:
+        yield
+    finally:
+        registry._registry.clear()
+        registry._registry.update(before)
+
+
+@pytest.mark.usefixtures("registry_restored")
 def test_a_registered_behaviour_is_created_by_name_without_touching_the_router() -> None:
     @register_behaviour("test-constant")
     class Constant(Behaviour):
