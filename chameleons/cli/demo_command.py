@@ -15,7 +15,9 @@ from chameleons.backend.app import create_app
 from chameleons.backend.display.links import current_path
 from chameleons.backend.wizard import typed_speech
 from chameleons.cli.common import load_settings
-from chameleons.cli.embedded import (
+from chameleons.cli.heap import settle_startup_heap
+from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.launch.embedded import (
     DataDirInUseError,
     DemoData,
     FaceSimulatorCues,
@@ -25,10 +27,8 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
-from chameleons.cli.heap import settle_startup_heap
-from chameleons.cli.interrupts import Interrupts, interrupts
-from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
-from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.launch.interrupts import Interrupts, interrupts
+from chameleons.launch.ports import ChosenPorts, PortError, choose_ports
 from chameleons.settings import Settings
 
 
@@ -110,7 +110,7 @@ def demo(host: str | None, port: int | None, simulate_face: bool) -> None:
     """Start the whole system on its embedded default: the server on SQLite with the demo
     study and plan, a local worker driving the virtual robot, and a simulated face."""
     # Ctrl-C and SIGTERM end it with 130 / 143 once the server, its worker and the face
-    # simulator have stopped, whenever they come (chameleons.cli.interrupts).
+    # simulator have stopped, whenever they come (chameleons.launch.interrupts).
     with interrupts() as stops:
         _run(stops, host, port, simulate_face)
 

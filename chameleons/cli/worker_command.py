@@ -11,7 +11,7 @@ from typing import Any
 import click
 
 from chameleons.cli.common import load_settings
-from chameleons.cli.interrupts import interrupts
+from chameleons.launch.interrupts import interrupts
 from chameleons.settings import Settings
 from chameleons.worker import curve
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
