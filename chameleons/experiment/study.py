@@ -15,7 +15,7 @@ import json
 from collections.abc import Mapping
 from dataclasses import asdict, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
@@ -124,12 +124,16 @@ def canonical_json(config: dict[str, Any]) -> str:
 
 # libyaml's parser (PyYAML's C extension) where it is installed: the same safe loader about
 # twenty times faster than the pure-Python one (the default study took about 0.4 s to read,
-# on every study created, every demo and in hundreds of tests).
-_SafeLoader: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+# on every study created, every demo and in hundreds of tests). Not a ternary: type
+# checkers subclass a plain alias only (the C loader's interface is the Python one's).
+if TYPE_CHECKING or not yaml.__with_libyaml__:  # noqa: SIM108
+    _SafeLoader = yaml.SafeLoader
+else:
+    _SafeLoader = yaml.CSafeLoader
 NESTED_TOO_DEEPLY = "nested too deeply: a study needs a few levels, not hundreds"
 
 
-class _DuplicateKeyLoader(_SafeLoader):  # type: ignore[valid-type,misc]
+class _DuplicateKeyLoader(_SafeLoader):
     """A safe loader that records duplicate mapping keys instead of silently keeping the last."""
 
     duplicates: list[str]
