@@ -16,7 +16,9 @@ from chameleons.backend.capture import capture_url
 from chameleons.backend.display.links import current_path
 from chameleons.backend.wizard import typed_speech
 from chameleons.cli.common import load_settings
-from chameleons.cli.embedded import (
+from chameleons.cli.heap import settle_startup_heap
+from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.launch.embedded import (
     DataDirInUseError,
     DemoData,
     FaceSimulatorCues,
@@ -26,10 +28,8 @@ from chameleons.cli.embedded import (
     start_face_simulator,
     stop_process,
 )
-from chameleons.cli.heap import settle_startup_heap
-from chameleons.cli.interrupts import Interrupts, interrupts
-from chameleons.cli.ports import ChosenPorts, PortError, choose_ports
-from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.launch.interrupts import Interrupts, interrupts
+from chameleons.launch.ports import ChosenPorts, PortError, choose_ports
 from chameleons.settings import Settings
 
 
@@ -132,7 +132,7 @@ def demo(host: str | None, port: int | None, simulate_face: bool, webcam: bool) 
     study and plan, a local worker driving the virtual robot, and a simulated face (or,
     with --webcam, the webcam capture page's link)."""
     # Ctrl-C and SIGTERM end it with 130 / 143 once the server, its worker and the face
-    # simulator have stopped, whenever they come (chameleons.cli.interrupts).
+    # simulator have stopped, whenever they come (chameleons.launch.interrupts).
     with interrupts() as stops:
         _run(stops, host, port, simulate_face and not webcam, webcam)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from chameleons.cli.common import load_settings
-from chameleons.cli.interrupts import Interrupts, interrupts
+from chameleons.launch.interrupts import Interrupts, interrupts
 from chameleons.rehearsal import runner
 from chameleons.rehearsal.patterns import PATTERNS
 from chameleons.rehearsal.runner import Options, RehearsalError, Summary, Target

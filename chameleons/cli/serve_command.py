@@ -8,8 +8,8 @@ from chameleons.backend.app import create_app
 from chameleons.backend.migrate import upgrade
 from chameleons.cli.common import load_settings
 from chameleons.cli.heap import settle_startup_heap
-from chameleons.cli.interrupts import interrupts
-from chameleons.cli.web_server import WebServer, run_until_stopped, web_config
+from chameleons.launch.interrupts import interrupts
+from chameleons.launch.web_server import WebServer, run_until_stopped, web_config
 
 STARTUP_FAILURE = 3  # uvicorn's status for a server that did not start (uvicorn.run's)
 

@@ -11,7 +11,7 @@ from typing import cast
 import click
 
 from chameleons.cli.common import load_settings
-from chameleons.cli.lifeline import die_with_parent
+from chameleons.launch.lifeline import die_with_parent
 from chameleons.worker.ingest.livelink import rotation_factor
 from chameleons.worker.simulate import (
     CuedMoves,

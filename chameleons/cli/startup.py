@@ -17,8 +17,8 @@ from typing import Any
 from fastapi import FastAPI
 
 from chameleons.backend.bridge.wiring import WorkerLinkError
-from chameleons.cli.interrupts import Interrupted, Interrupts
-from chameleons.cli.web_server import WebServer, run_until_stopped, web_config
+from chameleons.launch.interrupts import Interrupted, Interrupts
+from chameleons.launch.web_server import WebServer, run_until_stopped, web_config
 from chameleons.settings import Settings
 
 UVICORN_ERRORS = "uvicorn.error"

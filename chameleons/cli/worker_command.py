@@ -12,7 +12,7 @@ import click
 import yaml
 
 from chameleons.cli.common import load_settings
-from chameleons.cli.interrupts import interrupts
+from chameleons.launch.interrupts import interrupts
 from chameleons.settings import Settings
 from chameleons.worker import curve
 from chameleons.worker.behaviours.base import BehaviourError

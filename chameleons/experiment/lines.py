@@ -22,6 +22,11 @@ def line_index(text: str) -> dict[str, int]:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
         return {}
+    return node_lines(root)
+
+
+def node_lines(root: yaml.Node | None) -> dict[str, int]:
+    """:func:`line_index` of an already composed document (None: an empty one)."""
     lines: dict[str, int] = {}
     if root is not None:
         _walk(root, "", lines)

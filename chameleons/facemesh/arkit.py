@@ -13,7 +13,7 @@ cannot be derived, and without irises (the 468-point mesh) neither can the eight
 ``eyeLook*`` channels. They are NaN in :attr:`Expression.blendshapes` and listed in
 :attr:`Expression.missing`; recordings keep them NaN, the robot gets 0.
 
-Eye rotation (degrees, the ARKit convention of :mod:`chameleons.worker.ingest.rotation`) is
+Eye rotation (degrees, the ARKit convention of :mod:`chameleons.arkit.rotation`) is
 the iris's offset from the eye's centre in eye widths times :data:`GAZE_DEGREES_PER_WIDTH`
 (an iris a quarter of the eye's width off centre is a 30 degree turn, roughly the eyeball's
 geometry: radius ~12 mm, eye width ~30 mm).
@@ -38,8 +38,8 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 
+from chameleons.arkit.blendshapes import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, N_BLENDSHAPES
 from chameleons.facemesh.features import FEATURE_INDEX, FEATURE_NAMES, GAZE, N_FEATURES
-from chameleons.worker.frames import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, N_BLENDSHAPES
 
 F64Array = npt.NDArray[np.float64]
 NEVER_DERIVED: Final = ("cheekPuff", "jawForward", "tongueOut")

@@ -15,7 +15,7 @@ Output: the pose of the canonical face in the camera's frame (+x right, +y up, t
 looking along -z; the canonical face looks along +z, so a face looking into the camera has
 the identity rotation), and the landmarks moved back into the canonical face's frame (cm),
 where expression features are measured free of head pose. Angles follow
-:mod:`chameleons.worker.ingest.rotation` (the ARKit face frame): yaw > 0 turns the nose to
+:mod:`chameleons.arkit.rotation` (the ARKit face frame): yaw > 0 turns the nose to
 the image's right (the subject's left, in an image that is not mirrored), pitch > 0 tips
 the chin down, roll > 0 lifts the image-right side of the head.
 
@@ -31,8 +31,8 @@ from functools import cache
 import numpy as np
 import numpy.typing as npt
 
+from chameleons.arkit.rotation import yaw_pitch_roll
 from chameleons.facemesh.assets import canonical_mesh
-from chameleons.worker.ingest.rotation import yaw_pitch_roll
 
 F64Array = npt.NDArray[np.float64]
 MESH_POINTS = 468

@@ -27,9 +27,9 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
+from chameleons.arkit.blendshapes import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, N_BLENDSHAPES
 from chameleons.facemesh.arkit import NEVER_DERIVED, LinearMap, geometric_map
 from chameleons.facemesh.features import FEATURE_NAMES, N_FEATURES
-from chameleons.worker.frames import BLENDSHAPE_INDEX, BLENDSHAPE_NAMES, N_BLENDSHAPES
 
 F64Array = npt.NDArray[np.float64]
 LAMBDAS: Final = (0.01, 0.1, 1.0, 10.0, 100.0)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from pathlib import Path
 
+from chameleons.locations import actor_directories as actor_directories
 from chameleons.prompts.catalogue import Catalogue
 from chameleons.prompts.manifest import (
     ACTOR_PROFILE_NAME,
@@ -79,19 +80,6 @@ def load_catalogues(
     if problems:
         raise CatalogueError(problems)
     return catalogues
-
-
-def actor_directories(root: Path) -> list[Path]:
-    """Sub-directories of ``root`` holding a manifest, sorted; ``_``/``.`` names are skipped."""
-    if not root.is_dir():
-        return []
-    return sorted(
-        path
-        for path in root.iterdir()
-        if path.is_dir()
-        and not path.name.startswith(("_", "."))
-        and (path / MANIFEST_NAME).is_file()
-    )
 
 
 def _load_prompts(

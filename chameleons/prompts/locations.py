@@ -1,68 +1,23 @@
-"""Where files live on this machine, for paths that cross from the server to a worker.
+"""Where files live on this machine: :mod:`chameleons.locations`, re-exported here.
 
-The server and a worker may run on different machines, each with its own install: an
-absolute server path means nothing on a booth PC. So the server names a shipped prompt file
-relative to the prompts folder (``"prompts:_natural/demo-natural.npz"``) and a recording
-relative to the data directory (``"data:recordings/study-1/..."``; production shares the
-recordings volume at the same relative place), and each side resolves the marker against
-its own folders with :func:`resolve_marked_path`. Unmarked paths are used as they are.
-
-Pure path logic, no server imports: both the server and the worker import it.
+The worker resolves marked paths too, and the worker sits below the prompt catalogue (whose
+importer reads the worker's takes), so the path logic lives at the bottom of the layers.
 """
 
-from __future__ import annotations
+from chameleons.locations import (
+    DATA_MARKER,
+    PROMPTS_MARKER,
+    REPOSITORY_PROMPTS,
+    marked_path,
+    prompts_root,
+    resolve_marked_path,
+)
 
-from pathlib import Path
-from typing import Any
-
-from chameleons.prompts.loader import actor_directories
-
-REPOSITORY_PROMPTS = Path(__file__).resolve().parents[2] / "prompts"
-PROMPTS_MARKER = "prompts:"
-DATA_MARKER = "data:"
-
-
-def prompts_root(settings: Any) -> Path:
-    """The prompts folder in use: ``settings.prompts_dir`` when set, else
-    ``<data_dir>/prompts`` when it holds actors, else the repository's ``prompts/``."""
-    configured = getattr(settings, "prompts_dir", None)
-    if configured:
-        return Path(configured)
-    data_dir = getattr(settings, "data_dir", None)
-    if data_dir is not None and actor_directories(Path(data_dir) / "prompts"):
-        return Path(data_dir) / "prompts"
-    return REPOSITORY_PROMPTS
-
-
-def _relative_to(path: Path, root: Path) -> str | None:
-    try:
-        return path.resolve().relative_to(root.resolve()).as_posix()
-    except ValueError:
-        return None
-
-
-def marked_path(path: Path, settings: Any) -> str:
-    """``path`` as a worker on another machine can find it: marked relative to the prompts
-    folder (in use, else the repository's) or the data directory, else absolute."""
-    for marker, root in (
-        (PROMPTS_MARKER, prompts_root(settings)),
-        (PROMPTS_MARKER, REPOSITORY_PROMPTS),
-        (DATA_MARKER, Path(getattr(settings, "data_dir", None) or "data")),
-    ):
-        relative = _relative_to(path, root)
-        if relative is not None:
-            return marker + relative
-    return str(path.resolve())
-
-
-def resolve_marked_path(value: str, settings: Any) -> Path:
-    """The local file a (possibly marked) path names. A ``prompts:`` file missing from the
-    prompts folder in use falls back to the repository's (the shipped demo clip)."""
-    if value.startswith(PROMPTS_MARKER):
-        relative = value.removeprefix(PROMPTS_MARKER)
-        in_use = prompts_root(settings) / relative
-        return in_use if in_use.exists() else REPOSITORY_PROMPTS / relative
-    if value.startswith(DATA_MARKER):
-        data_dir = Path(getattr(settings, "data_dir", None) or "data")
-        return data_dir / value.removeprefix(DATA_MARKER)
-    return Path(value)
+__all__ = [
+    "DATA_MARKER",
+    "PROMPTS_MARKER",
+    "REPOSITORY_PROMPTS",
+    "marked_path",
+    "prompts_root",
+    "resolve_marked_path",
+]

@@ -12,7 +12,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-MANIFEST_NAME = "manifest.csv"
+from chameleons.locations import MANIFEST_NAME as MANIFEST_NAME
+
 ACTOR_PROFILE_NAME = "actor.yaml"
 MANIFEST_COLUMNS: tuple[str, ...] = (
     "id", "stage", "group", "text", "task", "item", "other_item", "robot_name", "audio",

@@ -32,17 +32,17 @@ from chameleons.backend.db import build_engine, build_sessionmaker
 from chameleons.backend.migrate import upgrade
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.studies import service as studies
-from chameleons.cli.embedded import (
+from chameleons.experiment.study import load_default_study, study_from_config
+from chameleons.launch.embedded import (
     DEMO_PARTICIPANTS,
     DEMO_PLAN_SEED,
     demo_settings,
     start_face_simulator,
     stop_process,
 )
-from chameleons.cli.interrupts import Interrupts
-from chameleons.cli.ports import free_port
-from chameleons.cli.web_server import WebServer, web_config
-from chameleons.experiment.study import load_default_study, study_from_config
+from chameleons.launch.interrupts import Interrupts
+from chameleons.launch.ports import free_port
+from chameleons.launch.web_server import WebServer, web_config
 from chameleons.rehearsal.runner import RehearsalError, Target
 from chameleons.settings import Settings
 

@@ -25,19 +25,18 @@ import sys
 import tempfile
 import threading
 import uuid
+from collections.abc import Mapping
 from functools import partial
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import zmq
 
 from chameleons.worker.drivers import DriverOptions, Publish, create_driver
 from chameleons.worker.render_stage import RendererStage
+from chameleons.worker.renderer import RenderConfig
 from chameleons.worker.stage import Endpoints
-
-if TYPE_CHECKING:
-    from chameleons.worker.runtime import WorkerConfig
 
 log = logging.getLogger(__name__)
 START_TIMEOUT = 60.0  # a spawned child imports NumPy, SciPy and ZeroMQ before its first tick
@@ -46,7 +45,33 @@ REALTIME_PRIORITY = 10  # low among real-time priorities: above every normal pro
 GIL_SWITCH_INTERVAL = 0.0005
 
 
-def make_driver(config: WorkerConfig, publish: Publish) -> Any:
+class RendererProcessConfig(Protocol):
+    """What the child needs of the worker's configuration (``runtime.WorkerConfig`` has it):
+    the robot driver's options, the renderer's, and the child's scheduling wishes. The
+    runtime starts this process, so this module names what it reads rather than importing
+    the runtime back."""
+
+    @property
+    def booth(self) -> str: ...
+    @property
+    def driver(self) -> str: ...
+    @property
+    def robot_url(self) -> str: ...
+    @property
+    def robot_key(self) -> str | None: ...
+    @property
+    def furhat_faces(self) -> Mapping[str, str]: ...
+    @property
+    def data_dir(self) -> Path: ...
+    @property
+    def render(self) -> RenderConfig: ...
+    @property
+    def renderer_realtime(self) -> bool: ...
+    @property
+    def renderer_cpu(self) -> int | None: ...
+
+
+def make_driver(config: RendererProcessConfig, publish: Publish) -> Any:
     options = DriverOptions(booth=config.booth, robot_url=config.robot_url,
                             robot_key=config.robot_key,
                             record_path=config.data_dir / f"driver-{config.booth}.jsonl",
@@ -106,7 +131,7 @@ class RendererProcess:
 
     name = "renderer"
 
-    def __init__(self, config: WorkerConfig, endpoints: Endpoints) -> None:
+    def __init__(self, config: RendererProcessConfig, endpoints: Endpoints) -> None:
         spawn = multiprocessing.get_context("spawn")  # no copy of this process's threads
         ready_reader, ready_writer = spawn.Pipe(duplex=False)
         stop_reader, self._stop_writer = spawn.Pipe(duplex=False)
@@ -135,7 +160,10 @@ class RendererProcess:
 
 
 def _child_main(
-    config: WorkerConfig, endpoints: Endpoints, stop_reader: Connection, ready_writer: Connection
+    config: RendererProcessConfig,
+    endpoints: Endpoints,
+    stop_reader: Connection,
+    ready_writer: Connection,
 ) -> None:
     # A terminal's Ctrl-C reaches the whole process group: the worker stops this process
     # through the pipe, in order, rather than have it die with a traceback first.

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from chameleons.cli.embedded import DEMO_MAX_JITTER_P99_MS, demo_settings
+from chameleons.launch.embedded import DEMO_MAX_JITTER_P99_MS, demo_settings
 from chameleons.settings import Settings
 
 

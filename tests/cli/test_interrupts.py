@@ -1,4 +1,4 @@
-"""The commands' one owner of SIGINT and SIGTERM (chameleons.cli.interrupts), with real
+"""The commands' one owner of SIGINT and SIGTERM (chameleons.launch.interrupts), with real
 signals to this process and a real uvicorn server in this thread, in each order the signal
 can meet the server: before it starts, while its application starts, once it serves. And a
 signal whose exception Python loses in a finalizer still ends the command with 130."""
@@ -17,8 +17,8 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 
-from chameleons.cli.interrupts import Interrupted, Interrupts, interrupts
-from chameleons.cli.web_server import WebServer, run_until_stopped, web_config
+from chameleons.launch.interrupts import Interrupted, Interrupts, interrupts
+from chameleons.launch.web_server import WebServer, run_until_stopped, web_config
 from chameleons.settings import Settings
 
 pytestmark = pytest.mark.skipif(

@@ -17,8 +17,8 @@ import pytest
 from fastapi import FastAPI
 
 from chameleons.cli.common import load_settings
-from chameleons.cli.interrupts import Interrupts
 from chameleons.cli.startup import QuietStartup, StartupError, serve
+from chameleons.launch.interrupts import Interrupts
 from chameleons.settings import Settings
 
 SETTINGS = Settings(_env_file=None)

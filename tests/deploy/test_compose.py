@@ -15,7 +15,7 @@ import yaml
 from fastapi import FastAPI
 
 from chameleons.cli.main import cli
-from chameleons.cli.web_server import web_config
+from chameleons.launch.web_server import web_config
 from chameleons.settings import InsecureSettingsError, Settings
 
 ROOT = Path(__file__).resolve().parents[2]

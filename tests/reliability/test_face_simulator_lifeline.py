@@ -14,7 +14,7 @@ from pathlib import Path
 DEADLINE = 120.0
 PARENT = """
 import sys, time
-from chameleons.cli.embedded import start_face_simulator
+from chameleons.launch.embedded import start_face_simulator
 from chameleons.settings import Settings
 child = start_face_simulator(Settings(_env_file=None), port=int(sys.argv[1]))
 print(child.pid, flush=True)

@@ -7,21 +7,24 @@ for the participants table). Declining ends the session at once, politely: the s
 the refusal is kept: the consent page comes before every question, so there are no
 answers, and the timeline only says that the phone connected and consent was declined.
 The participant's plan row is freed for the next participant, as nothing of it ran.
+
+What a pending session waits for (consent, the ``before`` questionnaires) is the flow's to
+say, as its allowed actions ask it: ``waiting_before_start`` and ``BEFORE_POSITION`` live in
+:mod:`.flow` and are re-exported here.
 """
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
 
-from sqlalchemy import select
-
-from chameleons.backend.models import Event, QuestionnaireResponse
+from chameleons.backend.models import Event
+from chameleons.backend.sessions.flow import BEFORE_POSITION as BEFORE_POSITION
 from chameleons.backend.sessions.flow import Flow
+from chameleons.backend.sessions.flow import waiting_before_start as waiting_before_start
 from chameleons.backend.studies.errors import ConflictError, GoneError
 from chameleons.i18n import N_
 
 CONSENT_DECLINED = "consent_declined"
-BEFORE_POSITION = -1  # questionnaires answered before the interactions (demographics)
 
 
 def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
@@ -50,18 +53,3 @@ def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
     flow.participant.plan_row_id = None
     flow.db.flush()
     return flow.log("consent.declined", source="participant", client_id=client_id, payload=payload)
-
-
-def waiting_before_start(flow: Flow) -> str | None:
-    """What the session waits for before the wizard may start it: ``consent``, the
-    ``before`` questionnaires (demographics), or nothing (None)."""
-    if flow.spec.procedure.consent is not None and flow.session.consent_at is None:
-        return "consent"
-    needed = {q.id for q in flow.spec.questionnaires_for("before")}
-    if not needed:
-        return None
-    query = select(QuestionnaireResponse.questionnaire).where(
-        QuestionnaireResponse.session_id == flow.session.id,
-        QuestionnaireResponse.position == BEFORE_POSITION,
-    )
-    return None if needed <= set(flow.db.scalars(query)) else "before"

@@ -17,7 +17,14 @@ from sqlalchemy.orm import Session
 
 from chameleons.backend.db import is_read_only, write_transaction
 from chameleons.backend.events import repository as events
-from chameleons.backend.models import Event, Interaction, Participant, PlanRow, Suggestion
+from chameleons.backend.models import (
+    Event,
+    Interaction,
+    Participant,
+    PlanRow,
+    QuestionnaireResponse,
+    Suggestion,
+)
 from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions.states import (
@@ -30,6 +37,8 @@ from chameleons.backend.studies.errors import ConflictError, InvalidInputError, 
 from chameleons.backend.studies.specs import spec_of
 from chameleons.experiment.model import Study
 from chameleons.i18n import N_
+
+BEFORE_POSITION = -1  # questionnaires answered before the interactions (demographics)
 
 # Statements that every request and live update runs, built once with bound parameters:
 # building one and its cache key took about 90 microseconds a call, a few per cent of the
@@ -204,8 +213,6 @@ def allowed_actions(flow: Flow, now: datetime | None = None) -> list[Action]:
     if flow.session.paused_at is not None and state not in ("complete", "ended"):
         return [{"action": "resume"}]  # (ending early stays possible, as from any state)
     if state == "pending":
-        from chameleons.backend.sessions.consent import waiting_before_start
-
         waiting = waiting_before_start(flow)
         return [{"action": "wait", "for": waiting}] if waiting else [{"action": "start"}]
     if state == "final_questionnaire":
@@ -251,3 +258,18 @@ def _negotiation_actions(flow: Flow, current: Interaction, now: datetime) -> lis
                 }
             )
     return actions
+
+
+def waiting_before_start(flow: Flow) -> str | None:
+    """What the session waits for before the wizard may start it: ``consent``, the
+    ``before`` questionnaires (demographics), or nothing (None)."""
+    if flow.spec.procedure.consent is not None and flow.session.consent_at is None:
+        return "consent"
+    needed = {q.id for q in flow.spec.questionnaires_for("before")}
+    if not needed:
+        return None
+    query = select(QuestionnaireResponse.questionnaire).where(
+        QuestionnaireResponse.session_id == flow.session.id,
+        QuestionnaireResponse.position == BEFORE_POSITION,
+    )
+    return None if needed <= set(flow.db.scalars(query)) else "before"

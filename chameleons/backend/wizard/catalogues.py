@@ -1,5 +1,10 @@
 """Where the console finds the prompt catalogues, loaded once per app and cached.
 
+Loading validates every row and looks up every file it names (about 0.1 s an actor). A
+folder's catalogue is also kept for the process, keyed by the folder and the name, size and
+modification time of everything in it: a new app (a test, a restarted server in the same
+process) reuses it, and any change in the folder reads it again.
+
 The lead may put ready catalogues on ``app.state.prompt_catalogues`` (actor -> Catalogue);
 otherwise they are loaded from ``settings.prompts_dir`` when that setting exists, else from
 ``<data_dir>/prompts`` when it holds actors, else from the repository's ``prompts/``.
@@ -9,6 +14,7 @@ the console then offers only the prompts recorded in that language.
 
 from __future__ import annotations
 
+import os
 import threading
 from pathlib import Path
 from typing import Any
@@ -25,6 +31,8 @@ __all__ = [
     "prompts_root",
 ]
 _LOCK = threading.Lock()
+_LOADED: dict[tuple[str, str | None], tuple[tuple[tuple[str, int, int], ...], Catalogue]] = {}
+_LOADED_LOCK = threading.Lock()
 
 
 class MissingCatalogueError(LookupError):
@@ -91,11 +99,35 @@ def _base_catalogue(state: Any, actor: str) -> Catalogue:
         return cache[actor]
 
 
+def _fingerprint(directory: Path) -> tuple[tuple[str, int, int], ...]:
+    """Every file and folder under ``directory``: relative path, size, modification time."""
+    found = []
+    for folder, folders, files in os.walk(directory):
+        folders.sort()
+        for name in sorted(files) + folders:
+            path = os.path.join(folder, name)
+            try:
+                info = os.stat(path)
+            except OSError:
+                continue  # removed while walking: the next load sees the change
+            found.append((os.path.relpath(path, directory), info.st_size, info.st_mtime_ns))
+    return tuple(found)
+
+
 def _load(directory: Path, actor: str, language_folder: str | None = None) -> Catalogue:
+    key = (str(directory.resolve()), language_folder)
+    fingerprint = _fingerprint(directory)
+    with _LOADED_LOCK:
+        loaded = _LOADED.get(key)
+    if loaded is not None and loaded[0] == fingerprint:
+        return loaded[1]
     try:
-        return load_catalogue(directory, language_folder=language_folder)
+        catalogue = load_catalogue(directory, language_folder=language_folder)
     except CatalogueError as error:
         raise MissingCatalogueError(
             f"The prompt catalogue of actor {actor!r} in {directory} cannot be used: "
             + "; ".join(error.problems[:3])
         ) from error
+    with _LOADED_LOCK:
+        _LOADED[key] = (fingerprint, catalogue)
+    return catalogue

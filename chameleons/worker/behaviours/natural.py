@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from chameleons.prompts.locations import resolve_marked_path
+from chameleons.locations import resolve_marked_path
 from chameleons.worker.behaviours.base import (
     NO_INPUT,
     VECTOR_SIZE,

@@ -27,8 +27,8 @@ from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions import service as sessions
 from chameleons.backend.sessions.flow import load as load_flow
 from chameleons.backend.studies import service as studies
-from chameleons.cli.lifeline import child_env
 from chameleons.experiment.study import load_default_study
+from chameleons.launch.lifeline import child_env
 from chameleons.settings import Settings
 
 DEMO_USERS = (("pi", "pi"), ("wizard", "wizard"))

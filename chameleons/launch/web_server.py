@@ -11,7 +11,7 @@ from typing import Any
 import uvicorn
 from fastapi import FastAPI
 
-from chameleons.cli.interrupts import Interrupts
+from chameleons.launch.interrupts import Interrupts
 from chameleons.settings import Settings
 
 
