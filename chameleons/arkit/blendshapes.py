@@ -22,3 +22,10 @@ BLENDSHAPE_NAMES: tuple[str, ...] = (
 )  # fmt: skip
 N_BLENDSHAPES = len(BLENDSHAPE_NAMES)
 BLENDSHAPE_INDEX: dict[str, int] = {name: i for i, name in enumerate(BLENDSHAPE_NAMES)}
+
+# Live Link Face's other channels after the 52 (protocols.md section 1): the head's and the
+# eyes' rotations.
+HEAD_NAMES: tuple[str, ...] = ("HeadYaw", "HeadPitch", "HeadRoll")
+EYE_NAMES: tuple[str, ...] = (
+    "LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll", "RightEyeYaw", "RightEyePitch", "RightEyeRoll",
+)  # fmt: skip

@@ -21,7 +21,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from chameleons.worker.frames import BLENDSHAPE_NAMES, EYE_NAMES, HEAD_NAMES
+from chameleons.arkit.blendshapes import BLENDSHAPE_NAMES, EYE_NAMES, HEAD_NAMES
 
 FACE_TYPE = "Face"
 MARKERS_TYPE = "Markers"

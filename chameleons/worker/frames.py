@@ -14,14 +14,12 @@ import numpy.typing as npt
 
 from chameleons.arkit.blendshapes import BLENDSHAPE_INDEX as BLENDSHAPE_INDEX
 from chameleons.arkit.blendshapes import BLENDSHAPE_NAMES as BLENDSHAPE_NAMES
+from chameleons.arkit.blendshapes import EYE_NAMES as EYE_NAMES
+from chameleons.arkit.blendshapes import HEAD_NAMES as HEAD_NAMES
 from chameleons.arkit.blendshapes import N_BLENDSHAPES as N_BLENDSHAPES
 
 F32Array = npt.NDArray[np.float32]
 
-HEAD_NAMES = ("HeadYaw", "HeadPitch", "HeadRoll")
-EYE_NAMES = (
-    "LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll", "RightEyeYaw", "RightEyePitch", "RightEyeRoll",
-)  # fmt: skip
 # Mouth and jaw channels: lip-sync owns these while the robot speaks.
 MOUTH_JAW_INDICES: tuple[int, ...] = tuple(
     i for i, n in enumerate(BLENDSHAPE_NAMES) if n.startswith(("mouth", "jaw"))

@@ -10,9 +10,12 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
-from chameleons.backend.analysis.plots import BOX_COLOUR, LINE_COLOUR
 from chameleons.backend.models import InstrumentStream
 
+# The analysis page's plot colours (backend/analysis/plots.py), repeated rather than
+# imported: the analysis page shows the coders' agreement from this feature.
+LINE_COLOUR = "#5b6575"
+BOX_COLOUR = "#1f6feb"
 MAX_POINTS = 4000  # per channel: a min/max envelope keeps the peaks of a longer stream
 MAX_CHANNELS = 8
 EVENT_COLOUR = "#8a94a6"

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from chameleons.prompts.locations import resolve_marked_path
+from chameleons.locations import resolve_marked_path
 from chameleons.worker.behaviours.base import (
     HEAD_SLICE,
     Behaviour,
