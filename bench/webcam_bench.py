@@ -117,7 +117,7 @@ def webcam_copy(video: Path, duration: float, delay: float) -> Row:
         frames0, wall0 = marker.count, time.monotonic()
         time.sleep(duration + delay)
         fps = (marker.count - frames0) / (time.monotonic() - wall0)
-        snapshot = worker.receivers["webcam"].snapshot()
+        snapshot = worker.receivers["webcam"].stats.snapshot()
     finally:
         worker.stop()
     probe = worker.probe

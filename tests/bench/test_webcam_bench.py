@@ -7,6 +7,7 @@ from __future__ import annotations
 import importlib
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -38,7 +39,8 @@ def test_the_unpaced_camera_source_reads_the_whole_file(tmp_path: Path) -> None:
 
 def test_the_table_prints_every_figure_beside_its_baseline() -> None:
     ms = {"min": 1.0, "p50": 2.0, "p99": 3.0, "max": 4.0}
-    copy = {f"{part}{suffix}": ms for part in ("head", "face") for suffix in ("_ms", "_abs_ms")}
+    parts = [f"{part}{suffix}" for part in ("head", "face") for suffix in ("_ms", "_abs_ms")]
+    copy: dict[str, Any] = dict.fromkeys(parts, ms)
     copy |= {"tracking_ms": ms, "paced_fps": 29.0}
     facemesh = {"detect_ms": 10.0, "detect_invoke_ms": 5.0, "tracked_frame_ms": 15.0,
                 "landmarks_invoke_ms": 5.0, "mapping_ms": 1.0, "fps_640x480": 66.0}  # fmt: skip
