@@ -9,7 +9,8 @@ hold; SQLite, and PostgreSQL when ``TEST_DATABASE_URL`` is set), ``bench.speech_
 CPU), ``bench.display_bench`` (the robot display's 3D head against its 2D face in
 Chromium) and ``bench.synchrony_bench`` (one interaction's synchrony beside a bare NumPy
 correlation); ``--worker`` adds ``bench.worker_bench`` (the realtime worker, the renderer in its
-own process included). Each prints its figures beside a baseline of its own run. With
+own process included) and ``bench.webcam_bench`` (the worker's webcam source against the
+iPhone path, issue 29). Each prints its figures beside a baseline of its own run. With
 ``--quick`` each runs its smoke size (each well under two minutes on a quiet 2-core
 machine). The exit status is 1 when any benchmark failed or missed one of its goals; the
 summary at the end says which.
@@ -34,7 +35,7 @@ BENCHES: dict[str, list[str]] = {
     "display": ["bench.display_bench"],
     "synchrony": ["bench.synchrony_bench"],
 }
-WORKER = {"worker": ["bench.worker_bench"]}
+WORKER = {"worker": ["bench.worker_bench"], "webcam": ["bench.webcam_bench"]}
 
 
 def commands(quick: bool, json_dir: Path | None, worker: bool) -> dict[str, list[str]]:
@@ -51,7 +52,8 @@ def parser() -> argparse.ArgumentParser:
     found = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     found.add_argument("--quick", action="store_true", help="Each benchmark's smoke size.")
     found.add_argument("--json-dir", type=Path, help="Write each benchmark's figures here.")
-    found.add_argument("--worker", action="store_true", help="Also run bench.worker_bench.")
+    found.add_argument("--worker", action="store_true",
+                       help="Also run bench.worker_bench and bench.webcam_bench.")  # fmt: skip
     found.add_argument("--list", action="store_true", help="Print the commands and exit.")
     return found
 

@@ -32,5 +32,5 @@ def test_the_list_names_the_commands_without_running_them() -> None:
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120,
                           check=True)  # fmt: skip
     names = ("server_bench", "speech_bench", "data_bench", "cli_bench", "display_bench",
-             "synchrony_bench", "worker_bench")  # fmt: skip
+             "synchrony_bench", "worker_bench", "webcam_bench")  # fmt: skip
     assert done.stdout.splitlines() == [f"-m bench.{name} --quick" for name in names]

@@ -145,6 +145,20 @@ def test_clock_mapper_uses_the_least_delayed_frame_and_resets_on_jumps() -> None
     assert mapper.resets == 1
 
 
+@pytest.mark.parametrize("source", ["webcam-python", "webcam-browser"])
+def test_a_webcam_frame_keeps_its_capture_time_its_tracking_time_is_not_added(
+    source: str,
+) -> None:
+    """A webcam's capture time is on this host's clock already: the time spent tracking
+    the frame (receive - capture) is not a clock offset to add to the copy delay."""
+    router = BehaviourRouter(build_context(), 0.0, initial="copy", params={"delay": 0.5})
+    frame = _frame(10.0, 0.5, receive_offset=0.008)
+    frame.source = source
+    assert router.on_participant(frame) == 10.0
+    iphone = _frame(11.0, 0.5, receive_offset=0.008)  # a sender clock: the offset is mapped
+    assert router.on_participant(iphone) == pytest.approx(11.008)
+
+
 def test_history_is_bounded_and_holds_over_long_dropouts() -> None:
     context = build_context(history_seconds=1.0, max_input_rate=60)
     router = BehaviourRouter(context, 0.0, initial="copy", params={"delay": 0.5})

@@ -78,6 +78,13 @@ def build_context(
                             input_mirrored=input_mirrored)  # fmt: skip
 
 
+# Sources whose capture times are already on this host's clock: the worker's own camera
+# (stamped on arrival, before tracking) and the capture page (mapped by the server relay
+# and the browser receiver). The clock mapper would add their least tracking time to the
+# copy delay (bench.webcam_bench measured +5 ms for the Python tracker).
+LOCAL_CLOCK_SOURCES = frozenset({"webcam-python", "webcam-browser"})
+
+
 class BehaviourRouter:
     """Owns the current behaviour, the participant history and the capture clock mapping."""
 
@@ -96,7 +103,10 @@ class BehaviourRouter:
 
     def on_participant(self, frame: FaceFrame) -> float:
         """Store a participant frame; returns its capture time on the local clock."""
-        t = self.clock.to_local(frame.capture_time, frame.receive_time)
+        if frame.source in LOCAL_CLOCK_SOURCES:
+            t = frame.capture_time
+        else:
+            t = self.clock.to_local(frame.capture_time, frame.receive_time)
         if self.context.history.append(t, frame.to_vector()):
             self.frames_in += 1
             self.context.head_neutral.add(t, frame.head)
