@@ -8,6 +8,11 @@ correlation is the delay (refined between grid points by a parabola through the 
 includes everything after the capture: the behaviour's delay, the head filter's group
 delay net of its look-ahead, and the renderer's send timing. A window without head movement
 (less than ``min_motion_deg`` of yaw range) or without a clear match gives no figure.
+
+The brows are watched over the same window (:meth:`DelayProbe.brows`): how far the
+participant's brows moved (the largest of the brow-raise blendshapes, peak to peak) and how
+far the robot's moved, so the check can say whether a condition that copies the head only
+left the brows at neutral.
 """
 
 from __future__ import annotations
@@ -27,6 +32,8 @@ class DelayProbe:
         size = int(window_s * 200)  # up to 200 frames a second of either stream
         self._captured: deque[tuple[float, float]] = deque(maxlen=size)
         self._sent: deque[tuple[float, float]] = deque(maxlen=size)
+        self._brows_in: deque[tuple[float, float]] = deque(maxlen=size)
+        self._brows_out: deque[tuple[float, float]] = deque(maxlen=size)
         self._lock = threading.Lock()
 
     def captured(self, capture_time: float, yaw: float) -> None:
@@ -37,11 +44,31 @@ class DelayProbe:
         with self._lock:
             self._sent.append((send_time, yaw))
 
+    def brow_captured(self, capture_time: float, raised: float) -> None:
+        with self._lock:
+            self._brows_in.append((capture_time, raised))
+
+    def brow_sent(self, send_time: float, raised: float) -> None:
+        with self._lock:
+            self._brows_out.append((send_time, raised))
+
     def reset(self) -> None:
         """Forget everything seen so far (the booth check's copy step starts)."""
         with self._lock:
-            self._captured.clear()
-            self._sent.clear()
+            for seen in (self._captured, self._sent, self._brows_in, self._brows_out):
+                seen.clear()
+
+    def brows(self, now: float) -> dict[str, float] | None:
+        """``{"captured", "sent"}``: peak-to-peak brow raise of the participant and of the
+        robot over the last window (None: too few frames of either)."""
+        start = now - self.window_s
+        with self._lock:
+            captured = [v for t, v in self._brows_in if t >= start]
+            sent = [v for t, v in self._brows_out if t >= start]
+        if len(captured) < 10 or len(sent) < 10:
+            return None
+        return {"captured": round(max(captured) - min(captured), 3),
+                "sent": round(max(sent) - min(sent), 3)}  # fmt: skip
 
     def measure(self, now: float) -> dict[str, Any] | None:
         """``{"delay_s", "correlation", "motion_deg"}`` for the last window, or None."""
