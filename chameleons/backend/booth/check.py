@@ -178,6 +178,7 @@ class Movement:
     problem: str | None = None  # why the robot could not be switched to copy
     params: Mapping[str, Any] | None = None  # the condition's params sent (None: delay only)
     words: str = ""  # the params in words (behaviour_words)
+    flip: bool = False  # the condition mirrors unlike the booth: the copied yaw is negated
 
 
 def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> dict[str, Any]:
@@ -236,6 +237,11 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
                    correlation=_number(probe.get("correlation"))
                    if isinstance(probe, Mapping) else None)  # fmt: skip
     fits, measured_words = check_copy.judge_delay(params, measured)
+    mirrored = bool(probe.get("mirrored")) if isinstance(probe, Mapping) else False
+    if mirrored != movement.flip:
+        fits = False
+        measured_words += ("; the robot's copied head turned the wrong way for the condition's "
+                           "mirror setting (and the booth's)")  # fmt: skip
     status = PASS if fits and brow_status != FAIL else FAIL
     return step("copy", label, status, f"{configured}, {measured_words}{brow_part}",
                 **figures)  # fmt: skip

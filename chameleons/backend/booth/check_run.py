@@ -87,6 +87,7 @@ class Plan:
     params: dict[str, Any] = field(default_factory=dict)  # sent to the worker
     words: str = ""  # the params in words (the export's behaviour_words)
     choices: tuple[tuple[str, str], ...] = ()  # the study's copy conditions and their words
+    flip: bool = False  # the condition's mirror differs from the booth's: the yaw is negated
 
     @property
     def movement_s(self) -> float:
@@ -119,7 +120,7 @@ class Plan:
 
     def movement(self, **seen: Any) -> Movement:
         return Movement(self.delay_s, self.condition, params=self.params or None,
-                        words=self.words, **seen)  # fmt: skip
+                        words=self.words, flip=self.flip, **seen)  # fmt: skip
 
 
 def plan_for(
@@ -148,8 +149,9 @@ def plan_for(
     params = dict(conditions[chosen].params)
     if needs_seed(params) and params.get("seed") is None:  # the wizard path's rule
         params["seed"] = _interaction_seed(db, session, chosen)
+    flip = params.get("mirror") is not None and params["mirror"] != (mirror is not False)
     return Plan(*timing, nominal_delay(params), chosen, study.id, rest, params,
-                _words(params, mirror), choices)  # fmt: skip
+                _words(params, mirror), choices, flip)  # fmt: skip
 
 
 def _words(params: dict[str, Any], mirror: bool | None) -> str:

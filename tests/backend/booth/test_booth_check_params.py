@@ -159,3 +159,19 @@ def test_what_each_parameter_lets_the_check_judge(
     result = judged(params, measured, brows)
     assert result["status"] == status, result
     assert why in result["value"], result["value"]
+
+
+@pytest.mark.parametrize(("flip", "mirrored", "status"),
+                         [(True, True, "pass"), (False, True, "fail"), (True, False, "fail")])
+def test_a_condition_mirroring_unlike_the_booth_is_judged_on_the_negated_turn(
+    flip: bool, mirrored: bool, status: str
+) -> None:
+    """A condition whose ``mirror`` differs from the booth's sends the yaw negated: the probe
+    matches it as ``mirrored``, which must agree with the condition."""
+    beat = {"behaviour": "copy", "movement_delay": {"delay_s": 1.0, "correlation": -0.97,
+                                                     "mirrored": mirrored}}  # fmt: skip
+    movement = check.Movement(1.0, "c", copy=beat, params={"delay": 1.0, "mirror": False},
+                              words="w", flip=flip)  # fmt: skip
+    result = check.copies({"input_fps": 60.0}, movement)
+    assert result["status"] == status, result
+    assert ("wrong way" in result["value"]) == (status == "fail")
