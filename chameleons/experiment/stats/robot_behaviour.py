@@ -76,8 +76,8 @@ def robot_behaviour(
         variants[key] = (first_words, first_params, n + 1)
     summary = []
     for condition in sorted(found):
-        variants = [Variant(w, n, *_delay_spread(p)) for w, p, n in found[condition].values()]
-        summary.append(ConditionBehaviour(condition, tuple(variants)))
+        ran = [Variant(w, n, *_delay_spread(p)) for w, p, n in found[condition].values()]
+        summary.append(ConditionBehaviour(condition, tuple(ran)))
     return summary
 
 
