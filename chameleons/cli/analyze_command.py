@@ -28,6 +28,8 @@ from chameleons.experiment.stats.analysis import PAPER_REFERENCE
 from chameleons.experiment.stats.effect_sizes import DEFAULT_RESAMPLES, BootstrapOptions
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
+from chameleons.experiment.stats.robot_behaviour import render_text as render_behaviour_text
+from chameleons.experiment.stats.robot_behaviour import robot_behaviour, worth_reporting
 from chameleons.experiment.stats.synchrony.outcomes import SynchronyAnalysis, analyze_synchrony
 from chameleons.experiment.stats.synchrony.render import render_synchrony_text
 from chameleons.experiment.study import StudyError, load_default_study, study_from_config
@@ -85,11 +87,16 @@ def analysis_output(
         )
     except AnalysisError as exc:
         raise click.ClickException(f"{exc} Nothing was analysed.") from exc
+    interactions = None if interactions is None else list(interactions)
     synchrony = _synchrony(interactions, rows, design, view, reference, models)
+    behaviour = [] if interactions is None else robot_behaviour(interactions,
+                                                                analysis.participants)  # fmt: skip
     if output_format == "json":
         data = analysis.to_dict()
         if synchrony is not None:
             data["synchrony"] = synchrony.to_dict()
+        if behaviour:
+            data["robot_behaviour"] = [c.to_dict() for c in behaviour]
         return json.dumps(data, indent=2)
     titles, ranges = design.titles, design.ranges
     if output_format == "latex":
@@ -98,6 +105,8 @@ def analysis_output(
     text = render_text(analysis, design.labels, measure_labels=titles, measure_ranges=ranges)
     if synchrony is not None:
         text += "\n" + render_synchrony_text(synchrony, design.labels)
+    if worth_reporting(behaviour):  # a condition's parameters varied, or a jittered delay
+        text += "\n" + render_behaviour_text(behaviour, design.labels)
     return text
 
 

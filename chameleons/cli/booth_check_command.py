@@ -23,6 +23,9 @@ TIMEOUT_S = 120  # the head movement, the robot's copy after the study's delay, 
               help="Asked for when not given (or CHAMELEONS_CHECK_PASSWORD).")  # fmt: skip
 @click.option("--session", "session_id", type=int, default=None,
               help="Store the result with this session (its booth must be BOOTH).")  # fmt: skip
+@click.option("--condition", default=None,
+              help="Check this copy condition of the study, with its parameters (default: "
+              "the session's next copy condition, else the study's first).")  # fmt: skip
 @click.option(
     "--no-wait",
     is_flag=True,
@@ -30,13 +33,17 @@ TIMEOUT_S = 120  # the head movement, the robot's copy after the study's delay, 
 )
 def booth_check(
     booth: str, server: str, username: str, password: str, session_id: int | None,
-    no_wait: bool,
+    condition: str | None, no_wait: bool,
 ) -> None:  # fmt: skip
     """Check a booth before a participant: face stream, head turn and nod, robot, copy
     delay, test prompt and disk space. Exits 1 when a step fails."""
+    from urllib.parse import urlencode
+
     from chameleons.backend.sessions.bot import ApiError, StaffApi
 
-    query = f"?session_id={session_id}" if session_id is not None else ""
+    chosen = {"session_id": session_id, "condition": condition}
+    given = {k: v for k, v in chosen.items() if v is not None}
+    query = f"?{urlencode(given)}" if given else ""
     try:
         with httpx.Client(base_url=server, timeout=TIMEOUT_S) as http:
             staff = StaffApi(http).login(username, password)
@@ -57,6 +64,8 @@ def _guided(staff: Any, path: str) -> dict[str, Any]:
     """Run the check and print each prompt of the server's plan for its time."""
     plan = staff.get(path)
     click.echo(f"Expected: {plan['expected_head']}.")
+    if plan.get("copy_condition"):
+        click.echo(f"Condition {plan['copy_condition']}: the robot {plan['behaviour_words']}.")
     with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
         answer = pool.submit(staff.post, path)
         for step in plan["prompts"]:

@@ -7,7 +7,14 @@ clock) against the head yaw the renderer sent to the robot (send times), over th
 correlation is the delay (refined between grid points by a parabola through the peak). It
 includes everything after the capture: the behaviour's delay, the head filter's group
 delay net of its look-ahead, and the renderer's send timing. A window without head movement
-(less than ``min_motion_deg`` of yaw range) or without a clear match gives no figure.
+(less than ``min_motion_deg`` of yaw range) or without a clear match gives no figure. A
+copy whose yaw is the captured yaw negated (a condition whose ``mirror`` differs from the
+booth's) matches too, and says ``mirrored``.
+
+The brows are watched over the same window (:meth:`DelayProbe.brows`): how far the
+participant's brows moved (the largest of the brow-raise blendshapes, peak to peak) and how
+far the robot's moved, so the check can say whether a condition that copies the head only
+left the brows at neutral.
 """
 
 from __future__ import annotations
@@ -27,6 +34,8 @@ class DelayProbe:
         size = int(window_s * 200)  # up to 200 frames a second of either stream
         self._captured: deque[tuple[float, float]] = deque(maxlen=size)
         self._sent: deque[tuple[float, float]] = deque(maxlen=size)
+        self._brows_in: deque[tuple[float, float]] = deque(maxlen=size)
+        self._brows_out: deque[tuple[float, float]] = deque(maxlen=size)
         self._lock = threading.Lock()
 
     def captured(self, capture_time: float, yaw: float) -> None:
@@ -37,14 +46,35 @@ class DelayProbe:
         with self._lock:
             self._sent.append((send_time, yaw))
 
+    def brow_captured(self, capture_time: float, raised: float) -> None:
+        with self._lock:
+            self._brows_in.append((capture_time, raised))
+
+    def brow_sent(self, send_time: float, raised: float) -> None:
+        with self._lock:
+            self._brows_out.append((send_time, raised))
+
     def reset(self) -> None:
         """Forget everything seen so far (the booth check's copy step starts)."""
         with self._lock:
-            self._captured.clear()
-            self._sent.clear()
+            for seen in (self._captured, self._sent, self._brows_in, self._brows_out):
+                seen.clear()
+
+    def brows(self, now: float) -> dict[str, float] | None:
+        """``{"captured", "sent"}``: peak-to-peak brow raise of the participant and of the
+        robot over the last window (None: too few frames of either)."""
+        start = now - self.window_s
+        with self._lock:
+            captured = [v for t, v in self._brows_in if t >= start]
+            sent = [v for t, v in self._brows_out if t >= start]
+        if len(captured) < 10 or len(sent) < 10:
+            return None
+        return {"captured": round(max(captured) - min(captured), 3),
+                "sent": round(max(sent) - min(sent), 3)}  # fmt: skip
 
     def measure(self, now: float) -> dict[str, Any] | None:
-        """``{"delay_s", "correlation", "motion_deg"}`` for the last window, or None."""
+        """``{"delay_s", "correlation", "motion_deg", "mirrored"}`` for the last window, or
+        None."""
         start = now - self.window_s
         with self._lock:
             captured = np.array([p for p in self._captured if p[0] >= start], dtype=np.float64)
@@ -64,11 +94,16 @@ class DelayProbe:
         if not scores.size or not np.isfinite(scores).any():
             return None
         best = int(np.nanargmax(scores))
-        if scores[best] < self.min_correlation:
-            return None
+        mirrored = False
+        if scores[best] < self.min_correlation:  # a copy as the other side's mirror image?
+            flipped = -scores
+            best = int(np.nanargmax(flipped))
+            if flipped[best] < self.min_correlation:
+                return None
+            scores, mirrored = flipped, True
         return {"delay_s": round(self._refine(scores, best) / self.rate_hz, 3),
-                "correlation": round(float(scores[best]), 3),
-                "motion_deg": round(motion, 1)}  # fmt: skip
+                "correlation": round(float(scores[best]) * (-1 if mirrored else 1), 3),
+                "motion_deg": round(motion, 1), "mirrored": mirrored}  # fmt: skip
 
     def _correlations(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Pearson correlation of ``a`` with ``b`` shifted later by each lag, all lags at

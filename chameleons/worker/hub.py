@@ -302,6 +302,7 @@ class ControlHub:
             "recording": self._stage("recorder"),
             # The copy delay measured movement to movement (booth check; None: no movement).
             "movement_delay": self._stage("recorder").get("movement_delay"),
+            "movement_brows": self._stage("recorder").get("movement_brows"),  # raised vs copied
             "drops": {"ingest": ingest.get("drops", {}), "behaviour": behaviour.get("errors", {}),
                       "renderer": renderer.get("errors", {}),
                       "driver": driver.get("dropped", 0), "hub": dict(self.errors)},

@@ -38,7 +38,7 @@ from chameleons.worker.control import (
 )
 from chameleons.worker.delay_probe import DelayProbe
 from chameleons.worker.envelope import EnvelopeError, Message, message_frame
-from chameleons.worker.frames import N_BLENDSHAPES, FaceFrame
+from chameleons.worker.frames import BLENDSHAPE_INDEX, N_BLENDSHAPES, FaceFrame
 from chameleons.worker.recording import (
     FrameRecorder,
     RecordingError,
@@ -60,6 +60,9 @@ from chameleons.worker.stage import (
 log = logging.getLogger(__name__)
 STREAMS = ("participant", "agent")
 STATS_INTERVAL = 1.0
+
+# The brow raises the booth check watches (copied or left at neutral).
+BROWS = [BLENDSHAPE_INDEX[n] for n in ("browInnerUp", "browOuterUpLeft", "browOuterUpRight")]
 
 
 def recording_paths(directory: Path, interaction_id: str) -> dict[str, Path]:
@@ -150,8 +153,11 @@ class RecorderStage:
             if message.topic == PARTICIPANT_TOPIC:
                 frame = message_frame(message)
                 self.probe.captured(frame.capture_time, float(frame.head[0]))
+                self.probe.brow_captured(frame.capture_time, float(frame.blendshapes[BROWS].max()))
             else:
-                self.probe.sent(message.time, float(message.array()[N_BLENDSHAPES]))
+                vector = message.array()
+                self.probe.sent(message.time, float(vector[N_BLENDSHAPES]))
+                self.probe.brow_sent(message.time, float(vector[BROWS].max()))
         except (EnvelopeError, KeyError, TypeError, ValueError, IndexError):
             pass  # counted by _record when recording; the probe just skips it
 
@@ -270,4 +276,5 @@ class RecorderStage:
         return {**self._files(), "frames": frames, "active": bool(self.recorders),
                 "errors": dict(self.errors), "problem": self.problem,
                 "frames_lost": self.frames_lost,
-                "movement_delay": self.probe.measure(time.monotonic())}  # fmt: skip
+                "movement_delay": self.probe.measure(time.monotonic()),
+                "movement_brows": self.probe.brows(time.monotonic())}  # fmt: skip

@@ -49,10 +49,16 @@ class Pose:
     nod_at: float | None = None
     nod_deg: float = 15.0
     nod_s: float = 1.0
+    brow_at: float | None = None  # a brow raise (0..1) of brow_s seconds
+    brow: float = 0.6
+    brow_s: float = 1.0
 
     def at(self, t: float) -> tuple[float, float]:
         return (self.rest_yaw + _bump(t, self.turn_at, self.turn_s) * self.turn_deg,
                 self.rest_pitch + _bump(t, self.nod_at, self.nod_s) * self.nod_deg)  # fmt: skip
+
+    def brows(self, t: float) -> float:
+        return _bump(t, self.brow_at, self.brow_s) * self.brow
 
 
 def _bump(t: float, start: float | None, length: float) -> float:
@@ -120,7 +126,7 @@ def stream_after(
         start = time.monotonic()
         for j in range(int(seconds * FPS)):
             time.sleep(max(0.0, start + j / FPS - time.monotonic()))
-            sock.sendto(pose_packet(k, *pose.at(j / FPS)), address)
+            sock.sendto(pose_packet(k, *pose.at(j / FPS), brow=pose.brows(j / FPS)), address)
             k += 1
         t0 = start + seconds - k / FPS  # the rest goes on on the same 60 fps grid
         if until is not None:

@@ -39,11 +39,14 @@ def _header(frame: int) -> bytes:
             + struct.pack(">ifii", START_FRAME + frame, 0.0, FPS, 1))  # fmt: skip
 
 
-def pose_packet(frame: int, yaw: float, pitch: float, jaw: float = 0.2) -> bytes:
+def pose_packet(frame: int, yaw: float, pitch: float, jaw: float = 0.2,
+                brow: float = 0.0) -> bytes:  # fmt: skip
     """One packet of the app: timecode ``frame`` frames after 14:03:59:00, head in degrees
-    (sent as radians)."""
+    (sent as radians), ``brow`` the brow raise (browInnerUp and both outer brows)."""
     values = np.zeros(61, dtype=">f4")
     values[BLENDSHAPE_INDEX["jawOpen"]] = jaw
+    for name in ("browInnerUp", "browOuterUpLeft", "browOuterUpRight"):
+        values[BLENDSHAPE_INDEX[name]] = brow
     values[N_BLENDSHAPES : N_BLENDSHAPES + 3] = [math.radians(yaw), math.radians(pitch), 0.0]
     return _header(frame) + struct.pack(">B", 61) + values.tobytes()
 

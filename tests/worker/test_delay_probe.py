@@ -45,3 +45,22 @@ def test_no_movement_or_no_copy_gives_no_figure() -> None:
     assert still.measure(10.0) is None
     noise = np.random.default_rng(3).normal(0.0, 5.0, 500)
     assert fed(4.0, copy=noise).measure(18.0) is None
+
+
+def test_a_copy_as_the_mirror_image_gives_back_its_delay_and_says_mirrored() -> None:
+    """A condition whose ``mirror`` differs from the booth's sends the yaw negated."""
+    sent = np.arange(0.0, 18.0, 1 / 25)
+    measured = fed(0.0, copy=-turn(sent - 1.5)).measure(18.0)
+    assert measured is not None
+    assert measured["delay_s"] == pytest.approx(1.5, abs=0.02)
+    assert (measured["mirrored"], measured["correlation"] < -0.99) == (True, True)
+    assert fed(1.5).measure(18.0)["mirrored"] is False  # type: ignore[index]
+
+
+def test_the_brows_raised_and_the_robots_are_reported_peak_to_peak() -> None:
+    probe = DelayProbe()
+    for k in range(120):
+        probe.brow_captured(k / 60, 0.6 if 30 <= k < 60 else 0.0)
+        probe.brow_sent(k / 60, 0.0)
+    assert probe.brows(2.0) == {"captured": 0.6, "sent": 0.0}
+    assert DelayProbe().brows(2.0) is None

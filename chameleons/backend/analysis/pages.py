@@ -267,5 +267,6 @@ def analysis_api(
         "analysis": result.analysis.to_dict() if result.analysis else None,
         "manipulation_check": [summary.to_dict() for summary in result.manipulation],
         "error_scores": errors,
+        "robot_behaviour": [c.to_dict() for c in result.behaviour],
         "latex": result.latex,
     }

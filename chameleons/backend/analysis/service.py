@@ -43,6 +43,11 @@ from chameleons.experiment.stats.effect_sizes import BootstrapOptions
 from chameleons.experiment.stats.manipulation import ItemSummary, manipulation_check
 from chameleons.experiment.stats.measures import StudyMeasures, study_measures
 from chameleons.experiment.stats.model_inputs import suggestions_with_item_set
+from chameleons.experiment.stats.robot_behaviour import (
+    ConditionBehaviour,
+    robot_behaviour,
+    worth_reporting,
+)
 from chameleons.experiment.study import study_from_config
 
 ERROR_LABELS = {
@@ -87,6 +92,13 @@ class StudyAnalysis:
     analysis: Analysis | None
     error: str | None
     errors: dict[str, dict[str, Descriptive]]
+    # What the robot did per condition (issue 31): the parameter sets recorded per interaction.
+    behaviour: list[ConditionBehaviour] = field(default_factory=list)
+
+    @property
+    def reports_behaviour(self) -> bool:
+        """Whether a condition's parameters varied within the study or drew a random delay."""
+        return worth_reporting(self.behaviour)
 
     @property
     def manipulation(self) -> list[ItemSummary]:
@@ -243,7 +255,10 @@ def _computed(
         errors = error_scores(db, scores, include_rehearsal)
         return StudyAnalysis(scores, None, f"The analysis cannot run: {exc}", errors)
     errors = error_scores(db, scores, include_rehearsal, analysis)
-    return StudyAnalysis(scores, analysis, None, errors)
+    return StudyAnalysis(scores, analysis, None, errors,
+                         robot_behaviour(interaction_rows(db, scores.study, scores.spec,
+                                                          include_rehearsal),
+                                         analysis.participants))  # fmt: skip
 
 
 def _extended(

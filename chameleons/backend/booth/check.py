@@ -22,11 +22,12 @@ with the session's events.
   Furhat login), with that reason: the worker measures the copy on what it sends, and a
   robot that refused the login receives none of it.
 - **Robot**: connected (for the virtual robot: a display page open and playing).
-- **Robot copies**: the check runs the robot in ``copy`` with the study's configured delay
-  while the head turns and nods (:mod:`.check_run`, which restores the behaviour before);
-  the configured delay against the delay the worker measured movement to movement
-  (:mod:`chameleons.worker.delay_probe`). No copy measured, or a delay off by more than
-  ``MAX_DELAY_ERROR_S``, fails.
+- **Robot copies**: the check runs the robot in the chosen ``copy`` condition (default: the
+  study's copy condition) with its full parameters while the head turns and nods
+  (:mod:`.check_run`, which restores the behaviour before); the condition's delay against
+  the delay the worker measured movement to movement (:mod:`chameleons.worker.delay_probe`),
+  and its channels against what moved (:mod:`.check_copy`). No copy measured, or a delay
+  outside the condition's (fixed: off by more than ``MAX_DELAY_ERROR_S``), fails.
 - **Test prompt**: the robot says a test prompt; its speech start and end must come back
   from the robot (for the virtual robot: from the display page) (:mod:`.speech_test`).
 - **Disk**: the recordings folder can be written, and its free space covers a session
@@ -44,6 +45,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from chameleons.backend.booth import check_copy
+from chameleons.backend.booth.check_copy import MAX_DELAY_ERROR_S as MAX_DELAY_ERROR_S
 from chameleons.backend.withdrawal.files import RECORDINGS_DIR
 from chameleons.backend.wizard import health
 from chameleons.worker.recording import write_problem
@@ -51,7 +54,6 @@ from chameleons.worker.recording import write_problem
 MIN_TURN_DEG, MAX_TURN_DEG = 20.0, 90.0
 MIN_NOD_DEG, MAX_NOD_DEG = 8.0, 60.0
 MAX_LATENCY_MS = 100.0
-MAX_DELAY_ERROR_S = 0.25  # measured against configured copy delay
 MIN_FREE_BYTES = 360 * 1000**2  # the settings' default: 100 kB/s for 60 minutes
 PASS, FAIL, WARN = "pass", "fail", "warn"
 CHECKED = "booth.checked"
@@ -169,28 +171,41 @@ class Movement:
     """What the check saw while it ran the robot in ``copy`` (:mod:`.check_run`): the
     heartbeat after the head movement and the one after the robot's copy of it."""
 
-    delay_s: float  # the configured copy delay the robot ran
+    delay_s: float  # the condition's delay as one number (a distribution's mean)
     condition: str | None  # the study's condition it comes from (None: the worker's default)
     head: Mapping[str, Any] | None = None
     copy: Mapping[str, Any] | None = None
     problem: str | None = None  # why the robot could not be switched to copy
+    params: Mapping[str, Any] | None = None  # the condition's params sent (None: delay only)
+    words: str = ""  # the params in words (behaviour_words)
+    flip: bool = False  # the condition mirrors unlike the booth: the copied yaw is negated
 
 
 def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> dict[str, Any]:
-    """The configured copy delay against the one measured movement to movement (the
-    worker's probe: captured head yaw against the yaw sent to the robot), while the check
-    ran the robot in ``copy``. Not copying, or a delay off by more than
-    ``MAX_DELAY_ERROR_S``, fails."""
+    """The condition's copy against what the worker measured movement to movement (its
+    probe: captured head yaw against the yaw sent to the robot; the brows raised against the
+    robot's brows), while the check ran the robot in the condition
+    (:mod:`.check_copy` says what is judged). Not copying, or a delay outside the
+    condition's, fails."""
     label = "Robot copies the head"
     if telemetry is None:
         return step("copy", label, FAIL, "no worker for this booth")
     if movement is None:
         return step("copy", label, FAIL, "not run: the check ran without the head movement")
-    delay, figures = movement.delay_s, {"delay_s": movement.delay_s, "measured_s": None,
-                                        "condition": movement.condition}  # fmt: skip
-    configured = f"delay {delay:.2f} s configured" + (
-        f" ({movement.condition})" if movement.condition else " (the worker's default)"
-    )
+    params = dict(movement.params) if movement.params is not None else {
+        "delay": movement.delay_s}  # fmt: skip
+    delay = movement.delay_s
+    figures: dict[str, Any] = {"delay_s": delay, "measured_s": None,
+                               "condition": movement.condition, "params": params,
+                               "behaviour_words": movement.words}  # fmt: skip
+    low, high = check_copy.delay_range(params)
+    late = f"delay {delay:.2f} s" if low == high else f"delay {low:.2f}-{high:.2f} s"
+    configured = f"{late} configured" + (
+        f" ({movement.condition}: {movement.words})" if movement.condition and movement.words
+        else f" ({movement.condition})" if movement.condition else " (the worker's default)"
+    )  # fmt: skip
+    note = check_copy.what_is_copied(params)
+    configured += f"; {note}" if note else ""
     if movement.problem:
         return step("copy", label, FAIL, f"the robot could not be switched to copy: "
                     f"{movement.problem}", **figures)  # fmt: skip
@@ -202,19 +217,38 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
     if seen.get("behaviour") != "copy":
         return step("copy", label, FAIL, f"{configured}; the robot ran "
                     f"{seen.get('behaviour') or 'nothing'}, not copy", **figures)  # fmt: skip
+    brow_status, brow_words = check_copy.judge_brows(params, _mapping(seen.get("movement_brows")))
+    figures["brows"] = seen.get("movement_brows")
+    brow_part = f"; {brow_words}" if brow_words else ""
     probe = seen.get("movement_delay")
     measured = _number(probe.get("delay_s")) if isinstance(probe, Mapping) else None
+    if not check_copy.copies_head_turn(params):
+        status = FAIL if brow_status == FAIL else WARN if brow_status != PASS else PASS
+        return step("copy", label, status, f"{configured}; this condition does not copy the "
+                    f"head turn, so its delay is not judged{brow_part}", **figures)  # fmt: skip
     if measured is None:
+        if params.get("intermittent"):
+            return step("copy", label, WARN, f"{configured}; no copied bout was measured (the "
+                        "movement fell into a rest between bouts: run the check again)"
+                        f"{brow_part}", **figures)  # fmt: skip
         return step("copy", label, FAIL, f"{configured}; the robot did not copy the head "
                     "movement (none measured: was the head turned?)", **figures)  # fmt: skip
-    off = measured - delay
     figures.update(measured_s=measured, tolerance_s=MAX_DELAY_ERROR_S,
                    correlation=_number(probe.get("correlation"))
                    if isinstance(probe, Mapping) else None)  # fmt: skip
-    status = PASS if abs(off) <= MAX_DELAY_ERROR_S else FAIL
-    return step("copy", label, status, f"{configured}, {measured:.2f} s measured movement to "
-                f"movement ({off * 1000:+.0f} ms; allowed ±{MAX_DELAY_ERROR_S * 1000:.0f} ms)",
+    fits, measured_words = check_copy.judge_delay(params, measured)
+    mirrored = bool(probe.get("mirrored")) if isinstance(probe, Mapping) else False
+    if mirrored != movement.flip:
+        fits = False
+        measured_words += ("; the robot's copied head turned the wrong way for the condition's "
+                           "mirror setting (and the booth's)")  # fmt: skip
+    status = PASS if fits and brow_status != FAIL else FAIL
+    return step("copy", label, status, f"{configured}, {measured_words}{brow_part}",
                 **figures)  # fmt: skip
+
+
+def _mapping(value: Any) -> Mapping[str, Any] | None:
+    return value if isinstance(value, Mapping) else None
 
 
 def speech(result: Mapping[str, Any] | None) -> dict[str, Any]:

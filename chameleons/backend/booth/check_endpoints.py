@@ -29,14 +29,16 @@ from chameleons.backend.wizard.playback import read, write
 router = make_router(tags=["booth"])
 Booth = Annotated[str, Path(pattern=BOOTH_PATTERN)]
 SessionId = Annotated[int | None, Query(description="Store the check with this session.")]
+CONDITION_HELP = "Check this copy condition of the study (default: its first)."
+ConditionId = Annotated[str | None, Query(max_length=64, description=CONDITION_HELP)]
 
 
 @router.get("/booths/{booth}/check", response_class=HTMLResponse)
 def check_page(
     request: Request, booth: Booth, user: CurrentStaff, templates: Templates,
-    settings: AppSettings, session_id: SessionId = None,
+    settings: AppSettings, session_id: SessionId = None, condition: ConditionId = None,
 ) -> Response:  # fmt: skip
-    plan = _plan(request.app.state, booth, session_id, settings)
+    plan = _plan(request.app.state, booth, session_id, settings, condition)
     context = {"user": user, "booth": booth, "session_id": session_id, "plan": plan.describe(),
                "expected_head": check.expected_head(),
                "capture_url": capture_url(request.app, booth, request_base(request))}  # fmt: skip
@@ -46,17 +48,18 @@ def check_page(
 @router.get("/api/booths/{booth}/check")
 def check_plan(
     request: Request, booth: Booth, _user: CurrentStaff, settings: AppSettings,
-    session_id: SessionId = None,
+    session_id: SessionId = None, condition: ConditionId = None,
 ) -> dict[str, Any]:  # fmt: skip
-    """What the check asks the technician to do and for how long, and the copy delay."""
-    plan = _plan(request.app.state, booth, session_id, settings)
+    """What the check asks the technician to do and for how long, and the copy condition
+    it runs (its params and their words, and the study's other copy conditions)."""
+    plan = _plan(request.app.state, booth, session_id, settings, condition)
     return {"booth": booth, **plan.describe(), "expected_head": check.expected_head()}
 
 
 @router.post("/api/booths/{booth}/check", dependencies=[Depends(verify_csrf)])
 async def run_check(
     request: Request, booth: Booth, _user: CurrentStaff, settings: AppSettings,
-    session_id: SessionId = None,
+    session_id: SessionId = None, condition: ConditionId = None,
     say: Annotated[bool, Query(description="Play the test prompt (speech step).")] = True,
     movement: Annotated[bool, Query(description="Run the robot in copy for the head "
                                     "movement (without it the copy step fails).")] = True,
@@ -70,7 +73,11 @@ async def run_check(
     refused = await run_in_threadpool(read, state, check_run.refusal, booth)
     if refused is not None:
         raise HTTPException(status.HTTP_409_CONFLICT, refused)
-    plan = await run_in_threadpool(read, state, check_run.plan_for, booth, session, settings)
+    try:
+        plan = await run_in_threadpool(read, state, check_run.plan_for, booth, session, settings,
+                                       condition)  # fmt: skip
+    except ValueError as exc:
+        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
     try:
         async with check_run.exclusive(state, booth):
             result = await _judge(state, booth, plan, settings, say=say, movement=movement)
@@ -98,11 +105,16 @@ def _fresh_telemetry(state: Any, booth: str) -> dict[str, Any] | None:
     return telemetry if age is not None and age <= health.STALE_AFTER_SECONDS else None
 
 
-def _plan(state: Any, booth: str, session_id: int | None, settings: Any) -> check_run.Plan:
+def _plan(
+    state: Any, booth: str, session_id: int | None, settings: Any, condition: str | None
+) -> check_run.Plan:
     session = read(state, _session, session_id)
     if session_id is not None and (session is None or session.booth != booth):
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"No session {session_id} on {booth}.")
-    return read(state, check_run.plan_for, booth, session, settings)
+    try:
+        return read(state, check_run.plan_for, booth, session, settings, condition)
+    except ValueError as exc:
+        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
 
 
 def _session(db: DbSession, session_id: int | None) -> Session | None:

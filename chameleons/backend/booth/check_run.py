@@ -15,10 +15,15 @@ a participant is never copied on the technician's pose. The copy-delay probe is 
 the rest is taken, so the measured delay is the delay of this movement only. A simulated
 face (the demo's: ``state.face_cues``) is told each move as it is asked for, so it does it.
 
-- The delay is the study's: with a session, its study's first ``copy`` condition still to
-  come in the session's plan (else the study's first ``copy`` condition); without one, the
-  study of the booth's latest session (else the latest active study). A study without a
-  ``copy`` condition is checked with the worker's default delay, and the step says so.
+- The condition is the study's: the one the technician picks (``?condition=``, any of the
+  study's ``copy`` conditions), else with a session its study's first ``copy`` condition
+  still to come in the session's plan (else the study's first ``copy`` condition); without
+  a session, the study of the booth's latest session (else the latest active study). The
+  robot runs that condition's full parameters (channels, gain, mirror, delay distribution,
+  coexpress, intermittent, only); a condition that draws at random gets the seed the
+  wizard path gives it (its ``seed``, else the id of the session's interaction in that
+  condition, else 0). A study without a ``copy`` condition is checked with the worker's
+  default delay, and the step says so.
 - The check is refused while a participant's interaction runs on the booth (it would
   take the robot from the participant), and while another check runs on it. Should an
   interaction start during the check, the robot is given that interaction's set-up at the
@@ -31,7 +36,7 @@ import asyncio
 import contextlib
 import time
 from collections.abc import AsyncIterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
@@ -39,6 +44,8 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 from starlette.concurrency import run_in_threadpool
 
+from chameleons.backend.booth import check_copy
+from chameleons.backend.booth.behaviour import RobotBehaviour, behaviour_words
 from chameleons.backend.booth.check import Movement
 from chameleons.backend.booth.flows import running_slot, running_target
 from chameleons.backend.models import Interaction, Study
@@ -47,7 +54,7 @@ from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import robot, worker_link
 from chameleons.backend.wizard.playback import read
 from chameleons.worker.behaviours.copy import DEFAULT_DELAY
-from chameleons.worker.behaviours.copy_params import nominal_delay
+from chameleons.worker.behaviours.copy_params import needs_seed, nominal_delay
 from chameleons.worker.control import (
     MARK_HEAD_REST,
     RECENTRE_HEAD,
@@ -69,46 +76,97 @@ class CheckRefusedError(Exception):
 
 @dataclass(frozen=True)
 class Plan:
-    """The head movement's timing and the copy delay the check runs the robot with."""
+    """The head movement's timing and the copy condition the check runs the robot with."""
 
     turn_s: float
     nod_s: float
-    delay_s: float
+    delay_s: float  # the condition's delay as one number (a distribution's mean)
     condition: str | None  # the study's copy condition (None: the worker's default delay)
     study_id: int | None
     rest_s: float = 2.0
+    params: dict[str, Any] = field(default_factory=dict)  # sent to the worker
+    words: str = ""  # the params in words (the export's behaviour_words)
+    choices: tuple[tuple[str, str], ...] = ()  # the study's copy conditions and their words
+    flip: bool = False  # the condition's mirror differs from the booth's: the yaw is negated
 
     @property
     def movement_s(self) -> float:
         return self.turn_s + self.nod_s
 
+    @property
+    def latest_s(self) -> float:
+        """The longest the condition may copy late (a distribution's upper end)."""
+        return check_copy.delay_range(self.params)[1] if self.params else self.delay_s
+
     def prompts(self) -> list[dict[str, Any]]:
         """What the technician is asked to do, in order, and for how long (seconds)."""
+        brows = bool(self.params) and check_copy.separates_brows(self.params)
+        nod = "Nod (chin down and up)" + (", then raise your eyebrows" if brows else "")
+        low, high = check_copy.delay_range(self.params or {"delay": self.delay_s})
+        late = f"{low:g} s later" if low == high else f"{low:g}-{high:g} s later"
         return [
             {"id": "rest", "text": "Face the robot and hold still", "seconds": self.rest_s},
             {"id": "turn", "text": "Turn your head left (and back)", "seconds": self.turn_s},
-            {"id": "nod", "text": "Nod (chin down and up)", "seconds": self.nod_s},
-            {"id": "copy", "seconds": self.delay_s + COPY_MARGIN_S,
-             "text": f"Hold still: the robot copies you {self.delay_s:g} s later"},
+            {"id": "nod", "text": nod, "seconds": self.nod_s},
+            {"id": "copy", "seconds": self.latest_s + COPY_MARGIN_S,
+             "text": f"Hold still: the robot copies you {late}"},
         ]  # fmt: skip
 
     def describe(self) -> dict[str, Any]:
         return {"copy_delay_s": self.delay_s, "copy_condition": self.condition,
+                "copy_params": self.params, "behaviour_words": self.words,
+                "conditions": [{"id": c, "words": w} for c, w in self.choices],
                 "study_id": self.study_id, "prompts": self.prompts()}  # fmt: skip
 
+    def movement(self, **seen: Any) -> Movement:
+        return Movement(self.delay_s, self.condition, params=self.params or None,
+                        words=self.words, flip=self.flip, **seen)  # fmt: skip
 
-def plan_for(db: DbSession, booth: str, session: SessionRow | None, settings: Any) -> Plan:
+
+def plan_for(
+    db: DbSession, booth: str, session: SessionRow | None, settings: Any,
+    condition: str | None = None,
+) -> Plan:  # fmt: skip
+    """The check's plan; ``condition`` picks one of the study's ``copy`` conditions (default:
+    the first still to come in the session, else the study's first). ValueError (a
+    sentence) for a condition the study has not or that is not a copy."""
     study, condition_ids = _study_and_order(db, booth, session)
-    delay, condition = DEFAULT_DELAY, None
-    if study is not None:
-        conditions = {c.id: c for c in spec_of(study).conditions if c.behaviour == COPY}
-        order = [c for c in condition_ids if c in conditions] + list(conditions)
-        if order:
-            condition = order[0]
-            delay = nominal_delay(conditions[condition].params)  # a distribution's mean
-    return Plan(float(settings.booth_check_turn_seconds), float(settings.booth_check_nod_seconds),
-                delay, condition, study.id if study else None,
-                float(settings.booth_check_rest_seconds))  # fmt: skip
+    timing = (float(settings.booth_check_turn_seconds), float(settings.booth_check_nod_seconds))
+    rest = float(settings.booth_check_rest_seconds)
+    conditions = ({c.id: c for c in spec_of(study).conditions if c.behaviour == COPY}
+                  if study is not None else {})  # fmt: skip
+    if condition is not None and condition not in conditions:
+        names = ", ".join(conditions) or "none"
+        raise ValueError(f"{condition!r} is not a copy condition of this study (its copy "
+                         f"conditions: {names}).")  # fmt: skip
+    mirror = getattr(settings, "mirror", None)
+    choices = tuple((c, _words(conditions[c].params, mirror)) for c in conditions)
+    order = [c for c in condition_ids if c in conditions] + list(conditions)
+    chosen = condition or (order[0] if order else None)
+    if study is None or chosen is None:
+        return Plan(*timing, DEFAULT_DELAY, None, study.id if study else None, rest,
+                    choices=choices)  # fmt: skip
+    params = dict(conditions[chosen].params)
+    if needs_seed(params) and params.get("seed") is None:  # the wizard path's rule
+        params["seed"] = _interaction_seed(db, session, chosen)
+    flip = params.get("mirror") is not None and params["mirror"] != (mirror is not False)
+    return Plan(*timing, nominal_delay(params), chosen, study.id, rest, params,
+                _words(params, mirror), choices, flip)  # fmt: skip
+
+
+def _words(params: dict[str, Any], mirror: bool | None) -> str:
+    return behaviour_words(RobotBehaviour(COPY, dict(params)), mirror)
+
+
+def _interaction_seed(db: DbSession, session: SessionRow | None, condition: str) -> int:
+    """The seed the participant's interaction in ``condition`` will draw with (its id, as
+    the wizard path sets it), so the check runs the same draws; 0 without one."""
+    if session is None:
+        return 0
+    found = db.scalars(select(Interaction.id).where(Interaction.session_id == session.id,
+                                                    Interaction.condition == condition)
+                       .order_by(Interaction.position).limit(1)).first()  # fmt: skip
+    return int(found) if found is not None else 0
 
 
 def _study_and_order(
@@ -158,12 +216,13 @@ async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, A
     before is restored whatever happens (shielded: a cancelled request restores too)."""
     bridge = worker_link.bridge_of(state)
     previous = _running_behaviour(bridge, booth, telemetry)
-    body = {"name": COPY, "params": {"delay": plan.delay_s}}
+    params = plan.params or {"delay": plan.delay_s}
+    body = {"name": COPY, "params": params}
     switched = await worker_link.send_command(bridge, booth, SET_BEHAVIOUR, body)
-    movement = Movement(plan.delay_s, plan.condition)
+    movement = plan.movement()
     try:
         if not switched.sent:
-            return Movement(plan.delay_s, plan.condition, problem=switched.detail)
+            return plan.movement(problem=switched.detail)
         _cue(state, booth, "rest", plan.rest_s)
         await asyncio.sleep(plan.rest_s)
         rest = {"rest_seconds": plan.rest_s}
@@ -175,9 +234,9 @@ async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, A
         await asyncio.sleep(max(0.0, started + plan.turn_s - time.monotonic()))
         _cue(state, booth, "nod", plan.nod_s)
         head = await _heartbeat_after(bridge, booth, started + plan.movement_s)
-        _cue(state, booth, "copy", plan.delay_s + COPY_MARGIN_S)
-        copy = await _copy_measured(bridge, booth, started + plan.movement_s + plan.delay_s)
-        movement = Movement(plan.delay_s, plan.condition, head=head, copy=copy)
+        _cue(state, booth, "copy", plan.latest_s + COPY_MARGIN_S)
+        copy = await _copy_measured(bridge, booth, started + plan.movement_s + plan.latest_s)
+        movement = plan.movement(head=head, copy=copy)
     finally:
         await asyncio.shield(_restore(state, booth, previous))
     return movement

@@ -105,6 +105,7 @@ def test_a_robot_that_refuses_the_login_fails_the_copy_step_with_the_login_failu
     copy = steps["copy"]
     assert copy["status"] == "fail", copy
     refused = "login refused: the robot refused the login (wrong or missing key)"
-    assert copy["value"] == f"delay 4.00 s configured (copy); the robot cannot copy: {refused}"
+    assert copy["value"] == ("delay 4.00 s configured (copy: copies everything, 4 s late, "
+                             f"mirror image); the robot cannot copy: {refused}")  # fmt: skip
     assert steps["robot"]["status"] == "fail"
     assert answer["passed"] is False

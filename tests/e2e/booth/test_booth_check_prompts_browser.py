@@ -87,7 +87,8 @@ def test_the_page_prompts_turn_then_nod_and_shows_yaw_and_pitch_against_the_expe
     root = page.locator("#booth-check")
     expect(root).to_contain_text("Expected, measured from the pose you held still: yaw "
                                  "+20..+90° (a turn to the left) and pitch +8..+60°")  # fmt: skip
-    expect(root).to_contain_text("The robot copies you 4.0 s later (the study's condition copy)")
+    expect(root).to_contain_text("The robot copies you 4.0 s later (the study's condition copy: "
+                                 "it copies everything, 4 s late")  # fmt: skip
 
     moving = turn_and_nod(worker)
     page.get_by_role("button", name="Run the check").click()
@@ -109,7 +110,9 @@ def test_the_page_prompts_turn_then_nod_and_shows_yaw_and_pitch_against_the_expe
     expect(head).to_contain_text(EXPECTED_PITCH)
     expect(head).to_contain_text("turn +4")  # the 40 degree turn, measured
     expect(head).to_contain_text("from a resting pose of yaw +0°, pitch +0°")
-    expect(page.locator("tr[data-step='copy']")).to_contain_text("delay 4.00 s configured (copy)")
+    expect(page.locator("tr[data-step='copy']")).to_contain_text(
+        "delay 4.00 s configured (copy: copies everything, 4 s late"
+    )
 
 
 def test_the_command_prints_the_prompts_in_time_and_the_expected_ranges(

@@ -42,8 +42,11 @@ async function guide(answered) {
 }
 
 async function post() {
-  const session = root.dataset.session ? `?session_id=${encodeURIComponent(root.dataset.session)}` : "";
-  const response = await fetch(`/api/booths/${encodeURIComponent(root.dataset.booth)}/check${session}`, {
+  const query = new URLSearchParams();
+  if (root.dataset.session) query.set("session_id", root.dataset.session);
+  if (root.dataset.condition) query.set("condition", root.dataset.condition);
+  const search = query.toString() ? `?${query}` : "";
+  const response = await fetch(`/api/booths/${encodeURIComponent(root.dataset.booth)}/check${search}`, {
     method: "POST",
     headers: { "X-CSRF-Token": root.dataset.csrf, "Content-Type": "application/json" },
     body: "{}",
