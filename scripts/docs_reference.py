@@ -121,7 +121,10 @@ def _command_section(command: click.Command, ctx: click.Context, path: str) -> I
 def cli_page() -> str:
     from chameleons.cli.main import cli
 
-    ctx = click.Context(cli, info_name="chameleons")
+    # With the group's own context settings (-h and --help), as the command line has them:
+    # click keeps each command's help option once made, so a context without them gave
+    # another page after a test had run a command in the same process.
+    ctx = click.Context(cli, info_name="chameleons", **cli.context_settings)
     lines = [
         "# Command line\n",
         "Every `chameleons` command with its options, as `--help` gives them. "

@@ -44,6 +44,7 @@ from chameleons.i18n import N_, preferred_language, translations
 DB_INT_LIMIT = 2**63  # SQLite INTEGER and PostgreSQL BIGINT hold -2**63 .. 2**63 - 1
 MAX_ROW_ID = 2**31 - 1  # PostgreSQL INTEGER: every row id but the events'
 _WHOLE_NUMBER = re.compile(r"-?\d+")
+_ID_WITH_EXTENSION = re.compile(r"(?<=\d)\.[A-Za-z0-9]{1,8}$")
 
 NUL_IN_ADDRESS = N_("The address contains a NUL character (0x00), which is not allowed.")
 NUL_IN_TEXT = N_("Text may not contain a NUL character (0x00). Please remove it and try again.")
@@ -138,7 +139,9 @@ def check_form(body: bytes) -> None:
 def check_address(scope: Scope) -> tuple[int, str] | None:
     if "\x00" in scope["path"]:
         return 400, NUL_IN_ADDRESS
-    if any(_too_large(segment, MAX_ROW_ID + 1) for segment in scope["path"].split("/")):
+    # A segment may be an id with a file extension (/pi/sessions/1/instruments/7.svg).
+    segments = (_ID_WITH_EXTENSION.sub("", segment) for segment in scope["path"].split("/"))
+    if any(_too_large(segment, MAX_ROW_ID + 1) for segment in segments):
         return 404, NO_SUCH_THING
     query = scope.get("query_string", b"").decode("latin-1")
     for name, value in parse_qsl(query, keep_blank_values=True):

@@ -5,6 +5,7 @@ setting."""
 
 from __future__ import annotations
 
+import difflib
 import importlib.util
 from pathlib import Path
 from types import ModuleType
@@ -44,7 +45,18 @@ def test_committed_reference_pages_match_the_code(
 ) -> None:
     stale = generator.stale(pages)
     names = ", ".join(str(path.relative_to(ROOT)) for path in stale)
-    assert not stale, f"{names} differ from the code: run `make docs-reference` and commit them"
+    # The first lines that differ, so a difference that depends on what ran before in the
+    # same process (state another test left behind) shows what it is.
+    diff = "".join(
+        list(difflib.unified_diff(
+            path.read_text("utf-8").splitlines(keepends=True) if path.exists() else [],
+            pages[path].splitlines(keepends=True), str(path), "generated now", n=0,
+        ))[:20]
+        for path in stale
+    )  # fmt: skip
+    assert not stale, (
+        f"{names} differ from the code: run `make docs-reference` and commit them\n{diff}"
+    )
 
 
 def test_staleness_is_detected(generator: ModuleType, tmp_path: Path) -> None:

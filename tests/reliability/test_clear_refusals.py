@@ -134,6 +134,8 @@ def test_a_json_body_nested_too_deeply_is_a_422_with_a_sentence(
         f"/pi/sessions/{HUGE}",
         f"/pi/recordings/{HUGE}",
         f"/wizard/sessions/{HUGE}",
+        f"/pi/sessions/1/instruments/{HUGE}.svg",  # an id with a file extension
+        f"/pi/interactions/{MAX_ROW_ID + 1}/synchrony.svg",
     ],
 )
 def test_ids_beyond_64_bits_in_a_path_are_a_404(

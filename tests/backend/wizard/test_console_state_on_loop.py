@@ -69,4 +69,7 @@ def test_a_phones_answer_reaches_the_console_without_a_thread_read(
         assert state["session"]["interactions"][0]["initial_ranking"] == ranking
         wizard.staff.post(f"/api/sessions/{wizard.session_id}/notes", {"text": "laughed"})
         _state_with(socket, "wizard.note")
-        assert reads == ["state", "state"]  # a note keeps no state: read in a thread
+        # A note keeps no state: read in a thread (at least once; on a busy machine another
+        # wake-up, a late notification of the same commits, may read once more).
+        assert len(reads) >= 2
+        assert set(reads) == {"state"}
