@@ -25,10 +25,9 @@ from typing import Any
 from chameleons.experiment.model import Questionnaire
 from chameleons.experiment.stats.effect_sizes import BootstrapOptions, effect_sizes
 from chameleons.experiment.stats.measure_test import (
-    DEFAULT_PERMUTATIONS,
-    MeasureAnalysis,
-    analyze_measure,
+    DEFAULT_PERMUTATIONS as DEFAULT_PERMUTATIONS,
 )
+from chameleons.experiment.stats.measure_test import MeasureAnalysis, analyze_measure
 from chameleons.experiment.stats.measure_test import small_sample_notes as small_sample_notes
 from chameleons.experiment.stats.measure_test import smallest_exact_p as smallest_exact_p
 from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
