@@ -60,9 +60,10 @@ TOO_LARGE_IN_ADDRESS = N_("A number in the address is too large (the limit is 21
 NO_SUCH_THING = "Not Found"
 PARTICIPANT_PREFIXES = ("/api/phone/", "/p/")
 # Query parameters that are text however they look: a phone's device id is 32 random hex
-# digits (phone.js), which may all be decimal digits, and a display key or booth name may
-# be too. Only numbers are range-checked (a device id of 16 digits was refused as "too
-# large", seen as a rare 403 on the phone's socket in bench/server_bench.py).
+# digits (static/phone/storage.js), which may all be decimal digits, and a display key or
+# booth name may be too. Only numbers are range-checked (a device id of 16 digits was
+# refused as "too large", seen as a rare 403 on the phone's socket in
+# bench/server_bench.py).
 TEXT_QUERY_PARAMETERS = frozenset({"device", "key", "booth"})
 
 

@@ -139,3 +139,8 @@ def _kind(value: object) -> str:
     if isinstance(value, str):
         return f"text {value!r}"
     return f"{type(value).__name__} {value!r}"[:80]
+
+
+def optional_text(reader: Reader, body: dict[str, Any], key: str, place: str) -> str:
+    """An optional text of ``body``: empty when absent or empty."""
+    return reader.text(body, key, place, default="", allow_empty=True)

@@ -1,4 +1,6 @@
-"""Reading each section of a study document into model values (problems go to the reader)."""
+"""Reading each section of a study document into model values (problems go to the reader).
+
+The questionnaires' sections are read in :mod:`.questionnaire_sections`."""
 
 from __future__ import annotations
 
@@ -9,34 +11,25 @@ from typing import Any, cast
 from chameleons.experiment.languages import LANGUAGE
 from chameleons.experiment.model import (
     Actor,
-    Choice,
     Condition,
     Face,
     FacePairing,
     Item,
     ItemSetRule,
-    ItemType,
     NamePairing,
     Personas,
-    Phase,
-    Questionnaire,
-    QuestionnaireItem,
     Task,
     Voice,
 )
-from chameleons.experiment.reader import SNAKE, Reader, join
+from chameleons.experiment.questionnaire_sections import ITEM_KEYS as ITEM_KEYS
+from chameleons.experiment.questionnaire_sections import ITEM_TYPES as ITEM_TYPES
+from chameleons.experiment.questionnaire_sections import PHASES as PHASES
+from chameleons.experiment.questionnaire_sections import (
+    read_questionnaires as read_questionnaires,
+)
+from chameleons.experiment.reader import SNAKE, Reader, join, optional_text
 from chameleons.worker.behaviours.params import check_params
 
-ITEM_TYPES = ("differential", "agreement", "text", "choice", "robot")
-PHASES = ("before", "interaction", "final")
-# Which keys each item type needs (beyond id and type) and may have.
-ITEM_KEYS: dict[str, tuple[list[str], list[str]]] = {
-    "differential": (["left", "right"], ["text", "reverse"]),
-    "agreement": (["text"], ["reverse"]),
-    "text": (["text"], []),
-    "choice": (["text", "options"], []),
-    "robot": (["text"], []),
-}
 GENDERS = ("female", "male", "other")
 MIN_CONDITIONS, MAX_CONDITIONS = 2, 6
 NAME_PAIRINGS = ("per_actor", "per_interaction")
@@ -63,7 +56,7 @@ def read_conditions(
             Condition(
                 cid,
                 reader.text(body, "label", place),
-                _optional(reader, body, "description", place),
+                optional_text(reader, body, "description", place),
                 behaviour,
                 params,
                 _renderer(reader, body, place),
@@ -125,8 +118,8 @@ def read_tasks(reader: Reader, node: object) -> tuple[Task, ...]:
             Task(
                 id=tid,
                 name=reader.text(body, "name", place),
-                source=_optional(reader, body, "source", place),
-                introduction=_optional(reader, body, "introduction", place),
+                source=optional_text(reader, body, "source", place),
+                introduction=optional_text(reader, body, "introduction", place),
                 items=items,
             )
         )
@@ -145,7 +138,7 @@ def _read_items(reader: Reader, node: object, path: str) -> tuple[Item, ...]:
             Item(
                 id=reader.identifier(body.get("id"), join(place, "id"), SNAKE),
                 name=reader.text(body, "name", place),
-                description=_optional(reader, body, "description", place),
+                description=optional_text(reader, body, "description", place),
                 expert_rank=reader.integer(body, "expert_rank", place, minimum=1),
             )
         )
@@ -250,7 +243,7 @@ def read_faces(reader: Reader, node: object) -> tuple[Face, ...]:
                 fid,
                 reader.text(body, "label", place),
                 _gender(reader, body, place),
-                _optional(reader, body, "age", place),
+                optional_text(reader, body, "age", place),
                 _properties(reader, body, place),
             )
         )
@@ -258,7 +251,7 @@ def read_faces(reader: Reader, node: object) -> tuple[Face, ...]:
 
 
 def _gender(reader: Reader, body: dict[str, Any], place: str) -> str:
-    gender = _optional(reader, body, "gender", place)
+    gender = optional_text(reader, body, "gender", place)
     if gender and gender not in GENDERS:
         reader.problem(join(place, "gender"), f"must be one of {list(GENDERS)}, got {gender!r}")
     return gender
@@ -308,96 +301,6 @@ def read_personas(reader: Reader, node: object, *, snapshot: bool = False) -> Pe
         faces=cast(FacePairing, faces if faces in FACE_PAIRINGS else "independent"),
         match_gender=reader.boolean(body, "match_gender", path, default=False),
     )
-
-
-def read_questionnaires(reader: Reader, node: object) -> tuple[Questionnaire, ...]:
-    questionnaires = []
-    for qid, body, place in reader.keyed(node, "questionnaires", SNAKE):
-        reader.check_keys(body, place, ["version", "phase", "items"], ["title", "scale"])
-        phase = body.get("phase")
-        if phase not in PHASES:
-            reader.problem(join(place, "phase"), f"must be one of {list(PHASES)}, got {phase!r}")
-        scale_place = join(place, "scale")
-        scale = reader.mapping(body.get("scale", {}), scale_place)
-        reader.check_keys(scale, scale_place, [], ["points", "low", "high"])
-        items = _read_questions(reader, body.get("items", []), join(place, "items"))
-        for index, item in enumerate(items):
-            if item.type == "robot" and phase != "final":
-                where = join(join(join(place, "items"), index), "type")
-                reader.problem(where, "a robot item belongs in a final questionnaire")
-        points = reader.integer(scale, "points", scale_place, default=7, minimum=2, maximum=11)
-        questionnaires.append(
-            Questionnaire(
-                id=qid,
-                version=reader.text(body, "version", place),
-                title=reader.text(body, "title", place, default=qid),
-                phase=cast(Phase, phase if phase in PHASES else "interaction"),
-                points=points,
-                low=_optional(reader, scale, "low", scale_place),
-                high=_optional(reader, scale, "high", scale_place),
-                items=items,
-            )
-        )
-    return tuple(questionnaires)
-
-
-def _read_questions(reader: Reader, node: object, path: str) -> tuple[QuestionnaireItem, ...]:
-    questions: list[QuestionnaireItem] = []
-    for index, element in enumerate(reader.sequence(node, path)):
-        place = join(path, index)
-        body = reader.mapping(element, place)
-        kind = body.get("type")
-        if kind in ITEM_TYPES:
-            needed, allowed = ITEM_KEYS[kind]
-            optional = ["identifying", "required", *allowed]
-            reader.check_keys(body, place, ["id", "type", *needed], optional)
-        else:  # which other keys belong depends on the type: report only the type
-            reader.problem(join(place, "type"), f"must be one of {list(ITEM_TYPES)}, got {kind!r}")
-            kind = "text"
-        question = QuestionnaireItem(
-            id=reader.identifier(body.get("id"), join(place, "id"), SNAKE),
-            type=cast(ItemType, kind),
-            text=_optional(reader, body, "text", place),
-            left=_optional(reader, body, "left", place),
-            right=_optional(reader, body, "right", place),
-            reverse=reader.boolean(body, "reverse", place, default=False),
-            identifying=reader.boolean(body, "identifying", place, default=kind == "text"),
-            required=reader.boolean(body, "required", place, default=kind != "text"),
-            options=_read_options(reader, body, place) if kind == "choice" else (),
-        )
-        if any(q.id == question.id for q in questions):
-            reader.problem(join(place, "id"), f"question id {question.id!r} used twice")
-        questions.append(question)
-    if not questions:
-        reader.problem(path, "needs at least one question")
-    return tuple(questions)
-
-
-def _read_options(reader: Reader, body: dict[str, Any], place: str) -> tuple[Choice, ...]:
-    """``options: [{id: yes, label: Yes}, ...]`` (a plain text is its own label with a
-    snake_case id made from it)."""
-    path = join(place, "options")
-    options: list[Choice] = []
-    for index, element in enumerate(reader.sequence(body.get("options", []), path)):
-        where = join(path, index)
-        if isinstance(element, str):
-            element = {"id": "_".join(element.lower().split()), "label": element}
-        option = reader.mapping(element, where)
-        reader.check_keys(option, where, ["id", "label"], [])
-        choice = Choice(
-            reader.identifier(option.get("id"), join(where, "id"), SNAKE),
-            reader.text(option, "label", where),
-        )
-        if any(o.id == choice.id for o in options):
-            reader.problem(join(where, "id"), f"option id {choice.id!r} used twice")
-        options.append(choice)
-    if len(options) < 2 and "options" in body:
-        reader.problem(path, f"needs at least 2 options, got {len(options)}")
-    return tuple(options)
-
-
-def _optional(reader: Reader, body: dict[str, Any], key: str, place: str) -> str:
-    return reader.text(body, key, place, default="", allow_empty=True)
 
 
 def _properties(reader: Reader, body: dict[str, Any], place: str) -> dict[str, Any]:

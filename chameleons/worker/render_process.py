@@ -46,7 +46,7 @@ GIL_SWITCH_INTERVAL = 0.0005
 
 
 class RendererProcessConfig(Protocol):
-    """What the child needs of the worker's configuration (``runtime.WorkerConfig`` has it):
+    """What the child needs of the worker's configuration (``config.WorkerConfig`` has it):
     the robot driver's options, the renderer's, and the child's scheduling wishes. The
     runtime starts this process, so this module names what it reads rather than importing
     the runtime back."""

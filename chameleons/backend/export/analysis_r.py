@@ -14,7 +14,8 @@ not fit), and the plots. The view is an argument: ``Rscript analysis.R [folder]
 from __future__ import annotations
 
 from chameleons import __version__
-from chameleons.backend.export.analysis_r_body import MODELS, TESTS
+from chameleons.backend.export.analysis_r_models import MODELS
+from chameleons.backend.export.analysis_r_tests import TESTS
 from chameleons.backend.export.columns import TableSpec
 from chameleons.backend.export.synchrony_r import SYNCHRONY_R
 from chameleons.backend.models import Study

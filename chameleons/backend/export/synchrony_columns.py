@@ -14,7 +14,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.export.columns import Column
+from chameleons.backend.export.column_spec import Column
 from chameleons.backend.models import InteractionSynchrony, Recording
 
 METHOD = ("windowed lagged cross-correlation of head rotation and facial blendshapes "

@@ -10,6 +10,9 @@ reported beside it. Rows are read and checked by
 condition of a measure is left out of that measure, with a note saying why; descriptives
 are over the same complete cases as the test, so the table and the test describe the same
 data.
+
+One measure's test is :mod:`.measure_test`; the rows a view counts and the models fit,
+:mod:`.view_rows`; here the whole analysis (tests, effect sizes, models, reliability).
 """
 
 from __future__ import annotations
@@ -17,28 +20,19 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from itertools import combinations
 from typing import Any
 
 from chameleons.experiment.model import Questionnaire
-from chameleons.experiment.stats.descriptive import (
-    Descriptive,
-    PairwiseTest,
-    bonferroni,
-    describe,
-    wilcoxon_pair,
+from chameleons.experiment.stats.effect_sizes import BootstrapOptions, effect_sizes
+from chameleons.experiment.stats.measure_test import (
+    DEFAULT_PERMUTATIONS as DEFAULT_PERMUTATIONS,
 )
-from chameleons.experiment.stats.effect_sizes import BootstrapOptions, EffectSizes, effect_sizes
-from chameleons.experiment.stats.friedman_test import (
-    FriedmanResult,
-    PermutationResult,
-    friedman,
-    permutation_p,
-)
+from chameleons.experiment.stats.measure_test import MeasureAnalysis, analyze_measure
+from chameleons.experiment.stats.measure_test import small_sample_notes as small_sample_notes
+from chameleons.experiment.stats.measure_test import smallest_exact_p as smallest_exact_p
 from chameleons.experiment.stats.models import ModelInputError, Models, fit_models
 from chameleons.experiment.stats.numbers import finite
 from chameleons.experiment.stats.reliability import Reliability
-from chameleons.experiment.stats.rounding import fmt_p
 from chameleons.experiment.stats.scale_reliability import scale_reliability
 from chameleons.experiment.stats.scores import (
     DEFAULT_VIEW,
@@ -47,16 +41,17 @@ from chameleons.experiment.stats.scores import (
     LeftOut,
     Reader,
     Scale,
-    ScoreTable,
     View,
-    missing_reason,
-    session_reason,
 )
 from chameleons.experiment.stats.suggestion_mix import SuggestionMix, suggestion_mix
+from chameleons.experiment.stats.view_rows import (
+    model_score_rows,
+    model_suggestion_rows,
+    view_conditions,
+)
 from chameleons.experiment.stats.wilcoxon import DEFAULT_RULE, WilcoxonRule
 
 DEFAULT_MEASURES = ("accepted", "credibility", "likeability", "trust")
-DEFAULT_PERMUTATIONS = 10_000  # Monte Carlo resamples where the exact p is too costly
 PAPER_CONDITION_ORDER = ("natural", "copy", "still")
 PAPER_REFERENCE = "still"  # the models' default baseline: the robot without facial gestures
 __all__ = [
@@ -69,63 +64,6 @@ __all__ = [
     "analyze",
     "order_conditions",
 ]
-
-
-@dataclass(frozen=True)
-class MeasureAnalysis:
-    measure: str
-    conditions: dict[str, Descriptive]
-    friedman: FriedmanResult
-    p_bonferroni: float | None
-    permutation: PermutationResult | None
-    permutation_p_bonferroni: float | None
-    posthoc: list[PairwiseTest]
-    posthoc_note: str
-    excluded: list[str]  # participants without a value in every condition of this measure
-    notes: list[str]
-    # The analysed values: participant -> one value per condition (the plots draw these).
-    values: dict[str, list[float]] = field(default_factory=dict, compare=False, repr=False)
-    effect_sizes: EffectSizes | None = None
-
-    @property
-    def primary_p(self) -> tuple[float | None, float | None, str]:
-        """The Friedman p the report leads with and the post-hoc tests are gated on: the
-        permutation p (exact or Monte Carlo) when computed, else the asymptotic one; with
-        its Bonferroni correction and what it is."""
-        perm = self.permutation
-        if perm is not None and perm.p is not None:
-            how = "exact permutation" if perm.method == "exact" else "Monte Carlo permutation"
-            return perm.p, self.permutation_p_bonferroni, how
-        return self.friedman.p, self.p_bonferroni, "asymptotic chi-squared"
-
-    def to_dict(self) -> dict[str, Any]:
-        test = self.friedman
-        friedman_dict: dict[str, Any] = {
-            "n": test.n,
-            "k": test.k,
-            "chi2": test.chi2,
-            "df": test.df,
-            "p": test.p,
-            "p_bonferroni": self.p_bonferroni,
-            "kendall_w": test.kendall_w,
-            "defined": test.chi2 is not None,
-            "permutation": None,
-            "primary": dict(zip(("p", "p_bonferroni", "method"), self.primary_p, strict=True)),
-        }
-        if self.permutation is not None:
-            friedman_dict["permutation"] = {
-                **asdict(self.permutation),
-                "p_bonferroni": self.permutation_p_bonferroni,
-            }
-        return {
-            "conditions": {c: d.to_dict() for c, d in self.conditions.items()},
-            "friedman": friedman_dict,
-            "posthoc": [t.to_dict() for t in self.posthoc],
-            "posthoc_note": self.posthoc_note,
-            "excluded_participants": self.excluded,
-            "notes": self.notes,
-            "effect_sizes": finite(self.effect_sizes.to_dict()) if self.effect_sizes else None,
-        }
 
 
 @dataclass(frozen=True)
@@ -234,7 +172,7 @@ def analyze(
     if not chosen:
         raise AnalysisError(f"no measure columns found (expected some of {wanted})")
     results = {
-        m: _analyze_measure(m, table, ordered, len(chosen), alpha, permutations, seed,
+        m: analyze_measure(m, table, ordered, len(chosen), alpha, permutations, seed,
                             wilcoxon_rule)
         for m in chosen
     }  # fmt: skip
@@ -303,173 +241,8 @@ def _with_effect_sizes(
     return replace(result, effect_sizes=effects)
 
 
-def _view_condition(row: Mapping[str, Any], view: View) -> str:
-    planned = str(row.get("planned_condition") or "").strip()
-    return planned if view == "as_planned" and planned else str(row.get("condition")).strip()
-
-
-def view_conditions(rows: Iterable[Mapping[str, Any]], view: View) -> dict[tuple[str, str], str]:
-    """(participant, position) -> the condition the view counts that interaction as."""
-    return {
-        (str(row.get("participant")).strip(), str(row.get("position")).strip()): (
-            _view_condition(row, view)
-        )
-        for row in rows
-    }
-
-
-def model_score_rows(
-    rows: list[Mapping[str, Any]], table: ScoreTable, view: View, measures: Sequence[str]
-) -> list[dict[str, Any]]:
-    """The score rows the models use: the view's participants and conditions, the values
-    as the tests read them (checked and parsed), and each row's position."""
-    kept = set(table.participants)
-    result = []
-    for row in rows:
-        participant = str(row.get("participant")).strip()
-        if participant not in kept:
-            continue
-        condition = _view_condition(row, view)
-        values = table.values.get((participant, condition), {})
-        result.append(
-            {
-                "participant": participant,
-                "condition": condition,
-                **({"position": row["position"]} if "position" in row else {}),
-                **{m: values.get(m) for m in measures},
-            }
-        )
-    return result
-
-
-def model_suggestion_rows(
-    rows: Iterable[Mapping[str, Any]], table: ScoreTable, view: View
-) -> list[dict[str, Any]]:
-    """Per-suggestion rows of the view's participants, conditions as the view counts them."""
-    kept = set(table.participants)
-    return [
-        {**row, "condition": _view_condition(row, view)}
-        for row in rows
-        if str(row.get("participant")).strip() in kept
-    ]
-
-
 def order_conditions(found: Iterable[str], preferred: Sequence[str] | None = None) -> list[str]:
     """``preferred`` order (default: the paper's natural, copy, still), others sorted after."""
     found = set(found)
     first = [c for c in (preferred or PAPER_CONDITION_ORDER) if c in found]
     return first + sorted(found - set(first))
-
-
-def _analyze_measure(
-    measure: str,
-    table: ScoreTable,
-    conditions: list[str],
-    tests: int,
-    alpha: float,
-    permutations: int | None,
-    seed: int,
-    rule: WilcoxonRule,
-) -> MeasureAnalysis:
-    blocks, excluded, notes = [], [], []
-    included: dict[str, list[float]] = {}
-    for participant in table.participants:
-        keys = [(participant, c) for c in conditions]
-        values = [table.values.get(key, {}).get(measure) for key in keys]
-        if any(v is None for v in values):
-            missing = [
-                c + (f" ({why})" if (why := missing_reason(table.status.get(key, ""))) else "")
-                for c, key, v in zip(conditions, keys, values, strict=True)
-                if v is None
-            ]
-            excluded.append(participant)
-            session = session_reason(table.sessions.get(participant, ""))
-            notes.append(
-                f"{participant} left out of {measure}: no value for {', '.join(missing)}"
-                + (f"; {session}" if session else "")
-            )
-        else:
-            blocks.append([float(v) for v in values if v is not None])
-            included[participant] = blocks[-1]
-    test = friedman(blocks)
-    if test.chi2 is None:
-        notes.append(
-            f"{measure}: Friedman statistic undefined: every participant's values are tied "
-            "(or no complete participant)"
-        )
-    resamples = DEFAULT_PERMUTATIONS if permutations is None else permutations
-    permutation = permutation_p(blocks, resamples=resamples, seed=seed) if blocks else None
-    notes += small_sample_notes(measure, len(blocks), len(conditions), tests, alpha)
-    descriptives = {c: describe([b[j] for b in blocks]) for j, c in enumerate(conditions)}
-    result = MeasureAnalysis(
-        measure=measure,
-        conditions=descriptives,
-        friedman=test,
-        p_bonferroni=bonferroni(test.p, tests),
-        permutation=permutation,
-        permutation_p_bonferroni=None if permutation is None else bonferroni(permutation.p, tests),
-        posthoc=[],
-        posthoc_note="",
-        excluded=excluded,
-        notes=notes,
-        values=included,
-    )
-    _, gate, how = result.primary_p
-    posthoc, posthoc_note = _posthoc(blocks, conditions, gate, how, alpha, rule)
-    return replace(result, posthoc=posthoc, posthoc_note=posthoc_note)
-
-
-def smallest_exact_p(n: int, k: int) -> float:
-    """The smallest permutation p any data of ``n`` participants and ``k`` conditions can
-    give: every participant ordering the conditions the same way, without ties, has
-    probability ``k! / (k!)^n`` under the null."""
-    return float(math.factorial(k)) ** (1 - n) if n >= 1 and k >= 1 else 1.0
-
-
-def small_sample_notes(measure: str, n: int, k: int, tests: int, alpha: float) -> list[str]:
-    """Warnings for samples too small to test anything: one participant (Kendall's W is 1
-    or undefined whatever they answered), or so few that no data could reach significance
-    after the Bonferroni correction."""
-    if n == 0 or k < 2:
-        return []
-    smallest = smallest_exact_p(n, k)
-    notes = []
-    if n == 1:
-        notes.append(
-            f"{measure}: only 1 participant: Kendall's W is 1 (or undefined) whatever the "
-            "answers, and no test can say anything; do not report these numbers"
-        )
-    if smallest * tests >= alpha:
-        notes.append(
-            f"{measure}: n = {n} is too few: with {k} conditions the smallest possible exact "
-            f"p is {fmt_p(smallest)}, so after Bonferroni over {tests} measure(s) no data "
-            f"could reach p < {alpha:g}"
-        )
-    return notes
-
-
-def _posthoc(
-    blocks: list[list[float]],
-    conditions: list[str],
-    p_corrected: float | None,
-    how: str,
-    alpha: float,
-    rule: WilcoxonRule,
-) -> tuple[list[PairwiseTest], str]:
-    if p_corrected is None:
-        return [], "not done: the Friedman test is undefined"
-    if p_corrected >= alpha:
-        return [], f"not done: corrected Friedman p ({how}) >= {alpha}"
-    pairs = list(combinations(range(len(conditions)), 2))
-    tests = [
-        wilcoxon_pair(
-            conditions[i],
-            conditions[j],
-            [b[i] for b in blocks],
-            [b[j] for b in blocks],
-            len(pairs),
-            rule,
-        )
-        for i, j in pairs
-    ]
-    return tests, f"Wilcoxon signed-rank, Bonferroni over {len(pairs)} pairs"

@@ -54,6 +54,15 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
 from chameleons.worker.drivers.base import SPEECH_END, SPEECH_START, Driver
+from chameleons.worker.drivers.furhat_messages import (
+    UNCERTAIN_FACE_FIELDS,
+    auth_request,
+    decode,
+    face_config,
+    face_params,
+    field_request,
+    headpose,
+)
 from chameleons.worker.drivers.furhat_speech import (
     FAILED,
     Credit,
@@ -66,8 +75,6 @@ log = logging.getLogger(__name__)
 DEFAULT_URL = "ws://127.0.0.1:9000/v1/events"
 # TONGUE_OUT is not confirmed to exist on the robot's ARKit face: left out unless asked for.
 DEFAULT_EXCLUDED = ("tongueOut",)
-# Idle behaviour the project switches off, in fields the vendor's client does not send.
-UNCERTAIN_FACE_FIELDS = ("blinking", "head_sway")
 AUTH_REFUSED, AUTH_TIMEOUT = "auth_refused", "auth_timeout"
 AUTH_TIMEOUT_S = 5.0  # the vendor's client waits 5 s for ``response.auth``
 
@@ -322,11 +329,7 @@ class FurhatDriver(Driver):
                 return
 
     def _face_config(self) -> dict[str, Any]:
-        config: dict[str, Any] = {"type": "request.face.config", "visibility": True,
-                                  "microexpressions": False}  # fmt: skip
-        if self.robot_face_id:
-            config["face_id"] = self.robot_face_id
-        return config
+        return face_config(self.robot_face_id)
 
     def _uncertain_fields(self) -> list[dict[str, Any]]:
         """One message per field the vendor's client does not send (not yet refused)."""
@@ -336,19 +339,15 @@ class FurhatDriver(Driver):
                 continue
             request_id = f"{name}-{self.connects}"
             self._pending_fields[request_id] = name
-            messages.append({"type": "request.face.config", name: False,
-                             "request_id": request_id})  # fmt: skip
+            messages.append(field_request(name, request_id))
         return messages
 
     async def _handshake(self, ws: ClientConnection) -> None:
-        auth: dict[str, Any] = {"type": "request.auth"}
-        if self.key:
-            auth["key"] = self.key
-        await ws.send(json.dumps(auth))
+        await ws.send(json.dumps(auth_request(self.key)))
         try:
             async with asyncio.timeout(self.auth_timeout):
                 while True:
-                    reply = _decode(await ws.recv())
+                    reply = decode(await ws.recv())
                     if reply.get("type") == "response.auth":
                         break
         except TimeoutError:
@@ -398,15 +397,12 @@ class FurhatDriver(Driver):
     def _stream_message(self, kind: str, data: Any) -> str:
         if kind == "head":
             yaw, pitch, roll = data
-            return json.dumps({"type": "request.face.headpose", "yaw": round(yaw, 3),
-                               "pitch": round(pitch, 3), "roll": round(roll, 3),
-                               "relative": False})  # fmt: skip
-        params = {name: round(float(v), 4) for name, v in zip(self._names, data, strict=True)}
-        return json.dumps({"type": "request.face.params", "params": params})
+            return headpose(yaw, pitch, roll)
+        return face_params(self._names, data)
 
     async def _receive_loop(self, ws: ClientConnection) -> None:
         async for raw in ws:
-            message = _decode(raw)
+            message = decode(raw)
             kind = str(message.get("type", ""))
             request_id = message.get("request_id")
             if kind in ("response.speak.start", "response.speak.end"):
@@ -424,11 +420,3 @@ class FurhatDriver(Driver):
         if kind.endswith("error") or message.get("success") is False or error:
             self.refused[name] = str(error or kind)
             log.warning("furhat refused face field %r: %s", name, self.refused[name])
-
-
-def _decode(raw: str | bytes) -> dict[str, Any]:
-    try:
-        message = json.loads(raw)
-    except ValueError:
-        return {}
-    return message if isinstance(message, dict) else {}

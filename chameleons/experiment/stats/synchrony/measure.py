@@ -31,7 +31,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from chameleons.experiment.stats.synchrony.ccf import windowed_ccf
+from chameleons.experiment.stats.synchrony.curves import (
+    MIN_SEGMENTS,
+    Curves,
+    lag_curves,
+    moving,
+    nanmean,
+    segment_samples,
+    segment_shuffles,
+    surrogate_curves,
+)
+from chameleons.experiment.stats.synchrony.params import METHOD_VERSION, SyncParams
 from chameleons.experiment.stats.synchrony.streams import (
     Array,
     FaceStream,
@@ -43,47 +53,21 @@ from chameleons.experiment.stats.synchrony.streams import (
 
 Ints = npt.NDArray[np.int64]
 Bools = npt.NDArray[np.bool_]
-METHOD_VERSION = 1
-MIN_SEGMENTS = 4
 MOUTH_PREFIXES = ("mouth", "jaw")
-HEAD_PREFIX = "head_"
 
-
-@dataclass(frozen=True)
-class SyncParams:
-    """How synchrony is computed (stored with every result: a number traces back here)."""
-
-    rate_hz: int = 25  # grid rate: 0.04 s lag steps (rMEA's 25 fps), refined by a parabola
-    window_s: float = 30.0  # rMEA winSec
-    increment_s: float = 15.0  # rMEA incSec: half-overlapping windows
-    max_lag_s: float = 6.0  # rMEA lagSec: +-6 s covers the copy's 4 s delay with room
-    max_gap_s: float = 0.25  # frames further apart than this: a capture gap (missing)
-    speech_margin_s: float = 0.5  # mouth/jaw of the robot missing this long around speech
-    min_motion: float = 1e-6  # a channel whose SD is below this does not move
-    surrogates: int = 40  # pseudo-pairs per interaction (between, else segment shuffles)
-    min_between: int = 10  # fewer usable between-participant pairs: segment shuffling
-    segment_s: float = 30.0  # segment length of the within-interaction fallback
-    band: float = 0.95  # the surrogate band: this quantile of the surrogate peaks
-    lag_tolerance_s: float = 0.2  # a copy's measured lag this far off its delay: flagged
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        for name in ("window_s", "increment_s", "max_lag_s", "segment_s"):
-            samples = getattr(self, name) * self.rate_hz
-            if samples < 1 or abs(samples - round(samples)) > 1e-9:
-                raise ValueError(f"{name} = {getattr(self, name)} s is not a whole number of "
-                                 f"samples at {self.rate_hz} Hz")  # fmt: skip
-
-    def samples(self, seconds: float) -> int:
-        return round(seconds * self.rate_hz)
-
-    @property
-    def minimum_s(self) -> float:
-        """The shortest overlap of the two streams that gives one window."""
-        return self.window_s + self.max_lag_s
-
-    def to_dict(self) -> dict[str, Any]:
-        return {**asdict(self), "method_version": METHOD_VERSION}
+__all__ = [
+    "METHOD_VERSION",
+    "MIN_SEGMENTS",
+    "Curves",
+    "Peak",
+    "SyncParams",
+    "SynchronyResult",
+    "lag_curves",
+    "mask_speech",
+    "measure_synchrony",
+    "segment_samples",
+    "segment_shuffles",
+]
 
 
 @dataclass
@@ -134,14 +118,6 @@ class SynchronyResult:
         return asdict(self)
 
 
-@dataclass(frozen=True)
-class Curves:
-    combined: Array
-    head: Array
-    face: Array
-    windows: int
-
-
 def mask_speech(robot: FaceStream, speech: Sequence[tuple[float, float]],
                 params: SyncParams) -> FaceStream:  # fmt: skip
     """The robot's frames with mouth and jaw missing while it speaks (lip-sync)."""
@@ -180,7 +156,7 @@ def measure_synchrony(
     names = [c for c in participant.channels if c in set(robot.channels)]
     p = p[:, [participant.channels.index(c) for c in names]]
     r = r[:, [robot.channels.index(c) for c in names]]
-    moving_p, moving_r = _moving(p, params), _moving(r, params)
+    moving_p, moving_r = moving(p, params), moving(r, params)
     used = moving_p & moving_r
     if not used.any():
         if not moving_r.any():
@@ -204,7 +180,7 @@ def measure_synchrony(
     result.channels, result.windows = channels, curves.windows
     result.curve, result.head_curve = _listed(curves.combined), _listed(curves.head)
     result.face_curve = _listed(curves.face)
-    pseudo, kind, used_pairs = _surrogate_curves(p, r, channels, surrogates, params)
+    pseudo, kind, used_pairs = surrogate_curves(p, r, channels, surrogates, params)
     result.surrogate_kind, result.surrogate_count = kind, len(pseudo)
     result.surrogates_used = used_pairs
     if kind == "segments":
@@ -225,96 +201,6 @@ def measure_synchrony(
     return result
 
 
-def lag_curves(p: Array, r: Array, channels: Sequence[str], params: SyncParams) -> Curves | None:
-    """Per-lag mean |z| over windows, then over channels (all, head, face); ``p`` and ``r``
-    are ``(samples, channels)`` on one grid."""
-    win, inc = params.samples(params.window_s), params.samples(params.increment_s)
-    lag = params.samples(params.max_lag_s)
-    if p.shape[0] < win + lag:
-        return None
-    table = windowed_ccf(p.T, r.T, win, inc, lag)  # (channels, windows, lags)
-    per_channel = _nanmean(table, axis=1)  # (channels, lags)
-    head = np.array([c.startswith(HEAD_PREFIX) for c in channels])
-    return Curves(_nanmean(per_channel, 0), _nanmean(per_channel[head], 0),
-                  _nanmean(per_channel[~head], 0), table.shape[1])  # fmt: skip
-
-
-def segment_shuffles(
-    p: Array, r: Array, params: SyncParams, count: int
-) -> list[tuple[Array, Array]]:
-    """``count`` pseudo-pairs from one interaction: both streams cut into segments
-    (:func:`segment_samples`; the remainder dropped), each shuffled, never two segments of
-    the same time side by side. Empty when fewer than two segments fit."""
-    seg = segment_samples(p.shape[0], params)
-    n = p.shape[0] // seg
-    if n < MIN_SEGMENTS:
-        return []
-    rng = np.random.default_rng([params.seed, 1])
-    pairs = []
-    for _ in range(count):
-        first = rng.permutation(n)
-        second = rng.permutation(n)
-        while np.any(first == second):  # a derangement relative to the first
-            second = rng.permutation(n)
-        pi = (first[:, None] * seg + np.arange(seg)).ravel()
-        ri = (second[:, None] * seg + np.arange(seg)).ravel()
-        pairs.append((p[pi], r[ri]))
-    return pairs
-
-
-def segment_samples(samples: int, params: SyncParams) -> int:
-    """The segment length of the within-interaction fallback: ``segment_s``, shortened in a
-    short interaction so that ``MIN_SEGMENTS`` fit, but never below the lag range (a
-    shuffled segment then still holds the largest lag). Fewer segments would give only a
-    handful of distinct shuffles, so then there is no within-interaction baseline."""
-    seg = params.samples(params.segment_s)
-    if samples // seg < MIN_SEGMENTS:
-        seg = max(params.samples(params.max_lag_s), samples // MIN_SEGMENTS, 1)
-    return seg
-
-
-def _surrogate_curves(
-    p: Array, r: Array, channels: list[str],
-    surrogates: Sequence[tuple[FaceStream, FaceStream]], params: SyncParams,
-) -> tuple[list[Array], str, list[int]]:  # fmt: skip
-    """The pseudo-pairs' lag curves, their kind, and which of ``surrogates`` gave one."""
-    curves, used = [], []
-    grids: dict[int, Array] = {}  # one stream is in many pairs: resample it once
-
-    def own(stream: FaceStream) -> Array:
-        if id(stream) not in grids:
-            grids[id(stream)] = _own_grid(stream, channels, params)
-        return grids[id(stream)]
-
-    for index, (other_p, other_r) in enumerate(surrogates[: params.surrogates]):
-        a, b = own(other_p), own(other_r)
-        n = min(a.shape[0], b.shape[0])
-        usable = _moving(a[:n], params) & _moving(b[:n], params)
-        if not usable.any():
-            continue
-        names = [c for c, u in zip(channels, usable, strict=True) if u]
-        found = lag_curves(a[:n][:, usable], b[:n][:, usable], names, params)
-        if found is not None and np.isfinite(found.combined).any():
-            curves.append(found.combined)
-            used.append(index)
-    if len(curves) >= params.min_between:
-        return curves, "between", used
-    shuffled = []
-    for a, b in segment_shuffles(p, r, params, params.surrogates):
-        found = lag_curves(a, b, channels, params)
-        if found is not None and np.isfinite(found.combined).any():
-            shuffled.append(found.combined)
-    return (shuffled, "segments", []) if shuffled else ([], "none", [])
-
-
-def _own_grid(stream: FaceStream, channels: list[str], params: SyncParams) -> Array:
-    """A stream on a grid from its own first frame (pseudo-pairs are aligned by start)."""
-    chosen = stream.select(channels)
-    if chosen.empty:
-        return np.empty((0, len(channels)))
-    return resample(chosen, grid(chosen.start, chosen.end, params.rate_hz), params.max_gap_s)
-
-
 def _peaks(result: SynchronyResult, curve: Array, lags: Ints, pseudo: list[Array],
            params: SyncParams) -> None:  # fmt: skip
     rate = params.rate_hz
@@ -323,7 +209,7 @@ def _peaks(result: SynchronyResult, curve: Array, lags: Ints, pseudo: list[Array
     mimicry = _peak(curve, lags, lead, rate)
     if pseudo:
         table = np.vstack(pseudo)
-        result.surrogate_mean = _listed(_nanmean(table, 0))
+        result.surrogate_mean = _listed(nanmean(table, 0))
         result.surrogate_high = _listed(_nanquantile(table, params.band))
     sync_null = [p.z for c in pseudo if (p := _peak(c, lags, follow, rate)) is not None]
     mimicry_null = [p.z for c in pseudo if (p := _peak(c, lags, lead, rate)) is not None]
@@ -380,25 +266,6 @@ def _check_copy(result: SynchronyResult, delay: float, params: SyncParams) -> No
 def _p_value(observed: float, null: Sequence[float]) -> float:
     """Share of pseudo-pairs at least as synchronous, counting the observed pair."""
     return (1 + sum(1 for z in null if z >= observed)) / (1 + len(null))
-
-
-def _moving(values: Array, params: SyncParams) -> Bools:
-    finite = np.isfinite(values)
-    counts = finite.sum(0)
-    safe = np.where(finite, values, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = safe.sum(0) / counts
-        var = np.where(finite, np.square(safe - mean), 0.0).sum(0) / counts
-    return np.asarray((counts >= 3) & (np.sqrt(var) > params.min_motion))
-
-
-def _nanmean(values: Array, axis: int) -> Array:
-    """NaN-ignoring mean without the empty-slice warning (an all-missing slice: NaN)."""
-    finite = np.isfinite(values)
-    counts = finite.sum(axis)
-    total = np.where(finite, values, 0.0).sum(axis)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.asarray(np.where(counts > 0, total / counts, np.nan))
 
 
 def _nanquantile(values: Array, q: float) -> Array:
