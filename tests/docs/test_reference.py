@@ -48,11 +48,12 @@ def test_committed_reference_pages_match_the_code(
     # The first lines that differ, so a difference that depends on what ran before in the
     # same process (state another test left behind) shows what it is.
     diff = "".join(
-        list(difflib.unified_diff(
+        line
+        for path in stale
+        for line in list(difflib.unified_diff(
             path.read_text("utf-8").splitlines(keepends=True) if path.exists() else [],
             pages[path].splitlines(keepends=True), str(path), "generated now", n=0,
         ))[:20]
-        for path in stale
     )  # fmt: skip
     assert not stale, (
         f"{names} differ from the code: run `make docs-reference` and commit them\n{diff}"
