@@ -78,7 +78,7 @@ def test_the_session_page_reads_in_words(
     main = page.locator("main")
     expect(main.get_by_role("heading", name="Timeline")).to_be_visible()
     text = main.inner_text()
-    assert not re.search(r"\bNone\b", text)
+    assert not re.search(r"\bNone\b", text), repr(text[max(0, text.find("None") - 200) :][:300])
     assert "interaction -1" not in text
 
     # Suggestions by the item's name, as the rankings beside them.

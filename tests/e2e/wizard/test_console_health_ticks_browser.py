@@ -4,7 +4,9 @@ second by second, without a "no word from the server" alarm."""
 
 from __future__ import annotations
 
+import json
 import re
+from itertools import pairwise
 
 import pytest
 from playwright.sync_api import WebSocket, expect
@@ -46,4 +48,17 @@ def test_the_strip_counts_on_between_health_messages(console: Console) -> None:
         timeout=60_000,
     )
     expect(page.locator("#health")).not_to_contain_text("No word from the server")
-    assert len(healths) == 1, healths
+    # Sent on a change only: far fewer than one a second, and no message repeats the one
+    # before it but for the times that count on (on a busy machine a check that finishes
+    # late, such as espeak-ng's, is a real change and is sent).
+    assert 1 <= len(healths) <= 3, healths
+    states = [_without_times(h) for h in healths]
+    assert all(a != b for a, b in pairwise(states)), states
+
+
+def _without_times(message: str) -> dict[str, object]:
+    body = json.loads(message)
+    body.pop("speaking_age_s", None)
+    for check in body.get("checks", []):
+        check.pop("failing_for", None)
+    return dict(body)
