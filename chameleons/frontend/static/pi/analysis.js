@@ -1,8 +1,9 @@
-// The effect sizes and models arrive after the first render (they take about a second
-// for a large study); then the LaTeX copy button.
-(function () {
+// Parts of the analysis page that arrive after the first render, each a fragment of its own
+// so one shows even when another cannot be computed: the effect sizes and models (about a
+// second for a large study) and the synchrony of the faces (issue 32).
+function loadFragment(holderId, statusId, what) {
   "use strict";
-  const holder = document.getElementById("extended");
+  const holder = document.getElementById(holderId);
   if (!holder) return;
   fetch(holder.dataset.src, { credentials: "same-origin", headers: { Accept: "text/html" } })
     .then(function (response) {
@@ -14,11 +15,13 @@
       holder.dataset.loaded = "true";
     })
     .catch(function (error) {
-      const status = document.getElementById("extended-status");
-      if (status) status.textContent = "The effect sizes and models could not be loaded (" + error.message + "): reload the page.";
+      const status = document.getElementById(statusId);
+      if (status) status.textContent = what + " could not be loaded (" + error.message + "): reload the page.";
       holder.dataset.loaded = "error";
     });
-})();
+}
+loadFragment("extended", "extended-status", "The effect sizes and models");
+loadFragment("synchrony-section", "synchrony-status", "The synchrony of the faces");
 
 // Copy the LaTeX table to the clipboard (falls back to selecting it for Ctrl-C).
 (function () {
@@ -39,26 +42,4 @@
       button.textContent = "Selected: press Ctrl-C";
     }
   });
-})();
-
-// The synchrony of the faces (issue 32): a fragment of its own, so it shows even when the
-// effect sizes or models cannot be computed (and they when it cannot).
-(function () {
-  "use strict";
-  const holder = document.getElementById("synchrony-section");
-  if (!holder) return;
-  fetch(holder.dataset.src, { credentials: "same-origin", headers: { Accept: "text/html" } })
-    .then(function (response) {
-      if (!response.ok) throw new Error("HTTP " + response.status);
-      return response.text();
-    })
-    .then(function (html) {
-      holder.innerHTML = html;
-      holder.dataset.loaded = "true";
-    })
-    .catch(function (error) {
-      const status = document.getElementById("synchrony-status");
-      if (status) status.textContent = "The synchrony of the faces could not be loaded (" + error.message + "): reload the page.";
-      holder.dataset.loaded = "error";
-    });
 })();
