@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import struct
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,17 +29,9 @@ BOOTH = "booth-page"
 
 
 @pytest.fixture
-def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
-    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    yield ctx
-    ctx.term()
-
-
-@pytest.fixture
-def peer(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    server = ControlPeer(zmq_context)
-    yield server
-    server.close()
+def peer(server: ControlPeer) -> ControlPeer:
+    """The server's end of the worker's control link (tests/worker/conftest.py)."""
+    return server
 
 
 def page_frame(roll: float, captured_ms: float, sent_ms: float) -> bytes:

@@ -6,7 +6,7 @@ heartbeat of a running worker."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -25,17 +25,9 @@ BOOTH = "booth-cam"
 
 
 @pytest.fixture
-def zmq_context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
-    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    yield ctx
-    ctx.term()
-
-
-@pytest.fixture
-def peer(zmq_context: zmq.Context[zmq.Socket[bytes]]) -> Iterator[ControlPeer]:
-    server = ControlPeer(zmq_context)
-    yield server
-    server.close()
+def peer(server: ControlPeer) -> ControlPeer:
+    """The server's end of the worker's control link (tests/worker/conftest.py)."""
+    return server
 
 
 def camera_video(path: Path, seconds: float = 4.0, rate: int = 15) -> Path:
