@@ -14,12 +14,12 @@ from sqlalchemy import Engine
 from chameleons.backend.db import build_sessionmaker, session_scope
 from chameleons.backend.instruments.xdf_import import import_xdf
 from tests.backend.test_auth import add_user
+from tests.e2e.pi.screens import SCREENS, pi_page
 from tests.e2e.pi.test_dashboard_browser import SLOW
 from tests.instruments.xdf_session import recorded_session
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
-SCREENS = {"desk": (1280, 720), "phone": (390, 844)}
 
 
 @pytest.fixture
@@ -35,14 +35,8 @@ def session_id(engine: Engine, settings: Any, tmp_path: Path) -> int:
 def test_the_pi_sees_the_instruments_under_the_timeline(
     live_server: LiveServer, browser: Browser, session_id: int, screen: str
 ) -> None:
-    width, height = SCREENS[screen]
-    context = browser.new_context(viewport={"width": width, "height": height})
-    page = context.new_page()
-    page.set_default_timeout(SLOW)
-    page.goto(f"{live_server.url}/pi/sessions/{session_id}")
-    page.get_by_label("Username").fill("pia")
-    page.get_by_label("Password").fill("correct horse")
-    page.get_by_role("button", name="Log in").click()
+    width = SCREENS[screen][0]
+    context, page = pi_page(browser, f"{live_server.url}/pi/sessions/{session_id}", screen)
     emg = page.locator('#instruments figure[data-stream="BioSemi"]')
     expect(emg).to_contain_text("BioSemi · EMG · 2 channels", timeout=SLOW)
     for plot in page.locator("#instruments img.instrument-plot").all():

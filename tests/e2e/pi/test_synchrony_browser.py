@@ -16,11 +16,11 @@ from chameleons.backend.synchrony import repository, service
 from tests.backend.synchrony.recorded import recorded_study
 from tests.backend.synchrony.test_service import PARAMS
 from tests.backend.test_auth import add_user
+from tests.e2e.pi.screens import SCREENS, pi_page
 from tests.e2e.pi.test_dashboard_browser import SLOW
 from tests.support.live_server import LiveServer
 
 pytestmark = pytest.mark.browser
-SCREENS = {"desk": (1280, 720), "phone": (390, 844)}
 
 
 @pytest.fixture
@@ -38,14 +38,8 @@ def session_id(engine: Engine, settings: Any) -> int:
 def test_the_pi_sees_synchrony_on_a_desk_and_a_phone(
     live_server: LiveServer, browser: Browser, session_id: int, screen: str
 ) -> None:
-    width, height = SCREENS[screen]
-    context = browser.new_context(viewport={"width": width, "height": height})
-    page = context.new_page()
-    page.set_default_timeout(SLOW)
-    page.goto(f"{live_server.url}/pi/sessions/{session_id}")
-    page.get_by_label("Username").fill("pia")
-    page.get_by_label("Password").fill("correct horse")
-    page.get_by_role("button", name="Log in").click()
+    width = SCREENS[screen][0]
+    context, page = pi_page(browser, f"{live_server.url}/pi/sessions/{session_id}", screen)
     copy = page.locator(".synchrony:has([data-check])")
     expect(copy).to_contain_text("copy check ok", timeout=SLOW)
     plot = copy.locator("img.synchrony-plot")
