@@ -17,6 +17,7 @@ from chameleons.backend.export.column_spec import (
     session_column,
     time_column,
 )
+from chameleons.backend.export.copy_realised import realised_columns
 from chameleons.backend.export.synchrony_columns import synchrony_columns
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.suggestions import FALLBACK_WORDS
@@ -111,6 +112,7 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "The same in words: what the robot copied, how late, how much and how often "
                 "(e.g. 'copies head, 4 s late, mirror image').",
             ),
+            *realised_columns(),
             Column(
                 "recording_problem",
                 "string",
