@@ -92,10 +92,10 @@ def interactions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "renderer",
                 "string",
-                "The virtual robot display's face the study's condition chose (2d: the flat "
-                "face, 3d: the 3D head); empty where the condition names none (the booth's "
-                "own choice applied, or the robot is a Furhat).",
-                "2d, 3d",
+                "The robot face the study's condition chose (2d: the virtual display's flat "
+                "face, 3d: its 3D head, furhat: the booth's Furhat); empty where the "
+                "condition names none (the booth's own choice applied).",
+                "2d, 3d, furhat",
             ),
             # issue 31: the behaviour's design-space parameters, per interaction
             Column(
