@@ -52,3 +52,24 @@ def new(template: str, directory: Path) -> None:
     click.echo(f"Wrote {target} (from the {template} template).")
     click.echo(f"Check its plan: chameleons plan --study {target} -n 12")
     click.echo("Then load it on the Studies page (paste the file into Study YAML).")
+
+
+@study.command("power")
+@click.argument("template", required=False)
+def power(template: str | None) -> None:
+    """Sample-size presets of the design-space templates (all, or TEMPLATE): participants
+    needed for conventional effect sizes and the smallest effect detected at N = 12..48
+    (statsmodels; the assumptions are in docs/design-space.md)."""
+    from chameleons.experiment import power_presets as presets
+
+    chosen: tuple[presets.TemplatePower, ...] = presets.TEMPLATES
+    if template is not None:
+        found = presets.by_name(template)
+        if found is None:
+            names = ", ".join(t.template for t in presets.TEMPLATES)
+            raise click.BadParameter(f"no preset for {template!r}; the templates with "
+                                     f"presets are {names}", param_hint="TEMPLATE")  # fmt: skip
+        chosen = (found,)
+    for item in chosen:
+        click.echo(presets.render(item))
+    click.echo(presets.render_references(), nl=False)

@@ -81,8 +81,10 @@ class Scenario:
 class Condition:
     """A condition runs ``behaviour`` (a registered behaviour of the worker) with ``params``
     (checked against the behaviour's declared parameters, defaults filled in). ``renderer``
-    ("2d" or "3d") sets the virtual robot display's face for the condition (so embodiment
-    can be a counterbalanced factor); None leaves the booth's own choice."""
+    ("2d" or "3d") sets the virtual robot display's face for the condition, "furhat" runs it
+    on the booth's Furhat (so embodiment can be a counterbalanced factor; a booth with both
+    robots runs its worker with ``--driver virtual+furhat``); None leaves the booth's own
+    choice."""
 
     id: str
     label: str

@@ -34,7 +34,9 @@ GENDERS = ("female", "male", "other")
 MIN_CONDITIONS, MAX_CONDITIONS = 2, 6
 NAME_PAIRINGS = ("per_actor", "per_interaction")
 FACE_PAIRINGS = ("independent", "per_actor")
-RENDERERS = ("2d", "3d")  # the virtual robot display's face a condition may choose
+# The robot face a condition may choose: the virtual display's 2d or 3d face, or the booth's
+# Furhat (its worker drives both robots with --driver virtual+furhat, or a Furhat only).
+RENDERERS = ("2d", "3d", "furhat")
 # Declared parameters per behaviour name (see chameleons.worker.behaviours.params); None
 # for a behaviour this machine does not have (a stored snapshot keeps its params as stored).
 Behaviours = Mapping[str, Mapping[str, Any] | None]
@@ -71,13 +73,15 @@ def read_conditions(
 
 
 def _renderer(reader: Reader, body: dict[str, Any], place: str) -> str | None:
-    """The virtual robot's face for the condition: 2d, 3d, or None (the booth's own)."""
+    """The robot's face for the condition: 2d, 3d (the display), furhat, or None (the
+    booth's own)."""
     value = body.get("renderer")
     if value is None:
         return None
     if value not in RENDERERS:
         reader.problem(
-            join(place, "renderer"), f"must be 2d or 3d (the robot display's face), got {value!r}"
+            join(place, "renderer"),
+            f"must be 2d or 3d (the robot display's face) or furhat, got {value!r}",
         )
         return None
     return str(value)

@@ -13,6 +13,9 @@ input (``copy``: its delay), which the renderer leaves out of its capture-to-sen
 The participant's neutral head pose (``copy`` re-centres on it) is measured here from the
 participant frames; ``recentre_head`` measures it afresh, and each new neutral is published
 as an ``event.behaviour`` ``head_neutral`` event (logged by the server with the session).
+What the behaviour drew at random (``copy``'s bouts and jittered delays) is published as an
+``event.behaviour`` ``copy_draw`` event per draw, when its output first shows it (the server
+logs it as ``robot.copy_draw`` of the running interaction; docs/design-space.md).
 """
 
 from __future__ import annotations
@@ -120,6 +123,8 @@ class BehaviourStage:
                 if self.router.context.head_neutral.changed:
                     send_message(pub, self._neutral_message())
                 self._publish_due(pub)
+                for report in self.router.realised():
+                    send_message(pub, self._draw_message(report))
                 if self.clock() >= next_stats:
                     next_stats += STATS_INTERVAL
                     send_message(pub, self._stats_message())
@@ -200,6 +205,15 @@ class BehaviourStage:
         body = {"worker_time": now, "wall_time": time.time() - (time.monotonic() - now),
                 **self._head()}  # fmt: skip
         return Message("event.behaviour", "head_neutral", 0, self.name, now, body)
+
+    def _draw_message(self, report: Mapping[str, Any]) -> Message:
+        """A random draw the output reached: when (``worker_time``, ``wall_time``) and what."""
+        now = self.clock()
+        when = float(report["t"])
+        body = {"worker_time": when, "wall_time": time.time() - (time.monotonic() - when),
+                "behaviour": self.router.current_name,
+                **{k: v for k, v in report.items() if k != "t"}}  # fmt: skip
+        return Message("event.behaviour", "copy_draw", 0, self.name, now, body)
 
     def _status(self, _body: Mapping[str, Any]) -> Mapping[str, Any]:
         return self._stats_body()

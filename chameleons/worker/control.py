@@ -37,6 +37,8 @@ PLAY_PROMPT: Final = "play_prompt"
 STOP_PROMPT: Final = "stop_prompt"
 SET_FACE: Final = "set_face"
 DISPLAY_RENDERERS: Final = ("2d", "3d")  # set_face "renderer": the virtual display's face
+# ... or "furhat": the booth's Furhat (a worker with --driver furhat or virtual+furhat).
+FURHAT_RENDERER: Final = "furhat"
 START_RECORDING: Final = "start_recording"
 STOP_RECORDING: Final = "stop_recording"
 STATUS: Final = "status"
@@ -75,7 +77,8 @@ COMMAND_FIELDS: Final[dict[str, dict[str, tuple[tuple[type, ...], bool]]]] = {
         "play_id": ((str, type(None)), False),
     },
     STOP_PROMPT: {},
-    # renderer: the virtual robot display's face, "2d" or "3d" (a study condition may set it).
+    # renderer: the virtual robot display's face, "2d" or "3d", or "furhat" (the booth's
+    # Furhat, with driver virtual+furhat); a study condition may set it.
     SET_FACE: {"face_id": ((str,), True), "renderer": ((str, type(None)), False)},
     START_RECORDING: {"interaction_id": ((str, int), True), "directory": ((str,), True)},
     STOP_RECORDING: {"interaction_id": ((str, int), False)},

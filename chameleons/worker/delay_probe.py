@@ -9,12 +9,15 @@ includes everything after the capture: the behaviour's delay, the head filter's 
 delay net of its look-ahead, and the renderer's send timing. A window without head movement
 (less than ``min_motion_deg`` of yaw range) or without a clear match gives no figure. A
 copy whose yaw is the captured yaw negated (a condition whose ``mirror`` differs from the
-booth's) matches too, and says ``mirrored``.
+booth's) matches too, and says ``mirrored``. At that lag the slope of the sent yaw on the
+captured yaw (least squares, sign dropped) is the copy's realised ``gain`` on the head turn:
+1 for a copy of the same amplitude, the condition's ``gain`` otherwise (the booth check
+judges it).
 
 The brows are watched over the same window (:meth:`DelayProbe.brows`): how far the
 participant's brows moved (the largest of the brow-raise blendshapes, peak to peak) and how
 far the robot's moved, so the check can say whether a condition that copies the head only
-left the brows at neutral.
+left the brows at neutral (and, their ratio, whether a brow gain was applied).
 """
 
 from __future__ import annotations
@@ -73,8 +76,8 @@ class DelayProbe:
                 "sent": round(max(sent) - min(sent), 3)}  # fmt: skip
 
     def measure(self, now: float) -> dict[str, Any] | None:
-        """``{"delay_s", "correlation", "motion_deg", "mirrored"}`` for the last window, or
-        None."""
+        """``{"delay_s", "correlation", "motion_deg", "mirrored", "gain"}`` for the last
+        window, or None."""
         start = now - self.window_s
         with self._lock:
             captured = np.array([p for p in self._captured if p[0] >= start], dtype=np.float64)
@@ -90,7 +93,7 @@ class DelayProbe:
             return None
         a = np.interp(grid, captured[:, 0], captured[:, 1])
         b = np.interp(grid, sent[:, 0], sent[:, 1])
-        scores = self._correlations(a, b)
+        scores, slopes = self._correlations(a, b)
         if not scores.size or not np.isfinite(scores).any():
             return None
         best = int(np.nanargmax(scores))
@@ -103,17 +106,19 @@ class DelayProbe:
             scores, mirrored = flipped, True
         return {"delay_s": round(self._refine(scores, best) / self.rate_hz, 3),
                 "correlation": round(float(scores[best]) * (-1 if mirrored else 1), 3),
-                "motion_deg": round(motion, 1), "mirrored": mirrored}  # fmt: skip
+                "motion_deg": round(motion, 1), "mirrored": mirrored,
+                "gain": round(abs(float(slopes[best])), 3)}  # fmt: skip
 
-    def _correlations(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Pearson correlation of ``a`` with ``b`` shifted later by each lag, all lags at
-        once (one C-level correlation plus running sums: this runs in a worker thread
-        beside the 125 Hz renderer, so no Python loop over lags). NaN where either side
-        does not move, or the overlap is under a second."""
+    def _correlations(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pearson correlation of ``a`` with ``b`` shifted later by each lag, and the slope
+        of ``b`` on ``a`` at each lag, all lags at once (one C-level correlation plus
+        running sums: this runs in a worker thread beside the 125 Hz renderer, so no Python
+        loop over lags). NaN where either side does not move, or the overlap is under a
+        second."""
         n = len(a)
         lags = min(int(self.max_lag_s * self.rate_hz), n - int(self.rate_hz))
         if lags < 0:
-            return np.array([])
+            return np.array([]), np.array([])
         k = np.arange(lags + 1)
         m = (n - k).astype(np.float64)
         # sum_i a[i] * b[i + k] for each k: the "full" correlation's tail, lag 0 first.
@@ -123,11 +128,13 @@ class DelayProbe:
         sx, sx2 = ca[n - k], ca2[n - k]  # a[: n - k]
         sy, sy2 = cb[n] - cb[k], cb2[n] - cb2[k]  # b[k:]
         vx, vy = sx2 - sx * sx / m, sy2 - sy * sy / m
+        cov = sxy - sx * sy / m
         with np.errstate(invalid="ignore", divide="ignore"):
-            scores = (sxy - sx * sy / m) / np.sqrt(vx * vy)
+            scores = cov / np.sqrt(vx * vy)
+            slopes = cov / vx
         flat = (vx < 1e-9 * m) | (vy < 1e-9 * m)
         scores[flat] = np.nan
-        return np.asarray(scores, dtype=np.float64)
+        return np.asarray(scores, dtype=np.float64), np.asarray(slopes, dtype=np.float64)
 
     @staticmethod
     def _refine(scores: np.ndarray, k: int) -> float:

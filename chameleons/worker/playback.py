@@ -73,10 +73,14 @@ class PlaybackStage:
 
     def __init__(
         self, context: zmq.Context[zmq.Socket[bytes]], endpoints: Endpoints,
-        *, speaks_text: bool = False,
+        *, speaks_text: bool = False, renderers: tuple[str, ...] = DISPLAY_RENDERERS,
+        driver: str = "",
     ) -> None:  # fmt: skip
+        """``renderers``: the condition renderers this booth's robot can run (``furhat``
+        only where it drives a Furhat); ``driver``: its name, for the refusal."""
         self.context, self.endpoints = context, endpoints
         self.speaks_text = speaks_text
+        self.renderers, self.driver = renderers, driver
         self.errors: Counter[str] = Counter()
         self.prompts = 0
         self._pub: zmq.Socket[bytes] | None = None
@@ -139,8 +143,13 @@ class PlaybackStage:
 
     def _face(self, body: Mapping[str, Any]) -> Mapping[str, Any]:
         renderer = body.get("renderer")
-        if renderer not in (None, *DISPLAY_RENDERERS):
-            raise CommandError("bad_renderer", f"renderer is 2d or 3d, got {renderer!r}")
+        if renderer == "furhat" and renderer not in self.renderers:
+            raise CommandError("bad_renderer", f"this booth drives no Furhat (its worker's "
+                               f"driver is {self.driver or 'not a Furhat'}): a furhat "
+                               "condition needs a worker started with --driver furhat or "
+                               "--driver virtual+furhat")  # fmt: skip
+        if renderer not in (None, *self.renderers):
+            raise CommandError("bad_renderer", f"renderer is 2d, 3d or furhat, got {renderer!r}")
         self._publish(Message("playback.face", "face", 0, self.name, body=dict(body)))
         result = {"face_id": body["face_id"]}
         if renderer is not None:

@@ -26,7 +26,7 @@ import zmq
 from chameleons.worker.behaviour_stage import BehaviourStage, BehaviourStageConfig
 from chameleons.worker.config import WorkerConfig as WorkerConfig
 from chameleons.worker.control import CALIBRATE_WEBCAM, MARK_HEAD_REST, RESET_PAIRING
-from chameleons.worker.drivers import speaks_text
+from chameleons.worker.drivers import renderers, speaks_text
 from chameleons.worker.hub import ControlHub, HubConfig
 from chameleons.worker.ingest.livelink import rotation_factor
 from chameleons.worker.ingest.pairing import SenderLock
@@ -108,7 +108,11 @@ class Worker:
             mirror=config.mirror,
         ))  # fmt: skip
         self.playback = PlaybackStage(
-            self.context, self.endpoints, speaks_text=speaks_text(config.driver)
+            self.context,
+            self.endpoints,
+            speaks_text=speaks_text(config.driver),
+            renderers=renderers(config.driver),
+            driver=config.driver,
         )
         # In-process (the default) the renderer is a stage thread like the others.
         self.renderer: RendererStage | None = None

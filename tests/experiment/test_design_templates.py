@@ -48,7 +48,7 @@ def test_the_templates_say_what_they_copy() -> None:
     partial = {c.id: c.params for c in load_study(templates()["partial_full"]).conditions}
     assert partial["nods"]["only"] == ["nods"]
     embodiment = load_study(templates()["embodiment"]).conditions
-    assert [c.renderer for c in embodiment] == ["2d", "3d", None]
+    assert [c.renderer for c in embodiment] == ["2d", "3d", "furhat"]
 
 
 def test_study_new_copies_a_template_and_refuses_what_it_cannot(tmp_path: Path) -> None:

@@ -64,3 +64,18 @@ def test_the_brows_raised_and_the_robots_are_reported_peak_to_peak() -> None:
         probe.brow_sent(k / 60, 0.0)
     assert probe.brows(2.0) == {"captured": 0.6, "sent": 0.0}
     assert DelayProbe().brows(2.0) is None
+
+
+@pytest.mark.parametrize(
+    ("gain", "offset", "sign"), [(1.0, 0.0, 1), (0.5, 3.0, 1), (2.0, -4.0, -1)]
+)
+def test_the_copys_gain_on_the_head_turn_is_the_slope_at_the_delay(
+    gain: float, offset: float, sign: int
+) -> None:
+    """The robot's turn over the participant's: the gain, whatever the robot's head rests
+    at (a re-centred head) and on either side (mirrored)."""
+    sent = np.arange(0.0, 18.0, 1 / 25)
+    measured = fed(0.0, copy=sign * gain * turn(sent - 1.2) + offset).measure(18.0)
+    assert measured is not None
+    assert measured["gain"] == pytest.approx(gain, rel=0.02)
+    assert measured["mirrored"] is (sign < 0)

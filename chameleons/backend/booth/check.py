@@ -219,8 +219,16 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
                     f"{seen.get('behaviour') or 'nothing'}, not copy", **figures)  # fmt: skip
     brow_status, brow_words = check_copy.judge_brows(params, _mapping(seen.get("movement_brows")))
     figures["brows"] = seen.get("movement_brows")
-    brow_part = f"; {brow_words}" if brow_words else ""
     probe = seen.get("movement_delay")
+    gain_status, gain_words = check_copy.judge_gain(
+        params, _mapping(probe), _mapping(seen.get("movement_brows"))
+    )
+    figures.update(gain=params.get("gain", 1.0),
+                   measured_gain=_number(probe.get("gain")) if isinstance(probe, Mapping)
+                   else None)  # fmt: skip
+    if gain_status == FAIL:
+        brow_status = FAIL  # the brows' and the head's gain fail the step alike
+    brow_part = "".join(f"; {w}" for w in (brow_words, gain_words) if w)
     measured = _number(probe.get("delay_s")) if isinstance(probe, Mapping) else None
     if not check_copy.copies_head_turn(params):
         status = FAIL if brow_status == FAIL else WARN if brow_status != PASS else PASS

@@ -14,7 +14,14 @@ reverse, raises the eyebrows). From what the worker reports it judges:
   neutral and brows copied must move;
 - **intermittent**: the robot copies in bouts, so the movement may fall into a rest: only a
   copied bout is judged (no copy measured is a warning saying so);
-- ``only``: the step says what is copied (the named expressions).
+- ``only``: the step says what is copied (the named expressions);
+- **the gain**: the robot's head turn over the participant's (the probe's least-squares
+  slope of the sent yaw on the captured yaw at the measured delay) against the condition's
+  gain on ``HeadYaw``, within ``GAIN_TOLERANCE`` of it (relative); when the brows are copied
+  and were raised, the robot's brow raise over the participant's against the brows' gain
+  too (not with ``only`` or ``intermittent``, whose gating cuts the raise, nor when the
+  gained raise would pass the blendshapes' ceiling of 1). Every condition is judged on it:
+  a gain of 1 must copy at the participant's amplitude.
 """
 
 from __future__ import annotations
@@ -34,6 +41,10 @@ MAX_DELAY_ERROR_S = 0.25  # measured against the configured copy delay
 BROWS_MOVED = 0.2  # the participant's brow raise (0..1, peak to peak) that counts as raised
 BROWS_STILL = 0.05  # the robot's brows moved less than this: left at neutral
 BROWS = frozenset(GROUPS["brows"])
+# The probe's brow figure is the largest of these (chameleons/worker/recorder_stage.py).
+BROW_RAISES = ("browInnerUp", "browOuterUpLeft", "browOuterUpRight")
+GAIN_TOLERANCE = 0.2  # measured gain within +-20 % of the configured one
+BROW_CEILING = 0.95  # a gained raise above this is cut at 1: its ratio is not the gain
 
 
 def delay_range(params: Mapping[str, Any]) -> tuple[float, float]:
@@ -103,6 +114,52 @@ def judge_brows(params: Mapping[str, Any], brows: Mapping[str, Any] | None) -> t
         f"brows not copied, as configured (raise {raised:.2f}, robot {sent:.2f})" if ok
         else f"the brows were copied (raise {raised:.2f}, robot {sent:.2f}) but the "
         "condition does not copy them")  # fmt: skip
+
+
+def gain_of(params: Mapping[str, Any], channel: str) -> float:
+    """The condition's gain on ``channel`` (a number for all, or a mapping whose later keys
+    win, as the copy behaviour applies them; absent: 1)."""
+    gain = params.get("gain", 1.0)
+    if not isinstance(gain, Mapping):
+        return float(gain)
+    value = 1.0
+    for key, number in gain.items():
+        if channel in expand([key]):
+            value = float(number)
+    return value
+
+
+def judge_gain(params: Mapping[str, Any], probe: Mapping[str, Any] | None,
+               brows: Mapping[str, Any] | None) -> tuple[str, str]:  # fmt: skip
+    """``(status, words)`` for the gain realised on the head turn (the probe's ``gain``)
+    and, where they can show it, on the brows; ``""`` status when nothing was judged."""
+    parts: list[tuple[bool, str]] = []
+    measured = _number((probe or {}).get("gain"))
+    if copies_head_turn(params) and measured is not None:
+        parts.append(_gain_part("head turn", gain_of(params, "HeadYaw"), measured))
+    raised, sent = _number((brows or {}).get("captured")), _number((brows or {}).get("sent"))
+    gains = {gain_of(params, name) for name in BROW_RAISES}
+    plain = not params.get("only") and not params.get("intermittent")
+    if (plain and set(BROW_RAISES) <= copied(params) and len(gains) == 1
+            and raised is not None and sent is not None and raised >= BROWS_MOVED):  # fmt: skip
+        (gain,) = gains
+        if raised * gain <= BROW_CEILING:
+            parts.append(_gain_part("brow raise", gain, sent / raised))
+    if not parts:
+        return "", ""
+    status = "pass" if all(ok for ok, _ in parts) else "fail"
+    return status, "; ".join(words for _, words in parts)
+
+
+def _gain_part(what: str, configured: float, measured: float) -> tuple[bool, str]:
+    low, high = configured * (1 - GAIN_TOLERANCE), configured * (1 + GAIN_TOLERANCE)
+    ok = low <= measured <= high if configured > 0 else measured < 0.05
+    allowed = f"allowed {low:.2f}-{high:.2f}" if configured > 0 else "allowed below 0.05"
+    ratio = f"the robot's was {measured:.2f} times the participant's"
+    if ok:
+        return True, f"gain {configured:g} realised on the {what}: {ratio} ({allowed})"
+    return False, (f"gain NOT realised on the {what}: {ratio}, the condition's gain is "
+                   f"{configured:g} ({allowed})")  # fmt: skip
 
 
 def what_is_copied(params: Mapping[str, Any]) -> str:

@@ -23,7 +23,9 @@
 - ``session.started``: the booth's face capture is told to pair with the next phone that
   sends (``capture.pairing_reset``, :mod:`chameleons.backend.wizard.capture`);
 - the worker's ``head_neutral`` event (the neutral pose the copied head is re-centred on)
-  becomes ``robot.head_neutral`` of the session running on that booth;
+  becomes ``robot.head_neutral`` of the session running on that booth, and its
+  ``copy_draw`` events (a bout or jittered delay that ``copy`` drew and began to show)
+  ``robot.copy_draw`` of the interaction running there (the export summarises them);
 - a booth's worker connecting (``worker_connected``, ``worker_restarted``) while an
   interaction runs there: whatever the worker has not acknowledged of that interaction's
   set-up and recording is sent now (an interaction started before the worker came up would
@@ -87,6 +89,8 @@ AUTH_STATES = frozenset({"auth_refused", "auth_timeout"})
 # (sent before the server's subscription took: ZeroMQ drops a PUB's messages until then).
 HEARTBEAT_STATES = AUTH_STATES | {"connected"}
 HEAD_NEUTRAL = "robot.head_neutral"
+COPY_DRAW = "robot.copy_draw"
+LOGGED_WORKER_EVENTS = {"head_neutral": HEAD_NEUTRAL, "copy_draw": COPY_DRAW}
 SESSION_STARTED = "session.started"
 
 
@@ -185,11 +189,12 @@ class BoothFlow:
             self._enqueue(f"booth:{booth}", partial(self._recordings.route_reported, dict(body)))
         elif message.type == "recording_failed":
             self._enqueue(f"booth:{booth}", partial(self._recordings.route_failed, dict(body)))
-        elif message.type == "head_neutral":  # the copied head's new neutral pose
+        elif message.type in LOGGED_WORKER_EVENTS:  # a new neutral head pose; a random draw
             payload = {"booth": booth, **{k: v for k, v in body.items() if k != "wall_time"}}
             when = body.get("worker_time")
             when = float(when) if isinstance(when, int | float) else None
-            job = partial(self._db.log_outage, booth, HEAD_NEUTRAL, payload, when)
+            kind = LOGGED_WORKER_EVENTS[message.type]
+            job = partial(self._db.log_outage, booth, kind, payload, when)
             self._enqueue(f"booth:{booth}", job)
 
     def _on_telemetry(self, message: Message) -> None:

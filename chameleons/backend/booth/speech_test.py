@@ -28,6 +28,7 @@ from chameleons.prompts import Catalogue, Prompt
 from chameleons.prompts.loader import actor_directories
 from chameleons.prompts.locations import prompts_root
 from chameleons.worker.control import PLAY_PROMPT
+from chameleons.worker.drivers import plays_wav
 
 PREFIX = "booth-check:"
 
@@ -52,7 +53,7 @@ def _audio_url(state: Any, actor: str, prompt: Prompt, booth: str) -> str:
     workers = getattr(worker_link.bridge_of(state), "workers", None)
     info = workers().get(booth) if callable(workers) else None
     hello = getattr(info, "hello", None) or {}
-    furhat = isinstance(hello, dict) and hello.get("driver") == "furhat"  # Furhat wants WAV
+    furhat = isinstance(hello, dict) and plays_wav(str(hello.get("driver")))  # Furhat: WAV
     key = signing_key(cast(FastAPI, SimpleNamespace(state=state)))
     path = media_path(key, actor, str(prompt.audio), wav=furhat)
     return f"{state.settings.effective_public_url}{path}"

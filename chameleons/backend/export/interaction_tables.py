@@ -17,6 +17,7 @@ from chameleons.backend.export.column_spec import (
     session_column,
     time_column,
 )
+from chameleons.backend.export.copy_realised import realised_columns
 from chameleons.backend.export.synchrony_columns import synchrony_columns
 from chameleons.experiment.model import Study as StudySpec
 from chameleons.experiment.suggestions import FALLBACK_WORDS
@@ -91,10 +92,10 @@ def interactions_table(spec: StudySpec) -> TableSpec:
             Column(
                 "renderer",
                 "string",
-                "The virtual robot display's face the study's condition chose (2d: the flat "
-                "face, 3d: the 3D head); empty where the condition names none (the booth's "
-                "own choice applied, or the robot is a Furhat).",
-                "2d, 3d",
+                "The robot face the study's condition chose (2d: the virtual display's flat "
+                "face, 3d: its 3D head, furhat: the booth's Furhat); empty where the "
+                "condition names none (the booth's own choice applied).",
+                "2d, 3d, furhat",
             ),
             # issue 31: the behaviour's design-space parameters, per interaction
             Column(
@@ -111,6 +112,7 @@ def interactions_table(spec: StudySpec) -> TableSpec:
                 "The same in words: what the robot copied, how late, how much and how often "
                 "(e.g. 'copies head, 4 s late, mirror image').",
             ),
+            *realised_columns(),
             Column(
                 "recording_problem",
                 "string",

@@ -16,6 +16,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.export.columns import LIST_SEPARATOR
+from chameleons.backend.export.copy_realised import realised_columns, realised_values
 from chameleons.backend.export.queries import (
     BATCH,
     counted_interactions,
@@ -94,6 +95,8 @@ def interaction_rows(
     actors = {actor.id: actor for actor in spec.actors}
     behaviours = {condition.id: condition.behaviour for condition in spec.conditions}
     problems = recording_problems(db, study.id)
+    realised = realised_values(db, study.id)
+    nothing_drawn = {column.name: None for column in realised_columns()}
     records = counted_interactions(db, study.id, include_rehearsal)
     synchrony = synchrony_values(db, [record.interaction.id for record in records])
     for record in records:
@@ -130,6 +133,7 @@ def interaction_rows(
             # issue 31: what the robot's behaviour was told, and the same in words
             "behaviour_params": _params_text(interaction.behaviour_params),
             "behaviour_words": interaction.behaviour_words,
+            **realised.get(interaction.id, nothing_drawn),
             "recording_problem": problems.get(interaction.id),
             "face_source": interaction.face_source,
             "face_calibration": interaction.face_calibration,

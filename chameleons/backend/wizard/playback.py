@@ -26,7 +26,7 @@ from chameleons.backend.models.base import utcnow
 from chameleons.backend.wizard import service, speech, typed_speech, worker_link
 from chameleons.backend.wizard.service import Cue, Outcome
 from chameleons.worker.control import PLAY_PROMPT, STOP_PROMPT
-from chameleons.worker.drivers import speaks_text
+from chameleons.worker.drivers import plays_wav, speaks_text
 
 T = TypeVar("T")
 
@@ -121,7 +121,7 @@ def audio_url(state: Any, cue: Cue) -> str:
     if cue.audio is None:
         return ""
     key = signing_key(cast(FastAPI, SimpleNamespace(state=state)))
-    path = media_path(key, cue.actor, cue.audio, wav=_driver(state, cue.booth) == "furhat",
+    path = media_path(key, cue.actor, cue.audio, wav=plays_wav(_driver(state, cue.booth) or ""),
                       language=cue.language_folder)  # fmt: skip
     return f"{state.settings.effective_public_url}{path}"
 

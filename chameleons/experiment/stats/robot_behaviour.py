@@ -7,8 +7,11 @@ beside the descriptives.
 The per-interaction ``seed`` (and ``yoked_copy``'s replayed ``path``) differ by design and
 are not a variation. For a delay distribution the summary gives the distribution's own mean
 and SD (uniform ``[a, b]``: ``(a + b) / 2`` and ``(b - a) / sqrt(12)``; normal: its mean and
-sd, before truncation to 0..11.5 s): the delays the worker actually drew are not recorded,
-so their mean and SD cannot be reported (docs/design-space.md).
+sd, before truncation to 0..11.5 s), and beside it what was *realised*: the delays the worker
+drew and showed (its ``copy_draw`` events, summarised per interaction in the export's
+``realised_delay_mean_s``, ``realised_delay_sd_s``, ``delay_draws``), pooled over the
+variant's interactions, and for ``intermittent`` the realised share of time copying
+(``copy_fraction``, mean over interactions) and bouts per interaction (``copy_bouts``).
 """
 
 from __future__ import annotations
@@ -30,10 +33,40 @@ class Variant:
     interactions: int
     delay_mean_s: float | None = None  # a delay distribution's mean and SD (not realised)
     delay_sd_s: float | None = None
+    realised: Realised | None = None  # what the worker drew and showed, when reported
 
     def to_dict(self) -> dict[str, Any]:
         return {"words": self.words, "interactions": self.interactions,
-                "delay_mean_s": self.delay_mean_s, "delay_sd_s": self.delay_sd_s}  # fmt: skip
+                "delay_mean_s": self.delay_mean_s, "delay_sd_s": self.delay_sd_s,
+                "realised": None if self.realised is None else self.realised.to_dict()}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Realised:
+    """The draws of a variant's interactions: delays pooled over all draws; the bouts'
+    share of time and count per interaction (means over the interactions that had bouts)."""
+
+    draws: int
+    delay_mean_s: float | None
+    delay_sd_s: float | None
+    copy_fraction: float | None = None
+    bouts_per_interaction: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"draws": self.draws, "delay_mean_s": self.delay_mean_s,
+                "delay_sd_s": self.delay_sd_s, "copy_fraction": self.copy_fraction,
+                "bouts_per_interaction": self.bouts_per_interaction}  # fmt: skip
+
+    def words(self) -> str:
+        parts = []
+        if self.delay_mean_s is not None:
+            sd = "" if self.delay_sd_s is None else f", SD {self.delay_sd_s:.2f} s"
+            parts.append(f"realised delay mean {self.delay_mean_s:.2f} s{sd} "
+                         f"({self.draws} draw{'s' if self.draws != 1 else ''})")  # fmt: skip
+        if self.copy_fraction is not None:
+            parts.append(f"copying {100 * self.copy_fraction:.0f}% of the time, "
+                         f"{self.bouts_per_interaction:.1f} bouts per interaction")  # fmt: skip
+        return "; ".join(parts)
 
 
 @dataclass(frozen=True)
@@ -61,6 +94,7 @@ def robot_behaviour(
     over the interactions of ``participants`` (all when None) that set the robot up."""
     kept = None if participants is None else {str(p) for p in participants}
     found: dict[str, dict[str, tuple[str, dict[str, Any], int]]] = {}
+    drawn: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for row in interactions:
         params = _params(row.get("behaviour_params"))
         condition = row.get("condition")
@@ -74,16 +108,44 @@ def robot_behaviour(
         variants = found.setdefault(str(condition), {})
         first_words, first_params, n = variants.get(key, (words, shared, 0))
         variants[key] = (first_words, first_params, n + 1)
+        drawn.setdefault((str(condition), key), []).append(row)
     summary = []
     for condition in sorted(found):
-        ran = [Variant(w, n, *_delay_spread(p)) for w, p, n in found[condition].values()]
+        ran = [Variant(w, n, *_delay_spread(p), realised(drawn[(condition, key)]))
+               for key, (w, p, n) in found[condition].items()]  # fmt: skip
         summary.append(ConditionBehaviour(condition, tuple(ran)))
     return summary
 
 
+def realised(rows: Iterable[Mapping[str, Any]]) -> Realised | None:
+    """The realised columns of some interactions pooled (None when none drew anything): the
+    delays' mean and SD over all their draws, from each interaction's n, mean and SD."""
+    parts: list[tuple[int, float, float]] = []
+    fractions, bouts = [], []
+    for row in rows:
+        n, m = _number(row.get("delay_draws")), _number(row.get("realised_delay_mean_s"))
+        if n and m is not None:
+            parts.append((int(n), m, _number(row.get("realised_delay_sd_s")) or 0.0))
+        fraction, count = _number(row.get("copy_fraction")), _number(row.get("copy_bouts"))
+        if fraction is not None and count:
+            fractions.append(fraction)
+            bouts.append(count)
+    if not parts and not fractions:
+        return None
+    n_total = sum(n for n, _, _ in parts)
+    mean = sum(n * m for n, m, _ in parts) / n_total if n_total else None
+    sd: float | None = None
+    if mean is not None and n_total > 1:
+        squares = sum((n - 1) * s**2 + n * (m - mean) ** 2 for n, m, s in parts)
+        sd = math.sqrt(squares / (n_total - 1))
+    return Realised(n_total, mean, sd,
+                    sum(fractions) / len(fractions) if fractions else None,
+                    sum(bouts) / len(bouts) if bouts else None)  # fmt: skip
+
+
 def worth_reporting(summary: Iterable[ConditionBehaviour]) -> bool:
-    """Whether any condition's parameters varied or drew its delay at random."""
-    return any(c.varied or c.jittered for c in summary)
+    """Whether any condition's parameters varied or drew at random (delays, bouts)."""
+    return any(c.varied or c.jittered or any(v.realised for v in c.variants) for c in summary)
 
 
 def render_text(summary: Iterable[ConditionBehaviour], labels: Mapping[str, str]) -> str:
@@ -93,8 +155,11 @@ def render_text(summary: Iterable[ConditionBehaviour], labels: Mapping[str, str]
         lines.append(f"  {labels.get(c.condition, c.condition)}{flag}:")
         for v in c.variants:
             delay = ("" if v.delay_mean_s is None else f"; delay distribution mean "
-                     f"{v.delay_mean_s:.2f} s, SD {v.delay_sd_s:.2f} s (realised delays not "
-                     "recorded)")  # fmt: skip
+                     f"{v.delay_mean_s:.2f} s, SD {v.delay_sd_s:.2f} s")  # fmt: skip
+            if v.realised is not None:
+                delay += f"; {v.realised.words()}"
+            elif v.delay_mean_s is not None:
+                delay += " (no realised delays reported)"
             lines.append(f"    {v.interactions} interaction{'s' if v.interactions != 1 else ''}: "
                          f"{v.words or '(no words recorded)'}{delay}")  # fmt: skip
     return "\n".join(lines) + "\n"
@@ -110,6 +175,17 @@ def _params(value: Any) -> dict[str, Any] | None:
             return None
         return loaded if isinstance(loaded, dict) else None
     return None
+
+
+def _number(value: Any) -> float | None:
+    """A number from a row (the database's, or interactions.csv's text; empty: None)."""
+    if isinstance(value, bool) or value is None or value == "":
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
 
 
 def _delay_spread(params: Mapping[str, Any]) -> tuple[float | None, float | None]:

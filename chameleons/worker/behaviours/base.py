@@ -93,6 +93,11 @@ class Behaviour(ABC):
         """Parameters for status reports."""
         return {}
 
+    def realised(self) -> list[dict[str, Any]]:
+        """What the behaviour drew at random and has started to show since the last call
+        (``copy``: its bouts and jittered delays); most behaviours draw nothing."""
+        return []
+
     @property
     def lag(self) -> float:
         """Seconds by which this behaviour means its output to trail the input it used

@@ -9,6 +9,12 @@ since the first frame it holds the neutral face. The frames live in the context'
 history, so switching to ``copy`` mid-stream starts copying at once. Every channel not
 copied stays at the neutral face; a copied channel is ``neutral + gain * (copied -
 neutral)`` (blendshapes kept within 0..1).
+
+What it drew at random is *realised* when the output first reaches it: each bout
+(``intermittent``, with the rest before it and its delay) and each jittered delay. Those
+are kept as :meth:`realised` reports, which the behaviour stage publishes as ``copy_draw``
+events (the server logs them per interaction, the export summarises them). A fixed delay
+without bouts draws nothing and reports nothing.
 """
 
 from __future__ import annotations
@@ -138,6 +144,9 @@ class CopyBehaviour(Behaviour):
         self._rest = np.zeros(VECTOR_SIZE, dtype=np.float32)
         self._idle = np.zeros(VECTOR_SIZE, dtype=np.float32)
         self._clip: Any = None
+        self._seed = seed
+        self._reached = -1  # the last bout or delay block reported
+        self._reports: list[dict[str, Any]] = []
         if self.rest_natural:
             from chameleons.worker.behaviours.natural import synthetic_clip
 
@@ -173,8 +182,12 @@ class CopyBehaviour(Behaviour):
             bout = self.bouts.bout_at(u)
             w_bout = self.bouts.weight(u)
             delay, previous, w_delay = self.delays.draw(max(bout, 0)), 0.0, 1.0
+            if bout > self._reached:
+                self._reach_bout(bout)
         else:
             delay, previous, w_delay = self.delays.at(u)
+            if self.delays.fixed is None and self.delays.block_at(u) > self._reached:
+                self._reach_block(self.delays.block_at(u))
         self._lag = delay
         if w_bout <= 0.0:
             self._rest_face(u, out)
@@ -220,6 +233,26 @@ class CopyBehaviour(Behaviour):
         self._clip.sample(u % self._clip.duration, idle)
         idle[_MOUTH_JAW] = neutral[_MOUTH_JAW]
         out += (self.scale != 0) * (idle - neutral)
+
+    def _reach_bout(self, bout: int) -> None:
+        assert self.bouts is not None
+        self._reached = bout
+        onset, rest = self.bouts.onset(bout), self.bouts.rest_before(bout)
+        self._reports.append({"bout": bout, "at_s": onset, "t": self._start + onset,
+                              "delay_s": self.delays.draw(bout), "bout_s": self.bouts.bout,
+                              "rest_s": rest, "seed": self._seed})  # fmt: skip
+
+    def _reach_block(self, block: int) -> None:
+        self._reached = block
+        at = block * self.delays.resample_s
+        self._reports.append({"block": block, "at_s": at, "t": self._start + at,
+                              "delay_s": self.delays.draw(block), "seed": self._seed})  # fmt: skip
+
+    def realised(self) -> list[dict[str, Any]]:
+        """The draws reached since the last call (``t``: the local time each took effect;
+        ``at_s``: the same, since the behaviour started)."""
+        reports, self._reports = self._reports, []
+        return reports
 
     @property
     def lag(self) -> float:

@@ -51,6 +51,17 @@ class BoutSchedule:
         into = u - self._onsets[i]
         return max(0.0, min(1.0, into / RAMP, (self.bout - into) / RAMP))
 
+    def rest_before(self, i: int) -> float:
+        """The rest (seconds) before bout ``i`` (from the start, or the end of bout i - 1)."""
+        self._extend(0.0)
+        while len(self._onsets) <= i:
+            self._extend(self._end)
+        return self._onsets[i] - (self._onsets[i - 1] + self.bout if i > 0 else 0.0)
+
+    def onset(self, i: int) -> float:
+        self.rest_before(i)
+        return self._onsets[i]
+
     def bouts(self, until: float) -> list[tuple[float, float]]:
         """(onset, end) of every bout that starts before ``until``."""
         self._extend(until)
@@ -82,12 +93,16 @@ class DelaySchedule:
             self._draws[block] = min(self.maximum, max(0.0, value))
         return self._draws[block]
 
+    def block_at(self, u: float) -> int:
+        """The index of the draw in force ``u`` seconds after the start (no intermittent)."""
+        return max(0, math.floor(u / self.resample_s))
+
     def at(self, u: float) -> tuple[float, float, float]:
         """(delay, previous delay, weight of the delay): a new draw fades in over
         :data:`DELAY_CROSSFADE` seconds (weight 1: no previous one to blend)."""
         if self.fixed is not None:
             return self.fixed, self.fixed, 1.0
-        block = max(0, math.floor(u / self.resample_s))
+        block = self.block_at(u)
         into = u - block * self.resample_s
         if block == 0 or into >= DELAY_CROSSFADE:
             return self.draw(block), self.draw(block), 1.0

@@ -128,6 +128,15 @@ class BehaviourRouter:
     def sample(self, t: float, out: F32Array) -> float:
         return self.current.sample(t, out)
 
+    def realised(self) -> list[dict[str, Any]]:
+        """The newest behaviour's draws since the last call (one being faded out reports
+        nothing more: what it still draws is on its way out)."""
+        newest = self.current
+        while isinstance(newest, Crossfade):
+            newest.old.realised()
+            newest = newest.new
+        return newest.realised()
+
     def advance(self, t: float) -> None:
         """No sample before ``t`` will be asked for again: drop finished crossfades."""
         current = self.current

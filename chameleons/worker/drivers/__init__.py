@@ -1,4 +1,5 @@
-"""Robot drivers: ``virtual``, ``furhat``, ``record``, ``null``."""
+"""Robot drivers: ``virtual``, ``furhat``, ``virtual+furhat`` (both robots at one booth, the
+condition's ``renderer`` choosing), ``record``, ``null``."""
 
 from __future__ import annotations
 
@@ -16,11 +17,26 @@ from chameleons.worker.drivers.base import (
 from chameleons.worker.drivers.furhat import DEFAULT_URL, FurhatDriver
 from chameleons.worker.drivers.null import NullDriver
 from chameleons.worker.drivers.record import RecordDriver
+from chameleons.worker.drivers.switch import FURHAT, SwitchDriver
 from chameleons.worker.drivers.virtual import Publish, VirtualDriver
 
-DRIVER_NAMES = ("virtual", "furhat", "record", "null")
+DRIVER_NAMES = ("virtual", "furhat", "virtual+furhat", "record", "null")
 _CLASSES: dict[str, type[Driver]] = {"virtual": VirtualDriver, "furhat": FurhatDriver,
-                                     "record": RecordDriver, "null": NullDriver}  # fmt: skip
+                                     "virtual+furhat": SwitchDriver, "record": RecordDriver,
+                                     "null": NullDriver}  # fmt: skip
+DISPLAY_FACES = ("2d", "3d")  # a condition's renderer on the virtual display
+
+
+def plays_wav(name: str) -> bool:
+    """Whether the booth's robot needs the prompts as WAV (a Furhat cannot play MP3; with
+    both robots the display's browser plays the WAV too)."""
+    return name in ("furhat", "virtual+furhat")
+
+
+def renderers(name: str) -> tuple[str, ...]:
+    """The condition renderers a worker with driver ``name`` can run: the display's faces
+    (a physical robot ignores them), and ``furhat`` where the booth drives a Furhat."""
+    return (*DISPLAY_FACES, FURHAT) if name in ("furhat", "virtual+furhat") else DISPLAY_FACES
 
 
 def speaks_text(name: str) -> bool:
@@ -44,6 +60,9 @@ def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver
         return VirtualDriver(options.booth, publish)
     if name == "furhat":
         return FurhatDriver(options.robot_url, key=options.robot_key, faces=options.furhat_faces)
+    if name == "virtual+furhat":
+        return SwitchDriver(VirtualDriver(options.booth, publish),
+                            create_driver("furhat", options, publish))  # fmt: skip
     if name == "record":
         return RecordDriver(options.record_path)
     if name == "null":
@@ -64,7 +83,10 @@ __all__ = [
     "NullDriver",
     "Publish",
     "RecordDriver",
+    "SwitchDriver",
     "VirtualDriver",
     "create_driver",
+    "plays_wav",
+    "renderers",
     "speaks_text",
 ]

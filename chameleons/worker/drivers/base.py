@@ -14,7 +14,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from chameleons.worker.frames import F32Array
+import numpy as np
+
+from chameleons.worker.frames import N_BLENDSHAPES, F32Array
 
 SPEECH_START = "speech_start"
 SPEECH_END = "speech_end"
@@ -78,6 +80,11 @@ class Driver(ABC):
     @abstractmethod
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
         """Absolute head pose in degrees."""
+
+    def rest(self) -> None:
+        """Set the robot to its neutral face and head now (another robot takes over)."""
+        self.send_face(np.zeros(N_BLENDSHAPES, dtype=np.float32))
+        self.send_head(0.0, 0.0, 0.0)
 
     def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         """Start the prompt's audio; speech start/end come back as events, carrying

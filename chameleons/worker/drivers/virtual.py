@@ -58,6 +58,10 @@ class VirtualDriver(Driver):
         self.heads_sent += 1
         self._send("head", {"yaw": yaw, "pitch": pitch, "roll": roll})
 
+    def rest(self) -> None:
+        self._next_head = 0.0  # the neutral head is never dropped by the head rate
+        super().rest()
+
     def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         body = {"prompt_id": prompt_id, "url": url}
         if play_id:

@@ -30,6 +30,7 @@ from tests.worker.head_stream import Pose, stream_after
 
 HEAD_ONLY = {"channels": "head", "delay": 1.0}
 JITTER = {"delay": {"uniform": [0.5, 1.5]}}
+HALF = {"channels": ["head", "brows"], "gain": 0.5, "delay": 1.0}
 # A turn, a nod and a brow raise, all within the check's movement (turn 2.5 s + nod 2 s).
 MOVES = Pose(turn_at=0.3, turn_deg=40.0, turn_s=1.5, nod_at=2.0, nod_deg=15.0, nod_s=1.0,
              brow_at=3.1, brow=0.6, brow_s=1.0)  # fmt: skip
@@ -48,6 +49,7 @@ def params_study(pi: StaffApi) -> int:
     document["conditions"] = {
         "head_only": {"label": "Head only", "behaviour": "copy", "params": HEAD_ONLY},
         "jitter": {"label": "Jittered", "behaviour": "copy", "params": JITTER},
+        "half": {"label": "Half", "behaviour": "copy", "params": HALF},
         "still": {"label": "Still", "behaviour": "still"},
     }  # fmt: skip
     return study_with_plan(pi, participants=6, yaml=study_yaml(document))
@@ -80,7 +82,7 @@ def test_a_head_only_condition_copies_the_head_turn_and_not_the_brows(
     plan = pi.get(f"/api/booths/{BOOTH}/check?condition=head_only")
     assert plan["behaviour_words"] == "copies head, 1 s late, mirror image"
     assert plan["prompts"][2]["text"] == "Nod (chin down and up), then raise your eyebrows"
-    assert [c["id"] for c in plan["conditions"]] == ["head_only", "jitter"]
+    assert [c["id"] for c in plan["conditions"]] == ["head_only", "jitter", "half"]
     step = run_check(pi, bridge, tmp_path, "head_only", HEAD_ONLY)
     assert step["status"] == "pass", step
     assert abs(step["figures"]["measured_s"] - 1.0) <= check.MAX_DELAY_ERROR_S
@@ -89,6 +91,25 @@ def test_a_head_only_condition_copies_the_head_turn_and_not_the_brows(
     assert brows["sent"] < check_copy.BROWS_STILL  # ... and the robot's stayed at neutral
     assert "brows not copied, as configured" in step["value"]
     assert "(head_only: copies head, 1 s late, mirror image)" in step["value"]
+    # Gain 1: the robot's turn as large as the technician's.
+    assert "gain 1 realised on the head turn" in step["value"]
+    assert step["figures"]["measured_gain"] == pytest.approx(1.0, abs=check_copy.GAIN_TOLERANCE)
+
+
+@pytest.mark.usefixtures("flow")
+def test_a_gain_is_judged_on_the_head_turn_and_the_brows(
+    pi: StaffApi, params_study: int, bridge: Bridge, tmp_path: Path
+) -> None:
+    """Gain 0.5 on the head and brows: the robot turns and raises its brows half as far,
+    and the step says so in one sentence per channel."""
+    new_session(pi, params_study)
+    step = run_check(pi, bridge, tmp_path, "half", HALF)
+    assert step["status"] == "pass", step
+    assert step["figures"]["measured_gain"] == pytest.approx(0.5, abs=0.1)
+    assert "gain 0.5 realised on the head turn: the robot's was 0." in step["value"]
+    assert "gain 0.5 realised on the brow raise" in step["value"]
+    brows = step["figures"]["brows"]
+    assert brows["sent"] / brows["captured"] == pytest.approx(0.5, abs=0.1)
 
 
 @pytest.mark.usefixtures("flow")
@@ -122,12 +143,13 @@ def test_a_condition_that_is_not_a_copy_of_the_study_is_refused_in_one_sentence(
     response = pi.http.get(f"/api/booths/{BOOTH}/check?condition=still")
     assert response.status_code == 422
     assert response.json()["detail"] == ("'still' is not a copy condition of this study (its "
-                                         "copy conditions: head_only, jitter).")  # fmt: skip
+                                         "copy conditions: head_only, jitter, half).")  # fmt: skip
 
 
 def judged(params: dict[str, Any], measured: float | None,
-           brows: dict[str, float] | None = None) -> dict[str, Any]:  # fmt: skip
-    probe = None if measured is None else {"delay_s": measured, "correlation": 0.95}
+           brows: dict[str, float] | None = None, gain: float = 1.0) -> dict[str, Any]:  # fmt: skip
+    probe = None if measured is None else {"delay_s": measured, "correlation": 0.95,
+                                           "gain": gain}  # fmt: skip
     beat = {"behaviour": "copy", "movement_delay": probe, "movement_brows": brows}
     movement = check.Movement(check_copy.delay_range(params)[0], "c", copy=beat, params=params,
                               words="w")  # fmt: skip
@@ -161,8 +183,40 @@ def test_what_each_parameter_lets_the_check_judge(
     assert why in result["value"], result["value"]
 
 
-@pytest.mark.parametrize(("flip", "mirrored", "status"),
-                         [(True, True, "pass"), (False, True, "fail"), (True, False, "fail")])
+@pytest.mark.parametrize(
+    ("params", "gain", "brows", "status", "why"),
+    [({"delay": 1.0}, 1.05, None, "pass",
+      "gain 1 realised on the head turn: the robot's was 1.05 times the participant's (allowed "
+      "0.80-1.20)"),
+     ({"delay": 1.0}, 0.5, None, "fail",
+      "gain NOT realised on the head turn: the robot's was 0.50 times the participant's, the "
+      "condition's gain is 1 (allowed 0.80-1.20)"),
+     ({"delay": 1.0, "gain": 2.0}, 1.0, None, "fail", "the condition's gain is 2"),
+     ({"delay": 1.0, "gain": {"head": 0.5, "HeadYaw": 1.5}}, 1.5, None, "pass",
+      "gain 1.5 realised on the head turn"),
+     ({"delay": 1.0, "gain": {"brows": 0.5}}, 1.0, {"captured": 0.6, "sent": 0.3}, "pass",
+      "gain 0.5 realised on the brow raise: the robot's was 0.50 times the participant's"),
+     ({"delay": 1.0, "gain": {"brows": 0.5}}, 1.0, {"captured": 0.6, "sent": 0.6}, "fail",
+      "gain NOT realised on the brow raise"),
+     ({"delay": 1.0, "gain": 2.0}, 2.0, {"captured": 0.6, "sent": 0.9}, "pass",
+      "on the head turn"),  # 0.6 x 2 passes the blendshapes' 1: brows not judged on it
+     ({"channels": "face", "delay": 1.0, "gain": 0.5}, 1.0, {"captured": 0.6, "sent": 0.6},
+      "fail", "gain NOT realised on the brow raise")],
+)  # fmt: skip
+def test_the_gain_is_judged_on_the_head_turn_and_the_brows(
+    params: dict[str, Any], gain: float, brows: dict[str, float] | None, status: str, why: str
+) -> None:
+    result = judged(params, 1.0, brows, gain=gain)
+    assert result["status"] == status, result
+    assert why in result["value"], result["value"]
+    if brows and brows["captured"] * check_copy.gain_of(params, "browInnerUp") > 1:
+        assert "brow raise" not in result["value"]
+
+
+@pytest.mark.parametrize(
+    ("flip", "mirrored", "status"),
+    [(True, True, "pass"), (False, True, "fail"), (True, False, "fail")],
+)
 def test_a_condition_mirroring_unlike_the_booth_is_judged_on_the_negated_turn(
     flip: bool, mirrored: bool, status: str
 ) -> None:

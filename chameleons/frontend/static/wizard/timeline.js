@@ -62,6 +62,9 @@ export function describe(event, names) {
     case "recording.failed": return `RECORDING FAILED (interaction ${p.position}): ${p.reason}`;
     case "recording.not_started": return `RECORDING NOT STARTED (interaction ${p.position}): ${p.detail || p.reason}`;
     case "recording.not_stopped": return `RECORDING NOT STOPPED (interaction ${p.position}): ${p.detail || p.reason}; ${count(p.recordings, "file")} recovered`;
+    case "robot.copy_draw": return p.bout != null
+      ? `Copy bout ${p.bout + 1}: ${p.bout_s} s after a rest of ${Number(p.rest_s).toFixed(1)} s, ${Number(p.delay_s).toFixed(2)} s late`
+      : `Copy delay drawn: ${Number(p.delay_s).toFixed(2)} s`;
     case "robot.connected": return `Robot connected (${p.booth || "booth"})`;
     case "robot.disconnected": return `ROBOT DISCONNECTED (${p.booth || "booth"})`;
     case "robot.auth_refused": return `ROBOT REFUSED THE LOGIN (${p.booth || "booth"}): ${p.reason || "wrong or missing key"}`;

@@ -1,0 +1,101 @@
+"""``virtual+furhat``: one booth with both robots, the virtual display and a Furhat, for a
+study whose embodiment varies within the session (the ``embodiment`` template).
+
+The condition's ``renderer`` says which robot it runs on: ``2d`` or ``3d`` the display's
+face, ``furhat`` the Furhat (the server sends it with the face in ``set_face``). Only that
+robot is driven: the face and head frames, the prompts' audio or typed speech go to it. On
+a switch the other robot is first set to its neutral face and head, so it never stays
+frozen mid-expression, and audio it was playing stops. Both connect at the start; their
+events (speech, connection state) reach the worker tagged with ``output``, and the worker's
+robot state is the driven robot's (a switch to a robot in another state reports it).
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from chameleons.worker.drivers.base import ROBOT_STATE, Driver, DriverEvent, EventSink
+from chameleons.worker.frames import F32Array
+
+FURHAT = "furhat"
+
+
+class SwitchDriver(Driver):
+    name = "virtual+furhat"
+    speaks_text: ClassVar[bool] = True  # the Furhat's TTS; on the display typed text is skipped
+
+    def __init__(self, display: Driver, furhat: Driver) -> None:
+        super().__init__()
+        self.outputs = {"display": display, FURHAT: furhat}
+        self.active_name = "display"
+
+    @property
+    def active(self) -> Driver:
+        return self.outputs[self.active_name]
+
+    def bind_events(self, sink: EventSink) -> None:
+        super().bind_events(sink)
+        for name, driver in self.outputs.items():
+            driver.bind_events(lambda event, name=name: self._event(name, event))  # type: ignore[misc]
+
+    def _event(self, output: str, event: DriverEvent) -> None:
+        body = {**event.body, "output": output}
+        if event.kind == ROBOT_STATE:
+            if output != self.active_name:
+                return  # the robot not driven now: its state shows in stats, not as ours
+            self.state = str(event.body.get("state", self.state))
+        self._sink(DriverEvent(event.kind, event.time, body))
+
+    def start(self) -> None:
+        for driver in self.outputs.values():
+            driver.start()
+        self.set_state(self.active.state, output=self.active_name)
+
+    def close(self) -> None:
+        for driver in self.outputs.values():
+            driver.close()
+        self.set_state("closed")
+
+    def send_face(self, blendshapes: F32Array) -> None:
+        self.faces_sent += 1
+        self.active.send_face(blendshapes)
+
+    def send_head(self, yaw: float, pitch: float, roll: float) -> None:
+        self.heads_sent += 1
+        self.active.send_head(yaw, pitch, roll)
+
+    def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
+        self.active.play_audio(prompt_id, url, play_id)
+
+    def speak_text(
+        self, prompt_id: str, text: str, voice: str | None, play_id: str | None = None
+    ) -> None:
+        self.active.speak_text(prompt_id, text, voice, play_id)
+
+    def stop_audio(self) -> None:
+        self.active.stop_audio()
+
+    def set_face(self, face_id: str, renderer: str | None = None) -> None:
+        """``renderer`` furhat: drive the Furhat; 2d, 3d or None: the display."""
+        chosen = FURHAT if renderer == FURHAT else "display"
+        if chosen != self.active_name:
+            previous = self.active
+            previous.stop_audio()
+            previous.rest()
+            self.active_name = chosen
+            self.set_state(self.active.state, output=chosen)
+        if chosen == FURHAT:
+            self.active.set_face(face_id)
+        else:
+            self.active.set_face(face_id, renderer)
+
+    def remote_speech(self, event: str, prompt_id: str | None, play_id: str | None = None) -> None:
+        self.outputs["display"].remote_speech(event, prompt_id, play_id)
+
+    def retry(self) -> None:
+        self.outputs[FURHAT].retry()
+
+    def stats(self) -> dict[str, Any]:
+        return {**self.active.stats(), "faces_sent": self.faces_sent,
+                "heads_sent": self.heads_sent, "active": self.active_name,
+                "outputs": {name: d.stats() for name, d in self.outputs.items()}}  # fmt: skip

@@ -1,0 +1,118 @@
+"""One booth, two robots (the ``embodiment`` template within a session): a real worker with
+``--driver virtual+furhat`` copies the participant (Live Link Face over UDP in) on the
+virtual display while the condition's renderer is 2d or 3d, and on the Furhat (its test
+peer) when it is ``furhat``; the robot left is set to its neutral head. A worker without a
+Furhat refuses a furhat condition in one sentence."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+import zmq
+
+from chameleons.worker.control import SET_FACE
+from chameleons.worker.runtime import Worker, WorkerConfig
+from tests.worker.control_peer import ControlPeer
+from tests.worker.furhat_peer import FurhatPeer
+from tests.worker.head_stream import Pose, stream
+
+pytestmark = pytest.mark.slow
+BOOTH = "embodiment"
+DELAY = 0.3
+TURN = 30.0
+REST = 10.0
+
+
+@pytest.fixture
+def context() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    yield ctx
+    ctx.term()
+
+
+def start(context: zmq.Context[zmq.Socket[bytes]], server: ControlPeer, driver: str,
+          robot_url: str) -> Worker:  # fmt: skip
+    config = WorkerConfig(booth=BOOTH, driver=driver, robot_url=robot_url, behaviour="copy",
+                          copy_delay=DELAY, mirror=False, head_recentre=False,
+                          livelink_port=0, facecapturex_port=None, capture_host="127.0.0.1",
+                          command_endpoint=server.command_endpoint,
+                          telemetry_endpoint=server.telemetry_endpoint)  # fmt: skip
+    return Worker(config, context=context).start()
+
+
+def display_yaws(server: ControlPeer, since: float) -> list[float]:
+    return [float(m.body["yaw"]) for m in server.published
+            if m.topic == f"display.{BOOTH}" and m.type == "head" and m.time >= since]  # fmt: skip
+
+
+def furhat_yaws(robot: FurhatPeer, since: float) -> list[float]:
+    return [float(r.message["yaw"]) for r in robot.of_type("request.face.headpose")
+            if r.time >= since]  # fmt: skip
+
+
+def turn(worker: Worker) -> float:
+    """The participant, resting 10 deg to the side, turns 30 deg further and back; returns
+    when the copy is over (monotonic)."""
+    pose = Pose(rest_yaw=REST, turn_at=0.3, turn_deg=TURN)
+    sent = stream(worker.receivers["livelink"].port, pose, 1.8)
+    return sent.start + 1.8 + DELAY + 0.3
+
+
+def test_the_condition_renderer_chooses_the_robot_that_copies(
+    context: zmq.Context[zmq.Socket[bytes]],
+) -> None:
+    server = ControlPeer(context)
+    with FurhatPeer() as robot:
+        worker = start(context, server, "virtual+furhat", robot.url)
+        try:
+            robot.wait_for(lambda p: bool(p.of_type("request.face.config")), timeout=10)
+            on_display = server.command(BOOTH, SET_FACE, {"face_id": "f1", "renderer": "2d"})
+            assert on_display.ok, on_display
+            before = time.monotonic()
+            done = turn(worker)
+            server.wait(lambda: any(m.time > done for m in server.published), timeout=10)
+            peak = REST + TURN
+            assert max(map(abs, display_yaws(server, before))) == pytest.approx(peak, abs=2.0)
+            assert max(map(abs, furhat_yaws(robot, before)), default=0.0) < 0.5
+
+            on_furhat = server.command(BOOTH, SET_FACE, {"face_id": "f1", "renderer": "furhat"})
+            assert on_furhat.ok, on_furhat
+            assert on_furhat.result["renderer"] == "furhat"
+            switched = time.monotonic()
+            done = turn(worker)
+            robot.wait_for(lambda p: bool(furhat_yaws(robot, done)), timeout=10)
+            assert max(map(abs, furhat_yaws(robot, switched))) == pytest.approx(peak, abs=2.0)
+            beat: dict[str, Any] = server.wait(lambda: next(
+                (m.body for m in server.of_type("heartbeat") if m.time > done), None),
+                timeout=10)  # fmt: skip
+            assert beat["driver"] == "virtual+furhat"
+            assert beat["robot_connected"] is True  # the driven robot's (the Furhat's) state
+            # (The heartbeat came after the copy: what the display was sent has arrived.)
+            # The display was set to its neutral head on the switch (the participant rests
+            # 10 deg aside), and is not driven since.
+            assert abs(display_yaws(server, before)[-1]) < 0.5
+            assert display_yaws(server, switched + 0.5) == []
+        finally:
+            worker.stop()
+            server.close()
+
+
+def test_a_booth_without_a_furhat_refuses_a_furhat_condition(
+    context: zmq.Context[zmq.Socket[bytes]],
+) -> None:
+    server = ControlPeer(context)
+    worker = start(context, server, "virtual", "ws://127.0.0.1:9")
+    try:
+        ack = server.command(BOOTH, SET_FACE, {"face_id": "f1", "renderer": "furhat"})
+        assert not ack.ok
+        assert ack.error == "bad_renderer"
+        assert ack.detail == ("this booth drives no Furhat (its worker's driver is virtual): a "
+                              "furhat condition needs a worker started with --driver furhat "
+                              "or --driver virtual+furhat")  # fmt: skip
+        assert server.command(BOOTH, SET_FACE, {"face_id": "f1", "renderer": "3d"}).ok
+    finally:
+        worker.stop()
+        server.close()
