@@ -47,11 +47,12 @@ def draws_after(booth: CopyBooth, params: dict[str, Any], seconds: float, n: int
 
 
 def test_jittered_delays_are_reported_as_drawn(booth: CopyBooth) -> None:
-    params = {"delay": {"uniform": [0.4, 1.2]}, "delay_resample_s": 0.5, "seed": 11}
+    delay: dict[str, Any] = {"uniform": [0.4, 1.2]}
+    params = {"delay": delay, "delay_resample_s": 0.5, "seed": 11}
     events = draws_after(booth, params, 12.0, 20)
     blocks = [m.body["block"] for m in events]
     assert blocks == list(range(len(blocks)))  # each block once, in order, none skipped
-    schedule = DelaySchedule(params["delay"], 11, 0.5, maximum=11.5)
+    schedule = DelaySchedule(delay, 11, 0.5, maximum=11.5)
     delays = np.array([m.body["delay_s"] for m in events])
     assert list(delays) == [schedule.draw(k) for k in blocks]  # the seeded draws
     assert [m.body["at_s"] for m in events] == [0.5 * k for k in blocks]
@@ -66,11 +67,12 @@ def test_jittered_delays_are_reported_as_drawn(booth: CopyBooth) -> None:
 
 
 def test_bouts_are_reported_with_their_rests_and_delays(booth: CopyBooth) -> None:
-    params = {"delay": {"normal": {"mean": 0.7, "sd": 0.1}}, "seed": 5,
+    delay: dict[str, Any] = {"normal": {"mean": 0.7, "sd": 0.1}}
+    params = {"delay": delay, "seed": 5,
               "intermittent": {"rate_per_s": 2.0, "bout_s": 0.4}}  # fmt: skip
     events = draws_after(booth, params, 10.0, 12)
     bouts = BoutSchedule(2.0, 0.4, seed=5)
-    delays = DelaySchedule(params["delay"], 5, 10.0, maximum=11.5)
+    delays = DelaySchedule(delay, 5, 10.0, maximum=11.5)
     numbers = [m.body["bout"] for m in events]
     assert numbers == list(range(len(numbers)))
     for m in events:
