@@ -123,8 +123,8 @@ def _video_items(flow: Flow, language: str) -> dict[str, str | None] | None:
     video = procedure.video
     if video is None or not procedure.records_video:
         return None
-    return {"label": gettext(language, video.label),
-            "audio_label": gettext(language, video.audio_label) if video.audio else None}  # fmt: skip
+    audio = gettext(language, video.audio_label) if video.audio else None
+    return {"label": gettext(language, video.label), "audio_label": audio}
 
 
 def _task(flow: Flow, interaction: Interaction) -> PhoneState:
