@@ -25,8 +25,10 @@ from chameleons.backend.video.schemas import BoothVideoState, ChunkStored, Video
 
 router = make_router(tags=["video"])
 NO_SUCH = "No such booth recording link."
-REFUSALS: dict[int | str, dict[str, Any]] = {404: {"description": "No such booth or video, or a wrong key"},
-            409: {"description": "Duplicate, out of order, or not to be filmed now"}}  # fmt: skip
+REFUSALS: dict[int | str, dict[str, Any]] = {
+    404: {"description": "No such booth or video, or a wrong key"},
+    409: {"description": "Duplicate, out of order, or not to be filmed now"},
+}
 
 
 def booth_key(request: Request, booth: str, db: DbSession,

@@ -91,7 +91,8 @@ def test_chunks_are_stored_in_order_and_every_refusal_is_counted(
     assert chunk(client, booth_key, video_id, 0, FIRST).status_code == 200
     early = chunk(client, booth_key, video_id, 2, b"third")
     assert early.status_code == 409
-    assert early.json()["detail"] == f"Chunk 2 of video {video_id} came out of order: chunk 1 comes next."
+    said = f"Chunk 2 of video {video_id} came out of order: chunk 1 comes next."
+    assert early.json()["detail"] == said
     again = chunk(client, booth_key, video_id, 0, FIRST)
     assert (again.status_code, again.json()["problem"]) == (409, "duplicate")
     empty = chunk(client, booth_key, video_id, 1, b"")
@@ -140,7 +141,7 @@ def test_the_key_and_the_booth_are_checked(
         assert client.post(f"{API}/videos/{video_id}/chunks/0", content=FIRST,
                            headers=headers).status_code == 404  # fmt: skip
     # booth-2's key opens nothing of booth-1, and booth-1's video is not booth-2's
-    other = client.get(f"/api/video/booth-2/state", headers={"X-Booth-Key": booth_key})
+    other = client.get("/api/video/booth-2/state", headers={"X-Booth-Key": booth_key})
     assert other.status_code == 404
     # a participant's phone link is no key; the phone API knows no video
     assert client.get(f"/video/{BOOTH}/{wizard.token}").status_code == 404
@@ -162,7 +163,8 @@ def test_the_pi_alone_gets_the_video_and_the_replay(
     assert replay["videos"][0]["url"] == url
     assert "consent.given" in [e["kind"] for e in replay["events"]]
     assert replay["faces"]["reason"] == "No face recordings of this session."
-    assert client.get(f"/pi/sessions/{wizard.session_id}/videos/{video_id + 1}.webm").status_code == 404
+    other_video = f"/pi/sessions/{wizard.session_id}/videos/{video_id + 1}.webm"
+    assert client.get(other_video).status_code == 404
     client.post("/logout", headers={"X-CSRF-Token": pi.csrf})
     client.cookies.clear()
     assert client.get(url, follow_redirects=False).status_code in (303, 401, 403)
