@@ -209,7 +209,11 @@ class ParticipantBot:
         return self._send("language", {"client_id": new_client_id(), "language": language})
 
     def consent(
-        self, agree: bool = True, client_id: str | None = None, *, video: bool = False,
+        self,
+        agree: bool = True,
+        client_id: str | None = None,
+        *,
+        video: bool = False,
         audio: bool = False,
     ) -> Json:
         body = {"client_id": client_id or new_client_id(), "agree": agree, "video": video,

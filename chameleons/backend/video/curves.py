@@ -81,8 +81,10 @@ def session_curves(db: DbSession, session_id: int, data_dir: Path,
         return result
     offset = worker_offset(db, session_id)
     if offset is None:
-        result["reason"] = "The face recordings cannot be placed on the timeline (no event " \
-                           "of this session carries the worker's clock)."
+        result["reason"] = (
+            "The face recordings cannot be placed on the timeline (no event "
+            "of this session carries the worker's clock)."
+        )
         return result
     shift = offset - _epoch(origin)
     for stream, files in paths.items():
@@ -107,5 +109,7 @@ def session_curves(db: DbSession, session_id: int, data_dir: Path,
             lookup = dict(zip(np.round(grid, 3).tolist(), np.round(means, 3).tolist(), strict=True))
             curve[name] = [lookup.get(t) for t in np.round(centres, 3).tolist()]
         result["streams"][STREAMS.get(stream, stream)] = {
-            "t": np.round(centres, 3).tolist() if centres is not None else [], **curve}
+            "t": np.round(centres, 3).tolist() if centres is not None else [],
+            **curve,
+        }
     return result

@@ -102,8 +102,7 @@ def add_chunk(db: DbSession, booth: str, video_id: int, seq: int, data: bytes | 
     """Store chunk ``seq`` (``None``: it was larger than :data:`MAX_CHUNK_BYTES`)."""
     video = _video_at(db, booth, video_id)
     if video.stopped_at is not None:
-        raise _refuse(db, video, 409, f"Video {video_id} was stopped; start a new one.",
-                       "stopped")
+        raise _refuse(db, video, 409, f"Video {video_id} was stopped; start a new one.", "stopped")
     if data is None:
         raise _refuse(db, video, 413, f"Chunk {seq} is larger than {MAX_CHUNK_BYTES} bytes: "
                                       f"record with a shorter timeslice.", "too_large")  # fmt: skip
