@@ -96,7 +96,7 @@ def test_the_eaf_files_link_the_video(
     ran = CliRunner().invoke(cli, ["export", "--out", str(out), "--format", "eaf", "--video"],
                              env=env)  # fmt: skip
     assert ran.exit_code == 0, ran.output
-    (early, (code_a, video_a, _)), (late, (code_b, video_b, _)) = sorted(videos.items())
+    (early, (code_a, video_a, _)), (late, (code_b, _video_b, _)) = sorted(videos.items())
     [linked] = _descriptors(out / "eaf" / f"{code_a}-session{early}.eaf")
     name = f"{code_a}-session{early}-video{video_a}.webm"
     assert linked["RELATIVE_MEDIA_URL"] == f"../video/{name}"
