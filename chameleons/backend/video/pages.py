@@ -25,7 +25,7 @@ from chameleons.backend.instruments.eaf import origin_of, session_marks
 from chameleons.backend.models import Event, ParticipantVideo, Session
 from chameleons.backend.routing import make_router
 from chameleons.backend.video.curves import session_curves
-from chameleons.backend.video.service import videos_of
+from chameleons.backend.video.service import last_media_ms, videos_of
 
 router = make_router(tags=["video"])
 TIMESLICE_MS = 2000  # each chunk: 2 s of video (a crash loses at most that)
@@ -76,6 +76,7 @@ def replay(session_id: int, _pi: CurrentPI, db: DbSession,
         "start_s": round((_aware(v.started_at) - origin).total_seconds(), 3),
         "chunks": v.chunks, "size_bytes": v.size_bytes, "audio": v.audio, "refused": v.refused,
         "started_at": _aware(v.started_at).isoformat(),
+        "duration_s": round((last_media_ms(db, v.id) or 0) / 1000, 3),
     } for v in videos_of(db, session_id)]  # fmt: skip
     events = [{"id": e.id, "kind": e.kind, "t": round((_aware(e.server_time) - origin)
                                                        .total_seconds(), 3)}

@@ -146,6 +146,12 @@ def videos_of(db: DbSession, session_id: int) -> list[ParticipantVideo]:
     return list(db.scalars(query))
 
 
+def last_media_ms(db: DbSession, video_id: int) -> float | None:
+    """The page's media time at the end of the video's last chunk (its length, nearly)."""
+    query = select(VideoChunk.media_ms).where(VideoChunk.video_id == video_id)
+    return db.scalar(query.order_by(VideoChunk.seq.desc()).limit(1))
+
+
 def forget_videos(db: DbSession, session_ids: list[int], data_dir: Path) -> int:
     """Withdrawal: delete the sessions' videos, rows and files; returns the files deleted."""
     if not session_ids:
