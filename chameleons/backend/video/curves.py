@@ -19,10 +19,12 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.models import Event, Interaction, Recording
-from chameleons.backend.synchrony.loading import CHANNELS, load_stream
-from chameleons.worker.recording import RecordingError
+from chameleons.worker.recording import RecordingError, read_recording_table
 
 RATE_HZ = 5.0
+# Frames further than this from the session's origin are not the session's (a clock that
+# jumped): left out rather than binned over hours.
+SPAN_S = (-600.0, 6 * 3600.0)
 # What the replay draws: a curve's name -> the channels averaged into it.
 CURVES: dict[str, tuple[str, ...]] = {
     "smile": ("mouthSmileLeft", "mouthSmileRight"),
@@ -31,6 +33,30 @@ CURVES: dict[str, tuple[str, ...]] = {
     "head yaw (deg)": ("head_yaw",),
 }
 STREAMS = {"participant": "participant", "agent": "robot"}
+CHANNELS = tuple(sorted({c for channels in CURVES.values() for c in channels}))
+
+
+def load_stream(paths: list[Path]) -> tuple[np.ndarray, np.ndarray]:
+    """(times on the worker's clock, values of :data:`CHANNELS`) of one stream's files;
+    ``capture_time``, or ``receive_time`` where those do not increase (a sender whose clock
+    restarted), as the synchrony's loader reads them. Raises RecordingError."""
+    times, values = [], []
+    for path in paths:
+        table = read_recording_table(path)
+        if table.num_rows == 0 or "capture_time" not in table.column_names:
+            continue
+        stamp = table.column("capture_time").to_numpy().astype(np.float64)
+        if np.any(np.diff(stamp) <= 0) and "receive_time" in table.column_names:
+            stamp = table.column("receive_time").to_numpy().astype(np.float64)
+        times.append(stamp)
+        values.append(np.column_stack([
+            np.asarray(table.column(c).to_numpy(zero_copy_only=False), dtype=np.float64)
+            if c in table.column_names else np.full(table.num_rows, np.nan)
+            for c in CHANNELS
+        ]))  # fmt: skip
+    if not times:
+        return np.empty(0), np.empty((0, len(CHANNELS)))
+    return np.concatenate(times), np.vstack(values)
 
 
 def _epoch(moment: datetime) -> float:
@@ -89,20 +115,24 @@ def session_curves(db: DbSession, session_id: int, data_dir: Path,
     shift = offset - _epoch(origin)
     for stream, files in paths.items():
         try:
-            loaded = load_stream(files)
+            stamps, table = load_stream(files)
         except RecordingError as exc:
             result["reason"] = str(exc)
             continue
-        if len(loaded.times) == 0:
+        if len(stamps) == 0:
             continue
-        times = loaded.times + shift
+        times = stamps + shift
+        inside = (times > SPAN_S[0]) & (times < SPAN_S[1])
+        times, table = times[inside], table[inside]
+        if len(times) == 0:
+            continue
         curve: dict[str, list[float | None]] = {}
         centres = None
         for name, channels in CURVES.items():
             columns = [CHANNELS.index(c) for c in channels]
             with warnings.catch_warnings():  # a frame without the channel: NaN, skipped
                 warnings.simplefilter("ignore", RuntimeWarning)
-                values = np.nanmean(loaded.values[:, columns], axis=1)
+                values = np.nanmean(table[:, columns], axis=1)
             if centres is None:
                 centres, _ = _binned(times, np.zeros_like(times))
             grid, means = _binned(times, values)

@@ -16,10 +16,10 @@ from pathlib import Path
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.booth.repository import active_session
 from chameleons.backend.models import ParticipantVideo, Session, Study, VideoChunk
 from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.video import storage
+from chameleons.backend.video.repository import active_session
 from chameleons.backend.video.schemas import BoothVideoState, Clock
 
 MAX_CHUNK_BYTES = 16 * 1024 * 1024  # a 2 s timeslice of HD video is well under 2 MiB
