@@ -1,0 +1,56 @@
+"""The consent page's own video items (issue 33): shown only where the study records
+video, unticked; what the participant ticked is kept on the session and in the timeline;
+the microphone counts only with the video; a study without video keeps nothing."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from sqlalchemy import Engine, select
+
+from chameleons.backend.models import Event
+from chameleons.backend.models import Session as SessionRow
+from tests.support.bots import ParticipantBot, StaffApi, WizardBot, study_with_plan
+
+
+def consented(engine: Engine, session_id: int) -> tuple[Any, Any, dict[str, Any]]:
+    with engine.connect() as db:
+        row = db.execute(select(SessionRow.video_consent, SessionRow.video_audio_consent)
+                         .where(SessionRow.id == session_id)).one()  # fmt: skip
+        payload = db.scalar(select(Event.payload).where(Event.session_id == session_id,
+                                                        Event.kind == "consent.given"))  # fmt: skip
+    return row[0], row[1], payload
+
+
+def test_the_consent_page_asks_for_video_and_sound(pi: StaffApi, video_study: int) -> None:
+    wizard = WizardBot.create(pi, video_study)
+    state = ParticipantBot(pi.http, wizard.token).state()
+    assert state["view"] == "consent"
+    assert state["consent"]["video"] == {
+        "label": "I agree to be filmed during the conversations (the video stays with the lab)",
+        "audio_label": "I agree to my voice being recorded with the video",
+    }
+
+
+@pytest.mark.parametrize(("video", "audio", "kept"), [
+    (True, True, (True, True)), (True, False, (True, False)), (False, True, (False, False)),
+    (False, False, (False, False)),
+])  # fmt: skip
+def test_the_ticks_are_kept(pi: StaffApi, video_study: int, engine: Engine, video: bool,
+                            audio: bool, kept: tuple[bool, bool]) -> None:  # fmt: skip
+    wizard = WizardBot.create(pi, video_study)
+    ParticipantBot(pi.http, wizard.token).consent(True, video=video, audio=audio)
+    filmed, voiced, payload = consented(engine, wizard.session_id)
+    assert (filmed, voiced) == kept
+    assert (payload["video"], payload["audio"]) == kept
+
+
+def test_a_study_without_video_asks_and_keeps_nothing(pi: StaffApi, engine: Engine) -> None:
+    wizard = WizardBot.create(pi, study_with_plan(pi, participants=2))
+    phone = ParticipantBot(pi.http, wizard.token)
+    assert phone.state()["consent"]["video"] is None
+    phone.consent(True, video=True, audio=True)  # a forged tick changes nothing
+    filmed, voiced, payload = consented(engine, wizard.session_id)
+    assert (filmed, voiced) == (None, None)
+    assert "video" not in payload
