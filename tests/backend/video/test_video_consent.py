@@ -20,6 +20,7 @@ def consented(engine: Engine, session_id: int) -> tuple[Any, Any, dict[str, Any]
                          .where(SessionRow.id == session_id)).one()  # fmt: skip
         payload = db.scalar(select(Event.payload).where(Event.session_id == session_id,
                                                         Event.kind == "consent.given"))  # fmt: skip
+    assert payload is not None
     return row[0], row[1], payload
 
 
