@@ -4,11 +4,15 @@ the microphone counts only with the video; a study without video keeps nothing."
 
 from __future__ import annotations
 
+import csv
+from pathlib import Path
 from typing import Any
 
 import pytest
 from sqlalchemy import Engine, select
 
+from chameleons.backend.db import build_sessionmaker
+from chameleons.backend.export.service import ExportRequest, export_to_directory
 from chameleons.backend.models import Event
 from chameleons.backend.models import Session as SessionRow
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot, study_with_plan
@@ -55,3 +59,23 @@ def test_a_study_without_video_asks_and_keeps_nothing(pi: StaffApi, engine: Engi
     filmed, voiced, payload = consented(engine, wizard.session_id)
     assert (filmed, voiced) == (None, None)
     assert "video" not in payload
+
+
+def test_the_participants_table_says_who_agreed_to_what(
+    pi: StaffApi, video_study: int, engine: Engine, tmp_path: Path
+) -> None:
+    ticks = {}
+    for video, audio in ((True, True), (False, False)):
+        wizard = WizardBot.create(pi, video_study)
+        ParticipantBot(pi.http, wizard.token).consent(True, video=video, audio=audio)
+        ticks[wizard.session_id] = (str(video), str(audio))
+    with build_sessionmaker(engine)() as db:
+        export_to_directory(db, ExportRequest(study_id=video_study, formats=("csv", "sav")),
+                            tmp_path)  # fmt: skip
+    with (tmp_path / "participants.csv").open(encoding="utf-8") as file:
+        rows = {int(r["session"]): (r["video_consent"], r["video_audio_consent"])
+                for r in csv.DictReader(file)}  # fmt: skip
+    assert {s: (v.lower(), a.lower()) for s, (v, a) in rows.items()} == {
+        s: (v.lower(), a.lower()) for s, (v, a) in ticks.items()
+    }
+    assert (tmp_path / "participants.sav").is_file()
