@@ -146,6 +146,8 @@ def test_the_key_and_the_booth_are_checked(
     # a participant's phone link is no key; the phone API knows no video
     assert client.get(f"/video/{BOOTH}/{wizard.token}").status_code == 404
     assert client.get(f"/video/{BOOTH}/{booth_key}").status_code == 200
+    capture = client.get(f"/capture/{BOOTH}/{booth_key}").text  # the capture page links it
+    assert f'href="/video/{BOOTH}/{booth_key}" id="video-link"' in capture
 
 
 def test_the_pi_alone_gets_the_video_and_the_replay(
