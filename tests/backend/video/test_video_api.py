@@ -160,6 +160,9 @@ def test_the_pi_alone_gets_the_video_and_the_replay(
     assert client.get(url).content == FIRST
     ranged = client.get(url, headers={"Range": "bytes=0-3"})
     assert (ranged.status_code, ranged.content) == (206, EBML_MAGIC)
+    page = client.get(f"/pi/sessions/{wizard.session_id}").text
+    assert '<span id="video-consent">video agreed</span>' in page
+    assert 'data-replay="/pi/sessions/' in page
     replay = client.get(f"/pi/sessions/{wizard.session_id}/replay.json").json()
     assert [v["id"] for v in replay["videos"]] == [video_id]
     assert replay["videos"][0]["url"] == url

@@ -27,6 +27,8 @@ def test_withdrawal_deletes_the_video_files_and_rows(
     gone_id = start(client, booth_key, gone.session_id).json()["video_id"]
     for seq, data in enumerate((FIRST, b"more")):
         assert chunk(client, booth_key, gone_id, seq, data).status_code == 200
+    form = client.get(f"/pi/participants/{gone_code(engine, gone.session_id)}/withdraw").text
+    assert '<span id="withdraw-videos">1 video</span> of them' in form
     data_dir = Path(settings.data_dir)
     folder = data_dir / "video" / f"session-{gone.session_id}"
     assert (folder / f"video-{gone_id}.webm").is_file()
@@ -43,3 +45,10 @@ def test_withdrawal_deletes_the_video_files_and_rows(
     with engine.connect() as db:
         assert db.scalar(select(func.count()).select_from(ParticipantVideo)) == 1
         assert db.scalar(select(func.count()).select_from(VideoChunk)) == 1
+
+
+def gone_code(engine: Engine, session_id: int) -> str:
+    with engine.connect() as db:
+        return str(db.scalar(select(Participant.code).join(
+            SessionRow, SessionRow.participant_id == Participant.id).where(
+            SessionRow.id == session_id)))  # fmt: skip
