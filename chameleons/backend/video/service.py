@@ -16,7 +16,7 @@ from pathlib import Path
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session as DbSession
 
-from chameleons.backend.models import ParticipantVideo, Session, Study, VideoChunk
+from chameleons.backend.models import ParticipantVideo, Study, VideoChunk
 from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.video import storage
 from chameleons.backend.video.repository import active_session
@@ -160,7 +160,3 @@ def forget_videos(db: DbSession, session_ids: list[int], data_dir: Path) -> int:
     db.execute(delete(VideoChunk).where(VideoChunk.video_id.in_(ids)))
     db.execute(delete(ParticipantVideo).where(ParticipantVideo.session_id.in_(session_ids)))
     return sum(storage.delete_session_videos(data_dir, sid) for sid in session_ids)
-
-
-def session_of(db: DbSession, video: ParticipantVideo) -> Session | None:
-    return db.get(Session, video.session_id)
