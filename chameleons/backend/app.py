@@ -56,6 +56,8 @@ from chameleons.backend.sessions import live as session_live
 from chameleons.backend.studies import endpoints as study_endpoints
 from chameleons.backend.studies import pages as study_pages
 from chameleons.backend.synchrony import pages as synchrony_pages
+from chameleons.backend.video import endpoints as video_endpoints
+from chameleons.backend.video import pages as video_pages
 from chameleons.backend.withdrawal import endpoints as withdrawal_endpoints
 from chameleons.backend.wizard import endpoints as wizard_endpoints
 from chameleons.backend.wizard import live as wizard_live
@@ -205,6 +207,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         instrument_pages.router,
         capture_pages.router,
         capture_endpoints.router,
+        video_pages.router,
+        video_endpoints.router,
     ):
         app.include_router(router)
     return app

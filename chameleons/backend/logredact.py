@@ -14,6 +14,9 @@ _PATTERNS = (
     (re.compile(r"(/display/[^/?#\s\"]+/)[^/?#\s\"]+"), r"\1<token>"),
     # /capture/<booth>/<key>: the booth's webcam capture page
     (re.compile(r"(/capture/[^/?#\s\"]+/)[^/?#\s\"]+"), r"\1<token>"),
+    # /video/<booth>/<key>: the booth's participant-video page (its API under /api/video/
+    # takes the key in a header, never in the address)
+    (re.compile(r"((?<!/api)/video/[^/?#\s\"]+/)[^/?#\s\"]+"), r"\1<token>"),
     (re.compile(r"([?&](?:token|key)=)[^&#\s\"]+"), r"\1<redacted>"),
 )
 LOGGERS = ("uvicorn.access", "uvicorn.error")

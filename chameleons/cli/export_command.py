@@ -42,6 +42,12 @@ from chameleons.prompts.locations import prompts_root
     is_flag=True,
     help="Also the streams attached with import-xdf, as Parquet under instruments/.",
 )
+@click.option(
+    "--video",
+    is_flag=True,
+    help="Also the participants' videos (studies that record video), as WebM under video/ "
+    "with video/videos.csv; the .eaf files then link these copies. Left out unless asked.",
+)
 @click.option("--include-rehearsal", is_flag=True, help="Include sessions marked as rehearsals.")
 @click.option("--study", "study_id", type=int, help="Study id (default: the newest active).")
 @click.option(
@@ -54,6 +60,7 @@ def export(
     out: Path,
     formats: tuple[ExportFormat | Literal["eaf"], ...],
     instruments: bool,
+    video: bool,
     include_rehearsal: bool,
     study_id: int | None,
     raw_csv: bool,
@@ -72,7 +79,8 @@ def export(
         with build_sessionmaker(engine)() as db:
             plan = export_to_directory(db, request, out)
             extra = _instruments(db, plan.study.id, include_rehearsal, settings.data_dir, out,
-                                 eaf="eaf" in formats, streams=instruments)  # fmt: skip
+                                 eaf="eaf" in formats, streams=instruments,
+                                 video=video)  # fmt: skip
     except StudyNotFoundError as exc:
         raise click.ClickException(str(exc)) from exc
     except SQLAlchemyError as exc:
@@ -85,13 +93,22 @@ def export(
 
 
 def _instruments(db: DbSession, study_id: int, include_rehearsal: bool, data_dir: Path,
-                 out: Path, *, eaf: bool, streams: bool) -> str:  # fmt: skip
-    """The ELAN files and instrument streams asked for; what was written, for the report."""
+                 out: Path, *, eaf: bool, streams: bool, video: bool) -> str:  # fmt: skip
+    """The videos, ELAN files and instrument streams asked for; what was written, for the
+    report. The ``.eaf`` files link the exported videos, else the server's own files."""
     from chameleons.backend.instruments.export import export_eaf, export_instruments
+    from chameleons.backend.video.export import export_videos, stored_videos
 
     said = ""
+    media = None
+    if video:
+        media = export_videos(db, study_id, include_rehearsal, Path(data_dir), out)
+        said += f"; {sum(len(v) for v in media.values())} video(s) in video/"
     if eaf:
-        said += f"; {export_eaf(db, study_id, include_rehearsal, out)} ELAN file(s) in eaf/"
+        if media is None:
+            media = stored_videos(db, study_id, include_rehearsal, Path(data_dir))
+        written = export_eaf(db, study_id, include_rehearsal, out, media)
+        said += f"; {written} ELAN file(s) in eaf/"
     if streams:
         count = export_instruments(db, study_id, include_rehearsal, Path(data_dir), out)
         said += f"; {count} instrument stream(s) in instruments/"

@@ -30,7 +30,7 @@ LANGUAGE = re.compile(r"^[a-z]{2,3}(-[A-Za-z0-9]{2,8})?$")
 # too: harmless, and a lab may want them translated for its records).
 TEXT_KEYS = frozenset(
     {"name", "description", "source", "introduction", "title", "text", "low", "high"}
-    | {"left", "right", "label", "agree", "decline"}
+    | {"left", "right", "label", "agree", "decline", "audio_label"}
 )
 # Sections only staff see, or that hold no texts: never translated.
 STAFF_SECTIONS = frozenset(

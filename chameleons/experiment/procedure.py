@@ -19,6 +19,8 @@ DEFAULT_AGREE = N_("I agree to take part")
 DEFAULT_DECLINE = N_("I do not want to take part")
 DEFAULT_CONSENT_TITLE = N_("Consent to take part")
 DEFAULT_DEBRIEFING_TITLE = N_("About this study")
+DEFAULT_VIDEO_LABEL = N_("I agree to be filmed during the session (the video stays with the lab)")
+DEFAULT_AUDIO_LABEL = N_("I agree to my voice being recorded with the video")
 
 
 @dataclass(frozen=True)
@@ -43,9 +45,28 @@ class Debriefing:
 
 
 @dataclass(frozen=True)
+class Video:
+    """Participant video (opt-in per study): the booth's camera is recorded only for a
+    participant who ticked ``label`` on the consent page, their microphone only when
+    ``audio`` and they ticked ``audio_label`` too. ``record: false`` keeps the section but
+    records nothing (and asks nothing)."""
+
+    record: bool
+    audio: bool = False
+    label: str = DEFAULT_VIDEO_LABEL
+    audio_label: str = DEFAULT_AUDIO_LABEL
+
+
+@dataclass(frozen=True)
 class Procedure:
     consent: Consent | None = None
     debriefing: Debriefing | None = None
+    video: Video | None = None
+
+    @property
+    def records_video(self) -> bool:
+        """Whether the consent page asks for video (the study opted in and has one)."""
+        return self.video is not None and self.video.record and self.consent is not None
 
 
 def paragraphs(text: str) -> list[str]:
@@ -56,7 +77,7 @@ def read_procedure(reader: Reader, node: object) -> Procedure:
     if node is None:
         return Procedure()
     body = reader.mapping(node, "procedure")
-    reader.check_keys(body, "procedure", [], ["consent", "debriefing"])
+    reader.check_keys(body, "procedure", [], ["consent", "debriefing", "video"])
     consent = None
     if "consent" in body:
         place = join("procedure", "consent")
@@ -78,7 +99,23 @@ def read_procedure(reader: Reader, node: object) -> Procedure:
             title=reader.text(part, "title", place, default=DEFAULT_DEBRIEFING_TITLE),
             text=_long_text(reader, part, place),
         )
-    return Procedure(consent, debriefing)
+    video = _read_video(reader, body) if "video" in body else None
+    if video is not None and video.record and consent is None:
+        reader.problem(join("procedure", "video"), "recording video needs the consent page "
+                       "(procedure.consent), where the participant is asked for it")  # fmt: skip
+    return Procedure(consent, debriefing, video)
+
+
+def _read_video(reader: Reader, body: dict[str, Any]) -> Video:
+    place = join("procedure", "video")
+    part = reader.mapping(body["video"], place)
+    reader.check_keys(part, place, ["record"], ["audio", "label", "audio_label"])
+    return Video(
+        record=reader.boolean(part, "record", place, default=False),
+        audio=reader.boolean(part, "audio", place, default=False),
+        label=reader.text(part, "label", place, default=DEFAULT_VIDEO_LABEL),
+        audio_label=reader.text(part, "audio_label", place, default=DEFAULT_AUDIO_LABEL),
+    )
 
 
 def _long_text(reader: Reader, part: dict[str, Any], place: str) -> str:
@@ -95,4 +132,6 @@ def procedure_config(procedure: Procedure) -> dict[str, Any] | None:
         data["consent"] = dict(procedure.consent.__dict__)
     if procedure.debriefing is not None:
         data["debriefing"] = dict(procedure.debriefing.__dict__)
+    if procedure.video is not None:
+        data["video"] = dict(procedure.video.__dict__)
     return data or None

@@ -18,7 +18,8 @@ from tests.backend.test_auth import add_user, csrf_from, login
 # A lab's robot head files are public like the static files: the display page loads them.
 PUBLIC = {"/healthz", "/login", "/join", "/favicon.ico", "/display-heads/{name}"}
 TOKEN_GUARDED = re.compile(
-    r"^/(p/|api/phone/|display/\{booth\}/\{token\}|capture/\{booth\}/\{token\}|media/)"
+    r"^/(p/|api/phone/|display/\{booth\}/\{token\}|capture/\{booth\}/\{token\}|media/"
+    r"|video/\{booth\}/\{token\}|api/video/)"
 )
 PI_ONLY = re.compile(r"^/(pi\b|api/pi/|api/staff/users)")
 # Wizards may read the study and its plan; changing them is the PI's.
@@ -29,7 +30,8 @@ VALUES = {
     "study_id": "1", "session_id": "1", "token": "not-a-token", "code": "P001",
     "measure": "trust", "fmt": "svg", "recording_id": "1", "booth": "booth-1",
     "actor": "m1", "relative": "audio/x.mp3", "name": "0123abcd.wav", "account_id": "1",
-    "device": "0123456789abcdef", "interaction_id": "1", "stream_id": "1",
+    "device": "0123456789abcdef", "interaction_id": "1", "stream_id": "1", "video_id": "1",
+    "seq": "0",
 }  # fmt: skip
 # Well-formed bodies, so the token check (not validation) is what answers.
 BODIES = {

@@ -19,6 +19,7 @@ from chameleons.backend.logredact import LOGGERS, RedactSecrets, redact
         ("GET /display/booth-1/AbC_displayKey", "AbC_displayKey"),
         ("/ws/display/booth-1?token=AbC_displayKey", "AbC_displayKey"),
         ("/media/prompts/m1/audio/a.wav?key=MediaKey123&x=1", "MediaKey123"),
+        ("GET /video/booth-1/VidKey_456 HTTP/1.1", "VidKey_456"),
     ],
 )
 def test_secrets_in_paths_are_redacted(line: str, secret: str) -> None:
@@ -40,3 +41,9 @@ def test_uvicorn_access_lines_are_filtered(app: FastAPI) -> None:
     assert all(f.filter(record) for f in logger.filters if isinstance(f, RedactSecrets))
     assert "Zx9_secretToken" not in record.getMessage()
     assert "/p/<token>" in record.getMessage()
+
+
+def test_the_video_api_paths_stay_readable() -> None:
+    """The recording page's API carries its key in a header: its paths are kept as they are."""
+    line = "POST /api/video/booth-1/videos/3/chunks/7 HTTP/1.1"
+    assert redact(line) == line

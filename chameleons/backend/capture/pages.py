@@ -34,7 +34,8 @@ def capture_page(
         raise HTTPException(status.HTTP_404_NOT_FOUND, "No such capture page.")
     vendor = str(request.url_for("static", path="/vendor/mediapipe-face-mesh/").path)
     context = {"booth": booth, "ws_path": f"/ws/capture/{booth}?token={token}",
-               "vendor": vendor, "version": VERSION}  # fmt: skip
+               "vendor": vendor, "version": VERSION,
+               "video_path": f"/video/{booth}/{token}"}  # fmt: skip
     response = templates.TemplateResponse(request, "capture/page.html", context)
     response.headers["Referrer-Policy"] = "no-referrer"
     response.headers["Cache-Control"] = "no-store"

@@ -78,6 +78,18 @@ def participants_table(spec: StudySpec) -> TableSpec:
                 "When the participant agreed on the phone's consent page; empty for a study"
                 " without one and for a participant who declined (end_reason consent_declined)",
             ),
+            Column(
+                "video_consent",
+                "boolean",
+                "Whether the participant ticked the consent page's video item (a study with"
+                " procedure.video); empty where it was not asked.",
+            ),
+            Column(
+                "video_audio_consent",
+                "boolean",
+                "Whether they also ticked the microphone item (a video study that asks for"
+                " sound); empty where it was not asked.",
+            ),
             time_column("started_at", "Session start"),
             time_column("completed_at", "Session completion"),
             Column("duration_s", "number", "Session duration in seconds (start to completion)."),

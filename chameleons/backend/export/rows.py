@@ -73,6 +73,8 @@ def participant_rows(db: DbSession, study: Study, include_rehearsal: bool) -> It
             "language": session.language,
             "session_state": session.state,
             "consent_at": iso(session.consent_at or participant.consent_at),
+            "video_consent": session.video_consent,
+            "video_audio_consent": session.video_audio_consent,
             "started_at": iso(session.started_at),
             "completed_at": iso(session.completed_at),
             "duration_s": _seconds(session.started_at, session.completed_at),

@@ -35,6 +35,18 @@ class EafError(ValueError):
 
 
 @dataclass(frozen=True, slots=True)
+class LinkedMedia:
+    """A video of the session to link in the ``.eaf``: the file, its path relative to the
+    ``.eaf`` (ELAN looks there first when the files move together), and when its first
+    frame was on the server's clock."""
+
+    path: Path
+    relative: str | None
+    started_at: datetime
+    mime_type: str = "video/webm"
+
+
+@dataclass(frozen=True, slots=True)
 class Mark:
     tier: str
     start: datetime
@@ -111,9 +123,11 @@ def _spans(marks: list[Mark], origin: datetime) -> list[tuple[int, int, str]]:
     return spans
 
 
-def write_eaf(db: DbSession, session_id: int, path: Path, *, media: Path | None = None) -> Path:
+def write_eaf(
+    db: DbSession, session_id: int, path: Path, *, media: Iterable[LinkedMedia] = ()
+) -> Path:
     """The session's ``.eaf``: the tiers of :data:`TIERS` (empty ones too, for the coders'
-    template), linked to ``media`` when there is a video."""
+    template), linked to the session's videos (``media``) when there are any."""
     from pympi.Elan import Eaf
 
     session = db.get(Session, session_id)
@@ -129,11 +143,24 @@ def write_eaf(db: DbSession, session_id: int, path: Path, *, media: Path | None 
         for start, end, value in _spans([m for m in marks if m.tier == tier], origin):
             eaf.add_annotation(tier, start, end, value)
     eaf.remove_tier("default")
-    if media is not None:
-        eaf.add_linked_file(str(media.resolve()), relpath=media.name)
+    for index, video in enumerate(media):
+        _link(eaf, video, origin, index)
     path.parent.mkdir(parents=True, exist_ok=True)
     eaf.to_file(str(path))
     return path
+
+
+def _link(eaf: Any, video: LinkedMedia, origin: datetime, index: int) -> None:
+    """ELAN's ``MEDIA_DESCRIPTOR``: ``MEDIA_URL`` (a file URL), ``RELATIVE_MEDIA_URL`` and
+    ``TIME_ORIGIN``, the point in the video that is the annotations' time 0, when the video
+    began before the origin. One that began later cannot be placed so (ELAN's offsets are
+    into the media): ``chameleons_video<n>_start_ms`` says where it begins on the tiers'
+    time either way."""
+    start_ms = round((_aware(video.started_at) - origin).total_seconds() * 1000)
+    eaf.add_linked_file(video.path.resolve().as_uri(), relpath=video.relative,
+                        mimetype=video.mime_type,
+                        time_origin=str(-start_ms) if start_ms <= 0 else None)  # fmt: skip
+    eaf.add_property(f"chameleons_video{index + 1}_start_ms", str(start_ms))
 
 
 @dataclass(frozen=True, slots=True)

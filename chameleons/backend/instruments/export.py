@@ -6,12 +6,17 @@ from __future__ import annotations
 import csv
 import json
 import shutil
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.models import InstrumentStream, Participant, Session
+
+if TYPE_CHECKING:
+    from chameleons.backend.instruments.eaf import LinkedMedia
 
 INDEX_COLUMNS = ("participant", "session_id", "stream", "stream_type", "source_id",
                  "channel_format", "nominal_srate", "channels", "samples", "first_s",
@@ -51,9 +56,11 @@ def export_instruments(db: DbSession, study_id: int, include_rehearsal: bool, da
     return len(rows)
 
 
-def export_eaf(db: DbSession, study_id: int, include_rehearsal: bool, out: Path) -> int:
+def export_eaf(db: DbSession, study_id: int, include_rehearsal: bool, out: Path,
+               media: Mapping[int, Sequence[LinkedMedia]] | None = None) -> int:  # fmt: skip
     """``out/eaf/<code>-session<id>.eaf`` for each session of the study (coders' template),
-    and ``out/eaf/reliability.csv`` once coders' annotations have been imported."""
+    linked to the session's videos in ``media`` (by session id), and
+    ``out/eaf/reliability.csv`` once coders' annotations have been imported."""
     from chameleons.backend.instruments.eaf import write_eaf
     from chameleons.backend.instruments.reliability import study_reliability
 
@@ -65,7 +72,8 @@ def export_eaf(db: DbSession, study_id: int, include_rehearsal: bool, out: Path)
         query = query.where(Session.is_rehearsal.is_(False))
     written = 0
     for session_id, code in db.execute(query).tuples():
-        write_eaf(db, session_id, out / "eaf" / f"{code}-session{session_id}.eaf")
+        write_eaf(db, session_id, out / "eaf" / f"{code}-session{session_id}.eaf",
+                  media=(media or {}).get(session_id, ()))  # fmt: skip
         written += 1
     tiers = study_reliability(db, study_id)
     if tiers:

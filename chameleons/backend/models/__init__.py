@@ -16,6 +16,7 @@ from chameleons.backend.models.staff_session import StaffSession
 from chameleons.backend.models.staff_user import StaffUser
 from chameleons.backend.models.study import Study
 from chameleons.backend.models.suggestion import Suggestion
+from chameleons.backend.models.video import ParticipantVideo, VideoChunk
 
 __all__ = [
     "Base",
@@ -27,6 +28,7 @@ __all__ = [
     "Interaction",
     "InteractionSynchrony",
     "Participant",
+    "ParticipantVideo",
     "PlanRow",
     "QuestionnaireResponse",
     "Recording",
@@ -35,4 +37,5 @@ __all__ = [
     "StaffUser",
     "Study",
     "Suggestion",
+    "VideoChunk",
 ]

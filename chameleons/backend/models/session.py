@@ -52,3 +52,7 @@ class Session(Base):
     pause_note: Mapped[str | None] = mapped_column(Text)
     pause_count: Mapped[int] = mapped_column(default=0, server_default="0")
     paused_seconds: Mapped[float] = mapped_column(default=0.0, server_default="0")
+    # The consent step's video items (a study with ``procedure.video``): whether the
+    # participant agreed to be filmed, and to their voice being recorded with it.
+    video_consent: Mapped[bool | None]
+    video_audio_consent: Mapped[bool | None]

@@ -75,8 +75,10 @@ def post_ranking(token: str, data: RankingSubmission, db: WriteDb) -> Receipt:
 def post_consent(token: str, data: ConsentSubmission, db: WriteDb) -> Receipt:
     with phone_errors(db, token):
         return submit(
-            db, token, data.client_id, lambda flow: record_consent(flow, data.client_id, data.agree)
-        )
+            db, token, data.client_id,
+            lambda flow: record_consent(flow, data.client_id, data.agree,
+                                        video=data.video, audio=data.audio),
+        )  # fmt: skip
 
 
 @router.post("/api/phone/{token}/language")

@@ -33,3 +33,7 @@ class LanguageSubmission(BaseModel):
 class ConsentSubmission(BaseModel):
     client_id: str = ClientId
     agree: bool = Field(description="true: takes part; false: declines (the session ends)")
+    video: bool = Field(False, description="The video item ticked: may be filmed (studies "
+                        "with procedure.video; ignored otherwise)")  # fmt: skip
+    audio: bool = Field(False, description="The microphone item ticked too (studies whose "
+                        "video asks for audio; ignored otherwise)")  # fmt: skip

@@ -107,6 +107,7 @@ def _before(flow: Flow) -> PhoneState:
                 "paragraphs": paragraphs(consent.text),
                 "agree": gettext(language, consent.agree),
                 "decline": gettext(language, consent.decline),
+                "video": _video_items(flow, language),
             },
         }
     if questionnaires_for(flow, BEFORE_POSITION):
@@ -114,6 +115,16 @@ def _before(flow: Flow) -> PhoneState:
         if state["view"] == "questionnaire":
             return state
     return {"view": "welcome"}
+
+
+def _video_items(flow: Flow, language: str) -> dict[str, str | None] | None:
+    """The consent page's own video items (unticked; each optional), or None."""
+    procedure = texts(flow).procedure
+    video = procedure.video
+    if video is None or not procedure.records_video:
+        return None
+    audio = gettext(language, video.audio_label) if video.audio else None
+    return {"label": gettext(language, video.label), "audio_label": audio}
 
 
 def _task(flow: Flow, interaction: Interaction) -> PhoneState:

@@ -208,8 +208,16 @@ class ParticipantBot:
         """The language buttons of the phone's first page (before consent)."""
         return self._send("language", {"client_id": new_client_id(), "language": language})
 
-    def consent(self, agree: bool = True, client_id: str | None = None) -> Json:
-        body = {"client_id": client_id or new_client_id(), "agree": agree}
+    def consent(
+        self,
+        agree: bool = True,
+        client_id: str | None = None,
+        *,
+        video: bool = False,
+        audio: bool = False,
+    ) -> Json:
+        body = {"client_id": client_id or new_client_id(), "agree": agree, "video": video,
+                "audio": audio}  # fmt: skip
         return self._send("consent", body)
 
     def prepare(self, rng: random.Random) -> None:

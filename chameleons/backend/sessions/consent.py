@@ -27,7 +27,12 @@ from chameleons.i18n import N_
 CONSENT_DECLINED = "consent_declined"
 
 
-def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
+def record_consent(
+    flow: Flow, client_id: str, agree: bool, *, video: bool = False, audio: bool = False
+) -> Event:
+    """Agree or decline; with agreement, the video items as ticked (``video``: may be
+    filmed; ``audio``: the microphone too). They count only where the study asks them
+    (``procedure.video``), audio only with video; elsewhere they stay None (not asked)."""
     consent = flow.spec.procedure.consent
     session = flow.session
     if session.state in ("complete", "ended"):
@@ -43,6 +48,12 @@ def record_consent(flow: Flow, client_id: str, agree: bool) -> Event:
     if agree:
         session.consent_at = now
         flow.participant.consent_at = now
+        asked = flow.spec.procedure.video if flow.spec.procedure.records_video else None
+        if asked is not None:
+            session.video_consent = video
+            session.video_audio_consent = bool(video and audio) if asked.audio else None
+            payload["video"] = session.video_consent
+            payload["audio"] = session.video_audio_consent
         flow.db.flush()
         return flow.log("consent.given", source="participant", client_id=client_id, payload=payload)
     session.state = "ended"

@@ -15,7 +15,7 @@ from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentPI
 from chameleons.backend.dashboard.context import flash, page_context, study_or_404, study_query
 from chameleons.backend.dependencies import AppSettings, DbSession, Templates
-from chameleons.backend.models import Interaction, Recording, Session
+from chameleons.backend.models import Interaction, ParticipantVideo, Recording, Session
 from chameleons.backend.routing import make_router
 from chameleons.backend.withdrawal.rehearsal import RehearsalError, set_rehearsal
 from chameleons.backend.withdrawal.scrub import scrub_database
@@ -69,6 +69,13 @@ def _recording_count(db: DbSession, participant_id: int) -> int:
     return int(db.scalar(query) or 0)
 
 
+def _video_count(db: DbSession, participant_id: int) -> int:
+    query = (select(func.count(ParticipantVideo.id))
+             .join(Session, Session.id == ParticipantVideo.session_id)
+             .where(Session.participant_id == participant_id))  # fmt: skip
+    return int(db.scalar(query) or 0)
+
+
 def _withdraw_page(
     request: Request, templates: Templates, context: dict[str, object], status_code: int = 200
 ) -> Response:
@@ -86,7 +93,8 @@ def withdraw_form(
     except WithdrawalError as exc:
         raise _http_error(exc) from exc
     recordings = _recording_count(db, participant.id)
-    context = page_context(request, user, found, "overview", code=code, recordings=recordings)
+    context = page_context(request, user, found, "overview", code=code, recordings=recordings,
+                           videos=_video_count(db, participant.id))  # fmt: skip
     return _withdraw_page(request, templates, {**context, "error": None})
 
 
@@ -109,6 +117,7 @@ def withdraw_submit(
         context = page_context(
             request, user, found, "overview", code=code,
             recordings=_recording_count(db, participant.id), error=str(exc),
+            videos=_video_count(db, participant.id),
         )  # fmt: skip
         return _withdraw_page(request, templates, context, status.HTTP_400_BAD_REQUEST)
     context = page_context(request, user, found, "overview", code=code, result=result)

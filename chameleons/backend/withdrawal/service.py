@@ -33,6 +33,7 @@ from chameleons.backend.models import (
     Suggestion,
 )
 from chameleons.backend.synchrony.repository import forget_derived as forget_synchrony
+from chameleons.backend.video.service import forget_videos
 from chameleons.backend.withdrawal.derived import (
     Withdrawn,
     YokedReplay,
@@ -110,6 +111,7 @@ def withdraw_participant(
         db, study_id, [r for r, _ in recordings], [*interaction_ids, *replays]
     )
     instrument_files = forget_instruments(db, session_ids, data_dir)  # XDF streams, ELAN codes
+    video_files = forget_videos(db, session_ids, data_dir)  # the booth camera's video
     _delete_rows(db, participant, session_ids, interaction_ids)
     forget_replays(db, replays)
     redacted = redact_events(db, study_id, withdrawn)
@@ -134,6 +136,8 @@ def withdraw_participant(
             f"what {redacted} event{_s(redacted)} of other sessions said about them "
             "(each keeps its kind and time, not its content)"
         )
+    if video_files:
+        removed.append(f"{video_files} video file{_s(video_files)} of the participant")
     if instrument_files:
         removed.append(f"{instrument_files} file{_s(instrument_files)} of other instruments "
                        "(streams attached with import-xdf)")  # fmt: skip

@@ -37,10 +37,37 @@ export function consentView(s) {
   c.paragraphs.forEach(function (text) { section.appendChild(h("p", { text: text })); });
   var agree = h("button", { type: "button", class: "big primary", id: "consent-agree", text: c.agree });
   var decline = h("button", { type: "button", class: "big", id: "consent-decline", text: c.decline });
-  agree.addEventListener("click", function () { submit("consent", { position: 0, agree: true }); });
+  var items = consentVideoItems(c.video);
+  if (items.node) { section.appendChild(items.node); }
+  agree.addEventListener("click", function () {
+    submit("consent", { position: 0, agree: true, video: items.video(), audio: items.audio() });
+  });
   decline.addEventListener("click", function () { submit("consent", { position: 0, agree: false }); });
   section.appendChild(h("div", { class: "consent-actions" }, agree, decline));
   return section;
+}
+
+/* The study's own video items (procedure.video): each optional, unticked; the microphone
+ * item only counts with the video one (it is disabled until that is ticked). */
+function consentVideoItems(video) {
+  if (!video) { return { node: null, video: function () { return false; }, audio: function () { return false; } }; }
+  var filmed = h("input", { type: "checkbox", id: "consent-video" });
+  var box = h("fieldset", { class: "consent-video" },
+    h("label", { class: "check" }, filmed, h("span", { text: video.label })));
+  var voice = null;
+  if (video.audio_label) {
+    voice = h("input", { type: "checkbox", id: "consent-audio", disabled: "disabled" });
+    box.appendChild(h("label", { class: "check" }, voice, h("span", { text: video.audio_label })));
+    filmed.addEventListener("change", function () {
+      voice.disabled = !filmed.checked;
+      if (!filmed.checked) { voice.checked = false; }
+    });
+  }
+  return {
+    node: box,
+    video: function () { return filmed.checked; },
+    audio: function () { return Boolean(voice && filmed.checked && voice.checked); }
+  };
 }
 
 export function welcomeView() {
