@@ -239,7 +239,8 @@ def goals(report: dict[str, Any], hold_phones: int) -> dict[str, dict[str, bool]
         }  # fmt: skip
         if "think_paced" in ours:
             checks["think p99 <= 50 ms (human-paced wizard)"] = (
-                ours["think_paced"]["state_p99_ms"] <= GOALS["think_update_p99_ms"])
+                ours["think_paced"]["state_p99_ms"] <= GOALS["think_update_p99_ms"]
+            )
         base = report.get(f"{name} baseline", {}).get("burst")
         if base and base["server_cpu_ms_per_submission"]:
             ratio = ours["burst"]["server_cpu_ms_per_submission"] / base[
