@@ -146,9 +146,13 @@ def burst(
             phone.wizard.start()
             for to in ("discussion", "ranking"):
                 phone.wizard.advance(1, to)
+        # The items to rank, read before the barrier: a phone page has them from its socket
+        # (the view pushed when the wizard opened the ranking) and sends only its answer.
+        rankings = [_items(phone) for phone in waiting]
         cpu, seconds = (figures.server_cpu_s, theirs.server_cpu_s), figures.seconds
         with server_cpu(real.server, figures), server_cpu(base, theirs):
-            run_threads([*(partial(submit_ranking, phone, figures) for phone in waiting),
+            run_threads([*(partial(submit_ranking, phone, figures, ranking)
+                           for phone, ranking in zip(waiting, rankings, strict=True)),
                          *(partial(submit_measured, theirs, other.console, other.send)
                            for other in beside)], together=True)  # fmt: skip
         figures.server_cpu_s += cpu[0]
@@ -175,8 +179,11 @@ def server_cpu(server: Server, figures: Figures, *more: Server) -> Iterator[None
     figures.seconds = time.monotonic() - started
 
 
-def submit_ranking(phone: Phone, figures: Figures) -> None:
-    ranking = [item["id"] for item in phone.participant.state()["items"]]
+def _items(phone: Phone) -> list[str]:
+    return [item["id"] for item in phone.participant.state()["items"]]
+
+
+def submit_ranking(phone: Phone, figures: Figures, ranking: list[str]) -> None:
     submit_measured(figures, phone.console, partial(phone.participant.submit_ranking, 1, ranking))
 
 
