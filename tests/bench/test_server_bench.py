@@ -71,6 +71,26 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
         assert line in stdout
 
 
+def test_the_burst_alone_repeated(tmp_path: Path) -> None:
+    """``--burst-only``: the CPU comparison alone, ``--bursts`` times with new sessions; no
+    think runs, no hold, and its goals are the burst's."""
+    stdout, report = _smoke_run(tmp_path, "--burst-only", "--bursts", "2", "--only", "sqlite")
+    real, baseline = report["SQLite"], report["SQLite baseline"]
+    assert {k for k in SCENARIOS if k in real} == {"burst"} == {k for k in SCENARIOS
+                                                                  if k in baseline}  # fmt: skip
+    assert "hold" not in real
+    for burst in (real["burst"], baseline["burst"]):
+        assert burst["submissions"] == 4  # two phones, two bursts
+        assert burst["errors"] == {}
+        assert burst["dropped_sockets"] == {}
+        assert burst["state_p99_ms"] >= burst["update_p99_ms"] > 0
+    checks = report["goals"]["SQLite"]
+    assert "burst p99 <= 500 ms" in checks
+    assert not any(goal.startswith("think") for goal in checks)
+    assert "server CPU / submission" in stdout
+    assert "human-paced" not in stdout
+
+
 def _submissions_per_session() -> int:
     study = load_default_study()
     per_interaction = 1 + len(study.questionnaires_for("interaction"))  # ranking, then pages

@@ -7,7 +7,9 @@ from datetime import UTC, datetime
 from typing import Any
 
 from sqlalchemy import bindparam, func, select
-from sqlalchemy.orm import Session
+from sqlalchemy import event as sa_event
+from sqlalchemy.engine import Connection
+from sqlalchemy.orm import Mapper, Session, SessionTransaction, object_session
 
 from chameleons.backend.models import Event
 from chameleons.backend.models.base import utcnow
@@ -105,9 +107,56 @@ def for_session(db: Session, session_id: int, after_id: int = 0, limit: int = 10
 
 
 def last_id(db: Session, session_id: int) -> int:
-    """The newest event's id: a version number of the session that only grows."""
+    """The newest event's id: a version number of the session that only grows. On SQLite,
+    once this transaction has inserted an event of the session, that is the newest one and
+    no statement is needed (``_note_inserted``)."""
+    noted: _Noted | None = db.info.get(_INSERTED_KEY)
+    if noted is not None and noted[0] is db.get_transaction() and session_id in noted[1]:
+        return noted[1][session_id]
     value = db.scalar(NEWEST_ID, {"session_id": session_id})
     return int(value or 0)
+
+
+# The newest event id each session got in a SQLite transaction, in ``Session.info``: the
+# transaction it was noted in, and the ids by session. A SQLite transaction that has
+# inserted a row holds the database's write lock until it ends, so no other connection can
+# add an event before its commit, and an event's id is above every id the table ever held
+# (``AUTOINCREMENT``, models.base.NEVER_REUSED_IDS). So the newest id it inserted for a
+# session is that session's newest event, and ``SELECT max(event.id)`` (once per snapshot,
+# issue 34) would only read it back. PostgreSQL's writers do not exclude each other (a prompt
+# play's event takes no session lock), so there the statement stays. An event inserted in a
+# savepoint (which may be rolled back on its own) or deleted makes its session's id unknown
+# again: that session is asked.
+_INSERTED_KEY = "events_inserted"
+_Noted = tuple[SessionTransaction, dict[int, int]]
+
+
+@sa_event.listens_for(Event, "after_insert")
+def _note_inserted(_mapper: Mapper[Event], connection: Connection, target: Event) -> None:
+    db = object_session(target)
+    if db is None or target.session_id is None or connection.dialect.name != "sqlite":
+        return
+    transaction = db.get_transaction()
+    noted: _Noted | None = db.info.get(_INSERTED_KEY)
+    if noted is None or noted[0] is not transaction:
+        if transaction is None:
+            return
+        noted = (transaction, {})
+        db.info[_INSERTED_KEY] = noted
+    ids = noted[1]
+    if db.in_nested_transaction():
+        ids.pop(target.session_id, None)
+        return
+    ids[target.session_id] = max(ids.get(target.session_id, 0), target.id)
+
+
+@sa_event.listens_for(Event, "after_delete")
+def _forget_deleted(_mapper: Mapper[Event], _connection: Connection, target: Event) -> None:
+    """A session whose event this transaction deleted is asked again (its newest may be gone)."""
+    db = object_session(target)
+    noted: _Noted | None = db.info.get(_INSERTED_KEY) if db is not None else None
+    if noted is not None and target.session_id is not None:
+        noted[1].pop(target.session_id, None)
 
 
 def iso(moment: datetime | None) -> str | None:
