@@ -216,6 +216,8 @@ def print_table(name: str, result: dict[str, Any], baseline: dict[str, Any]) -> 
         if scenario not in result:  # --burst-only
             continue
         ours, base = result[scenario], baseline.get(scenario, baseline.get("think_paced"))
+        if base is None:  # no baseline scenario of that kind ran
+            continue
         for figure, what in FIGURES.items():
             p50, p99 = ours[f"{figure}_p50_ms"], ours[f"{figure}_p99_ms"]
             ratio = p99 / base[f"{figure}_p99_ms"] if base[f"{figure}_p99_ms"] else float("nan")

@@ -9,7 +9,7 @@ from typing import Any
 from sqlalchemy import bindparam, func, select
 from sqlalchemy import event as sa_event
 from sqlalchemy.engine import Connection
-from sqlalchemy.orm import Mapper, Session, SessionTransaction, object_session
+from sqlalchemy.orm import Mapper, ORMExecuteState, Session, SessionTransaction, object_session
 
 from chameleons.backend.models import Event
 from chameleons.backend.models.base import utcnow
@@ -157,6 +157,14 @@ def _forget_deleted(_mapper: Mapper[Event], _connection: Connection, target: Eve
     noted: _Noted | None = db.info.get(_INSERTED_KEY) if db is not None else None
     if noted is not None and target.session_id is not None:
         noted[1].pop(target.session_id, None)
+
+
+@sa_event.listens_for(Session, "do_orm_execute")
+def _forget_after_bulk(state: ORMExecuteState) -> None:
+    """A bulk ``delete()``/``update()`` statement (withdrawal deletes events so) passes no
+    single row through the mapper events: every noted id of the transaction is forgotten."""
+    if state.is_delete or state.is_update:
+        state.session.info.pop(_INSERTED_KEY, None)
 
 
 def iso(moment: datetime | None) -> str | None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
-from sqlalchemy import func, select
+from sqlalchemy import delete, func, select
 
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import session_channel
@@ -107,4 +107,22 @@ def test_an_event_deleted_in_the_transaction_makes_the_version_asked_again(
         db.delete(added)
         db.flush()
         assert flow.newest_event_id() == before
+        db.rollback()
+
+
+def test_a_bulk_delete_of_events_makes_the_version_asked_again(
+    app: FastAPI, client: TestClient, wizard: WizardBot
+) -> None:
+    """A ``delete(Event)`` statement (as withdrawal runs) passes no row through the mapper:
+    the noted ids are forgotten and the version is what the database holds."""
+    wizard.start()
+    with app.state.sessionmaker() as db:
+        flow = load(db, wizard.session_id)
+        added = flow.log("note.added", payload={"text": "bulk-deleted"})
+        assert flow.newest_event_id() == added.id
+        db.execute(delete(Event).where(Event.id == added.id))
+        with statements_here() as statements:
+            version = flow.newest_event_id()
+        assert [s for s in statements if NEWEST in s.lower()], statements
+        assert version < added.id
         db.rollback()
