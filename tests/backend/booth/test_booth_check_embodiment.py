@@ -148,8 +148,11 @@ def test_the_check_runs_on_the_conditions_robot_and_puts_the_booth_back(
     assert steps["copy"]["status"] == "pass", steps["copy"]
     assert "; checked on the display's 2D face" in steps["copy"]["value"]
     # The display is judged by its page (none is open in this test), not by the Furhat.
-    assert steps["robot"] == {**steps["robot"], "status": "fail",
-                              "value": "the display's 2D face: no robot display open"}
+    assert steps["robot"] == {
+        **steps["robot"],
+        "status": "fail",
+        "value": "the display's 2D face: no robot display open",
+    }
 
 
 @pytest.mark.usefixtures("flow")
@@ -175,8 +178,7 @@ def test_a_furhat_condition_on_a_booth_without_a_furhat_is_refused_in_one_senten
     assert answer["robot"]["problem"] == sentence
     assert (steps["robot"]["status"], steps["robot"]["value"]) == ("fail", sentence)
     assert (steps["copy"]["status"], steps["copy"]["value"]) == ("fail", f"not run: {sentence}")
-    assert (steps["speech"]["status"], steps["speech"]["value"]) == ("fail",
-                                                                    f"not run: {sentence}")
+    assert (steps["speech"]["status"], steps["speech"]["value"]) == ("fail", f"not run: {sentence}")
 
 
 @pytest.mark.usefixtures("flow")
