@@ -63,6 +63,7 @@ def chips_when(
     def read() -> bool:
         if page is not None:
             page.send_text(json.dumps(PAGE_TELEMETRY))
+        last.clear()
         last.update(chips(client, wizard))
         return matches(last)
 
@@ -125,8 +126,8 @@ def test_each_robot_the_study_needs_is_judged_and_a_missing_one_named(
                 chips_when(client, wizard, page, robot="display open (the display runs now)",
                            furhat="connected (for copy_furhat)")  # fmt: skip
                 furhat.close()  # the Furhat goes away
-                found = chips_when(client, wizard, page, robot="display open (the display runs now)",
-                                   furhat="disconnected...")  # fmt: skip
+                found = chips_when(client, wizard, page, furhat="disconnected...",
+                                   robot="display open (the display runs now)")  # fmt: skip
                 assert found["furhat"]["value"].endswith("; copy_furhat needs it")
                 assert (found["furhat"]["ok"], found["furhat"]["level"]) == (False, "degraded")
 
