@@ -15,8 +15,10 @@ display: it is put back there, with the same face id.
 
 A ``furhat`` condition on a booth whose worker drives no Furhat is not sent at all: the
 check says so in one sentence, and the steps that need the robot fail with it at once.
-A condition without a ``renderer`` runs on whatever robot the booth drives now (nothing is
-switched). The check's result says which robot was checked (``checked_on``).
+A condition without a ``renderer`` runs as it would in a session: on the display of a booth
+with both robots (the face is sent without a renderer if the Furhat runs now), elsewhere on
+the booth's robot as it is (nothing is switched). The check's result says which robot was
+checked (``checked_on``).
 """
 
 from __future__ import annotations
@@ -87,10 +89,13 @@ async def on_robot(
     driver = worker_driver(bridge, booth)
     previous = robot.acknowledged(bridge, booth, SET_FACE)
     current = (previous or {}).get("renderer")
-    chosen = renderer or (current if isinstance(current, str) else None)
+    # A condition without a renderer runs on the display of a booth with both robots (the
+    # set-up's face without a renderer), elsewhere on the booth's robot as it is.
+    back_to_display = renderer is None and driver == TWO_ROBOTS and current == FURHAT
+    chosen = renderer or (None if back_to_display or not isinstance(current, str) else current)
     output = (FURHAT if chosen == FURHAT else DISPLAY) if driver == TWO_ROBOTS else None
     checked = Checked(chosen, output, robot_words(driver, chosen))
-    if renderer is None:  # the condition names no robot: the booth's, as it is
+    if renderer is None and not back_to_display:  # the booth's robot, as it is
         yield checked
         return
     if renderer == FURHAT and driver is not None and FURHAT not in renderers(driver):
@@ -100,7 +105,7 @@ async def on_robot(
     if not isinstance(face_id, str) or not face_id:
         yield replace(checked, problem="no face to set: the study names no face")
         return
-    body = {"face_id": face_id, "renderer": renderer}
+    body = {"face_id": face_id, **({"renderer": renderer} if renderer else {})}
     if previous == body:  # already on it: nothing to switch or restore
         yield checked
         return

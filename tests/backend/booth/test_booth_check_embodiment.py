@@ -162,6 +162,9 @@ def test_a_furhat_condition_on_a_booth_without_a_furhat_is_refused_in_one_senten
     """Nothing is sent to the worker (its face and behaviour stay), and the steps that
     need the Furhat fail with the sentence at once (no head movement is waited for)."""
     new_session(pi, embodiment_study)
+    assert pi.get(f"/api/booths/{BOOTH}/check?condition=copy_furhat")["renderer"] == "furhat"
+    page = pi.http.get(f"/booths/{BOOTH}/check?condition=copy_furhat").text
+    assert 'Like the condition, it runs on <strong id="check-renderer">the Furhat' in page
     config = worker_config(bridge, tmp_path, livelink_port=0, driver="virtual")
     with running_worker(bridge, config):
         until(lambda: running_behaviour(bridge) == "still", what="the worker in still")
@@ -214,3 +217,44 @@ def test_an_interaction_that_starts_during_the_check_keeps_its_own_robot(
             expected = "furhat" if renderer == "furhat" else "display"
             until(lambda: heartbeat(bridge).get("robot_active") == expected,
                   what="the interaction's robot driven")  # fmt: skip
+
+
+@pytest.fixture
+def plain_copy_study(pi: StaffApi) -> int:
+    """A copy condition that names no robot beside the Furhat's."""
+    document = default_document()
+    document["conditions"] = {
+        "copy_plain": {"label": "Copy", "behaviour": "copy", "params": DELAY},
+        "copy_furhat": {"label": "Copy, Furhat", "behaviour": "copy", "renderer": "furhat",
+                        "params": DELAY},
+        "still": {"label": "Still", "behaviour": "still"},
+    }  # fmt: skip
+    return study_with_plan(pi, participants=6, yaml=study_yaml(document))
+
+
+@pytest.mark.usefixtures("flow")
+def test_a_condition_without_a_renderer_is_checked_on_the_display_as_a_session_runs_it(
+    client: TestClient, pi: StaffApi, plain_copy_study: int, bridge: Bridge, tmp_path: Path
+) -> None:
+    """The Furhat runs now; a condition naming no robot runs on the display in a session
+    (its face is sent without a renderer), so the check puts the booth there and back."""
+    new_session(pi, plain_copy_study)
+    on_furhat = {"face_id": "face-2", "renderer": "furhat"}
+    frames: list[Message] = []
+    bridge.add_listener("display.", frames.append)
+    with FurhatPeer() as robot:
+        config = worker_config(bridge, tmp_path, livelink_port=0, driver="virtual+furhat",
+                               robot_url=robot.url)  # fmt: skip
+        with running_worker(bridge, config):
+            until(lambda: running_behaviour(bridge) == "still", what="the worker in still")
+            set_face(client, bridge, on_furhat)
+            answer = pi.post(f"/api/booths/{BOOTH}/check?condition=copy_plain&say=false"
+                             "&movement=false")  # fmt: skip
+            assert face(bridge) == on_furhat
+            until(lambda: heartbeat(bridge).get("robot_active") == "furhat",
+                  what="the Furhat driven again")  # fmt: skip
+    # The display was given the face (no renderer: the page keeps its own) for the check.
+    assert [m.body for m in frames if m.type == "set_face"] == [{"face_id": "face-2"}]
+    assert answer["checked_on"] == "Checked on the display"
+    robot_step = next(s for s in answer["steps"] if s["id"] == "robot")
+    assert robot_step["value"] == "the display: no robot display open"
