@@ -56,6 +56,8 @@ def booth_check(
         raise click.ClickException(f"the check could not run: {exc}") from exc
     for step in result["steps"]:
         click.echo(f"{step['status'].upper():5} {step['label']}: {step['value']}")
+    if result.get("checked_on"):  # which robot: a booth may have the display and a Furhat
+        click.echo(f"{result['checked_on']}.")
     click.echo("Booth ready." if result["passed"] else "NOT READY: fix the failing steps.")
     raise SystemExit(0 if result["passed"] else 1)
 

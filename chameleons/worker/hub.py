@@ -70,6 +70,7 @@ ROUTES: dict[str, str] = {
     RECENTRE_HEAD: "behaviour",
 }  # fmt: skip
 ROBOT_FACE_FIELDS = ("face_id", "robot_face_id", "unmapped_face", "refused")
+ROBOT_OUTPUT_FIELDS = ("state", "problem", "retry_in")  # per robot of a two-robot booth
 StatsSource = Callable[[], Mapping[str, Any]]
 LocalHandler = Callable[[Mapping[str, Any]], Mapping[str, Any]]  # body -> result
 CaptureSink = Callable[[Message], None]  # the capture page's relayed frames (no ack)
@@ -298,6 +299,10 @@ class ControlHub:
             "robot_problem": driver.get("problem"),
             "robot_retry_in": driver.get("retry_in"),  # seconds to the next login attempt
             "robot_face": {k: driver.get(k) for k in ROBOT_FACE_FIELDS if k in driver},
+            # A booth with both robots (virtual+furhat): the one driven now, and each one's
+            # state (the console says when the one a later condition needs is missing).
+            "robot_active": driver.get("active"),
+            "robot_outputs": _outputs(driver.get("outputs")),
             "speaking": renderer.get("speaking", False), "prompt_id": renderer.get("prompt_id"),
             "recording": self._stage("recorder"),
             # The copy delay measured movement to movement (booth check; None: no movement).
@@ -315,3 +320,11 @@ class ControlHub:
         self._heartbeats += 1
         return Message(telemetry_topic(self.config.booth), "heartbeat", self._heartbeats,
                        self.name, time.monotonic(), self.status())  # fmt: skip
+
+
+def _outputs(outputs: Any) -> dict[str, dict[str, Any]] | None:
+    """Each robot's state, problem and retry time (a two-robot driver's ``outputs``)."""
+    if not isinstance(outputs, Mapping):
+        return None
+    return {str(name): {k: stats.get(k) for k in ROBOT_OUTPUT_FIELDS}
+            for name, stats in outputs.items() if isinstance(stats, Mapping)}  # fmt: skip

@@ -90,6 +90,10 @@ def test_the_condition_renderer_chooses_the_robot_that_copies(
                 timeout=10)  # fmt: skip
             assert beat["driver"] == "virtual+furhat"
             assert beat["robot_connected"] is True  # the driven robot's (the Furhat's) state
+            # Which robot is driven, and each one's state (the console's health reads them).
+            assert beat["robot_active"] == "furhat"
+            assert {name: o["state"] for name, o in beat["robot_outputs"].items()} == {
+                "display": "connected", "furhat": "connected"}  # fmt: skip
             # (The heartbeat came after the copy: what the display was sent has arrived.)
             # The display was set to its neutral head on the switch (the participant rests
             # 10 deg aside), and is not driven since.

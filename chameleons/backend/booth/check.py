@@ -21,7 +21,10 @@ with the session's events.
 - **Robot copies**: also fails when the robot is not logged in (a refused or unanswered
   Furhat login), with that reason: the worker measures the copy on what it sends, and a
   robot that refused the login receives none of it.
-- **Robot**: connected (for the virtual robot: a display page open and playing).
+- **Robot**: connected (for the virtual robot: a display page open and playing). On a
+  booth with both robots (``virtual+furhat``) the robot of the checked condition
+  (:mod:`.check_robot`: the check runs on it), and the result says which
+  (``checked_on``: "Checked on the Furhat").
 - **Robot copies**: the check runs the robot in the chosen ``copy`` condition (default: the
   study's copy condition) with its full parameters while the head turns and nods
   (:mod:`.check_run`, which restores the behaviour before); the condition's delay against
@@ -159,11 +162,22 @@ def unit_hint(measured: float, low: float, high: float, movement: str) -> str:
     return ""
 
 
-def robot(telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None) -> dict[str, Any]:
+def robot(
+    telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None,
+    checked: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """The robot the check ran on (``checked``, :class:`.check_robot.Checked`): on a booth
+    with both robots that one, driven now or not; else the booth's robot."""
     if telemetry is None:
         return step("robot", "Robot", FAIL, "no worker for this booth")
-    check = health.evaluate(telemetry, 0.0, display=display)["robot"]
-    return step("robot", "Robot", PASS if check.ok else FAIL, check.value)
+    if checked and checked.get("problem"):
+        return step("robot", "Robot", FAIL, str(checked["problem"]))
+    if checked and checked.get("output"):
+        check = health.output_check(telemetry, str(checked["output"]), display)
+    else:
+        check = health.evaluate(telemetry, 0.0, display=display)["robot"]
+    value = f"{checked['words']}: {check.value}" if checked else check.value
+    return step("robot", "Robot", PASS if check.ok else FAIL, value)
 
 
 @dataclass(frozen=True)
@@ -179,6 +193,8 @@ class Movement:
     params: Mapping[str, Any] | None = None  # the condition's params sent (None: delay only)
     words: str = ""  # the params in words (behaviour_words)
     flip: bool = False  # the condition mirrors unlike the booth: the copied yaw is negated
+    robot: str = ""  # the robot it ran on, in words ("the Furhat")
+    unreachable: str | None = None  # why it could not run on the condition's robot
 
 
 def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> dict[str, Any]:
@@ -197,7 +213,10 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
     delay = movement.delay_s
     figures: dict[str, Any] = {"delay_s": delay, "measured_s": None,
                                "condition": movement.condition, "params": params,
-                               "behaviour_words": movement.words}  # fmt: skip
+                               "behaviour_words": movement.words,
+                               "robot": movement.robot or None}  # fmt: skip
+    if movement.unreachable:
+        return step("copy", label, FAIL, f"not run: {movement.unreachable}", **figures)
     low, high = check_copy.delay_range(params)
     late = f"delay {delay:.2f} s" if low == high else f"delay {low:.2f}-{high:.2f} s"
     configured = f"{late} configured" + (
@@ -206,6 +225,7 @@ def copies(telemetry: Mapping[str, Any] | None, movement: Movement | None) -> di
     )  # fmt: skip
     note = check_copy.what_is_copied(params)
     configured += f"; {note}" if note else ""
+    configured += f"; checked on {movement.robot}" if movement.robot else ""
     if movement.problem:
         return step("copy", label, FAIL, f"the robot could not be switched to copy: "
                     f"{movement.problem}", **figures)  # fmt: skip
@@ -299,14 +319,22 @@ def disk(data_dir: Path, minimum: int = MIN_FREE_BYTES) -> dict[str, Any]:
 def run(
     telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None, data_dir: Path,
     disk_needed: int = MIN_FREE_BYTES, spoken: Mapping[str, Any] | None = None,
-    movement: Movement | None = None,
+    movement: Movement | None = None, checked: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """Every step; the head step reads the heartbeat taken right after the head movement
-    when there was one (its window would lose the turn while the robot copies it)."""
+    when there was one (its window would lose the turn while the robot copies it).
+    ``checked``: the robot the check ran on (:class:`.check_robot.Checked`), said in the
+    result as ``checked_on`` ("Checked on the Furhat")."""
     head = movement.head if movement is not None and movement.head is not None else telemetry
-    steps = [face_stream(telemetry), head_turn(head), robot(telemetry, display),
+    steps = [face_stream(telemetry), head_turn(head), robot(telemetry, display, checked),
              copies(telemetry, movement), speech(spoken), disk(data_dir, disk_needed)]  # fmt: skip
-    return {"passed": all(s["status"] != FAIL for s in steps), "steps": steps}
+    result = {"passed": all(s["status"] != FAIL for s in steps), "steps": steps}
+    if checked:
+        problem = checked.get("problem")
+        result["checked_on"] = (f"Not checked on {checked['words']}: {problem}" if problem
+                                else f"Checked on {checked['words']}")  # fmt: skip
+        result["robot"] = dict(checked)
+    return result
 
 
 def _number(value: Any) -> float | None:

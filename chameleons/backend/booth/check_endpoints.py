@@ -14,7 +14,7 @@ from starlette.concurrency import run_in_threadpool
 
 from chameleons.backend.auth.csrf import verify_csrf
 from chameleons.backend.auth.dependencies import CurrentStaff
-from chameleons.backend.booth import check, check_run
+from chameleons.backend.booth import check, check_robot, check_run
 from chameleons.backend.booth.check_store import store
 from chameleons.backend.booth.speech_test import say_test_prompt
 from chameleons.backend.capture.links import capture_url, request_base
@@ -90,14 +90,26 @@ async def run_check(
 async def _judge(
     state: Any, booth: str, plan: check_run.Plan, settings: Any, *, say: bool, movement: bool
 ) -> dict[str, Any]:
+    """The steps, with the head movement, the copy and the test prompt on the condition's
+    robot (:mod:`.check_robot`: a booth with both robots is put on it and back)."""
     telemetry = _fresh_telemetry(state, booth)
-    moved = None
-    if movement and telemetry is not None:
-        moved = await check_run.exercise(state, booth, plan, telemetry)
-    spoken = await say_test_prompt(state, booth) if say and telemetry is not None else None
-    telemetry = _fresh_telemetry(state, booth) if telemetry is not None else None
+    if telemetry is None:
+        return check.run(None, display_presence(state, booth), settings.data_dir,
+                         settings.session_disk_bytes)  # fmt: skip
+    moved = spoken = None
+    async with check_robot.on_robot(state, booth, plan.renderer, plan.condition,
+                                    plan.face) as checked:  # fmt: skip
+        if checked.problem is not None:  # a sentence, at once: nothing is driven
+            moved = plan.movement(robot=checked.words, unreachable=checked.problem)
+            spoken = {"prompt_id": None, "start_ms": None, "ended": False,
+                      "problem": f"not run: {checked.problem}"} if say else None  # fmt: skip
+        else:
+            if movement:
+                moved = await check_run.exercise(state, booth, plan, telemetry, checked.words)
+            spoken = await say_test_prompt(state, booth) if say else None
+        telemetry = _fresh_telemetry(state, booth)
     return check.run(telemetry, display_presence(state, booth), settings.data_dir,
-                     settings.session_disk_bytes, spoken, moved)  # fmt: skip
+                     settings.session_disk_bytes, spoken, moved, checked.describe())  # fmt: skip
 
 
 def _fresh_telemetry(state: Any, booth: str) -> dict[str, Any] | None:

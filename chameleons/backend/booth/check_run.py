@@ -24,6 +24,8 @@ face (the demo's: ``state.face_cues``) is told each move as it is asked for, so 
   wizard path gives it (its ``seed``, else the id of the session's interaction in that
   condition, else 0). A study without a ``copy`` condition is checked with the worker's
   default delay, and the step says so.
+- The condition's ``renderer`` picks the robot on a booth with both (``virtual+furhat``):
+  the check runs on it and puts the booth back afterwards (:mod:`.check_robot`).
 - The check is refused while a participant's interaction runs on the booth (it would
   take the robot from the participant), and while another check runs on it. Should an
   interaction start during the check, the robot is given that interaction's set-up at the
@@ -88,6 +90,8 @@ class Plan:
     words: str = ""  # the params in words (the export's behaviour_words)
     choices: tuple[tuple[str, str], ...] = ()  # the study's copy conditions and their words
     flip: bool = False  # the condition's mirror differs from the booth's: the yaw is negated
+    renderer: str | None = None  # the condition's robot (2d, 3d, furhat; None: the booth's)
+    face: str | None = None  # the face to set with it when the booth has none acknowledged
 
     @property
     def movement_s(self) -> float:
@@ -116,7 +120,8 @@ class Plan:
         return {"copy_delay_s": self.delay_s, "copy_condition": self.condition,
                 "copy_params": self.params, "behaviour_words": self.words,
                 "conditions": [{"id": c, "words": w} for c, w in self.choices],
-                "study_id": self.study_id, "prompts": self.prompts()}  # fmt: skip
+                "renderer": self.renderer, "study_id": self.study_id,
+                "prompts": self.prompts()}  # fmt: skip
 
     def movement(self, **seen: Any) -> Movement:
         return Movement(self.delay_s, self.condition, params=self.params or None,
@@ -151,7 +156,21 @@ def plan_for(
         params["seed"] = _interaction_seed(db, session, chosen)
     flip = params.get("mirror") is not None and params["mirror"] != (mirror is not False)
     return Plan(*timing, nominal_delay(params), chosen, study.id, rest, params,
-                _words(params, mirror), choices, flip)  # fmt: skip
+                _words(params, mirror), choices, flip, conditions[chosen].renderer,
+                _face(db, study, session, chosen))  # fmt: skip
+
+
+def _face(db: DbSession, study: Study, session: SessionRow | None, condition: str) -> str | None:
+    """The face of the session's interaction in ``condition`` (else the study's first): set
+    with the condition's robot when the booth has no face acknowledged yet."""
+    if session is not None:
+        found = db.scalars(select(Interaction.face).where(
+            Interaction.session_id == session.id, Interaction.condition == condition
+        ).order_by(Interaction.position).limit(1)).first()  # fmt: skip
+        if found:
+            return str(found)
+    faces = spec_of(study).faces
+    return faces[0].id if faces else None
 
 
 def _words(params: dict[str, Any], mirror: bool | None) -> str:
@@ -211,18 +230,21 @@ async def exclusive(state: Any, booth: str) -> AsyncIterator[None]:
         running.discard(booth)
 
 
-async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, Any]) -> Movement:
+async def exercise(
+    state: Any, booth: str, plan: Plan, telemetry: Mapping[str, Any], robot_words: str = ""
+) -> Movement:
     """Run the robot in ``copy`` for the head movement and its copy; the behaviour from
-    before is restored whatever happens (shielded: a cancelled request restores too)."""
+    before is restored whatever happens (shielded: a cancelled request restores too).
+    ``robot_words``: the robot it runs on (:mod:`.check_robot`), for the result."""
     bridge = worker_link.bridge_of(state)
     previous = _running_behaviour(bridge, booth, telemetry)
     params = plan.params or {"delay": plan.delay_s}
     body = {"name": COPY, "params": params}
     switched = await worker_link.send_command(bridge, booth, SET_BEHAVIOUR, body)
-    movement = plan.movement()
+    movement = plan.movement(robot=robot_words)
     try:
         if not switched.sent:
-            return plan.movement(problem=switched.detail)
+            return plan.movement(problem=switched.detail, robot=robot_words)
         _cue(state, booth, "rest", plan.rest_s)
         await asyncio.sleep(plan.rest_s)
         rest = {"rest_seconds": plan.rest_s}
@@ -236,7 +258,7 @@ async def exercise(state: Any, booth: str, plan: Plan, telemetry: Mapping[str, A
         head = await _heartbeat_after(bridge, booth, started + plan.movement_s)
         _cue(state, booth, "copy", plan.latest_s + COPY_MARGIN_S)
         copy = await _copy_measured(bridge, booth, started + plan.movement_s + plan.latest_s)
-        movement = plan.movement(head=head, copy=copy)
+        movement = plan.movement(head=head, copy=copy, robot=robot_words)
     finally:
         await asyncio.shield(_restore(state, booth, previous))
     return movement
@@ -278,15 +300,23 @@ async def _restore(state: Any, booth: str, previous: dict[str, Any] | None) -> N
     # from the next frames (a participant between interactions is not copied on the
     # technician's pose; a session start re-measures it anyway).
     await worker_link.send_command(worker_link.bridge_of(state), booth, RECENTRE_HEAD, {})
-    slot = await run_in_threadpool(read, state, running_slot, booth)
-    if slot is not None:  # an interaction started meanwhile: its set-up, not the old one
-        find = partial(running_target, interaction_id=slot.interaction_id)
-        with contextlib.suppress(Exception):
-            await robot.apply_with(state, find, source="server", only_changes=True)
+    if await set_up_started_interaction(state, booth):
         return
     if previous is not None:
         bridge = worker_link.bridge_of(state)
         await worker_link.send_command(bridge, booth, SET_BEHAVIOUR, previous)
+
+
+async def set_up_started_interaction(state: Any, booth: str) -> bool:
+    """If an interaction started on ``booth`` during the check, give the robot its set-up
+    (behaviour and face, what differs from what the worker has) and say so (True)."""
+    slot = await run_in_threadpool(read, state, running_slot, booth)
+    if slot is None:
+        return False
+    find = partial(running_target, interaction_id=slot.interaction_id)
+    with contextlib.suppress(Exception):
+        await robot.apply_with(state, find, source="server", only_changes=True)
+    return True
 
 
 def _heartbeat(bridge: Any | None, booth: str) -> tuple[dict[str, Any] | None, float]:

@@ -29,7 +29,7 @@ from chameleons.backend.events.hub import LiveHub
 from chameleons.backend.models import Interaction, Participant, Session, Study
 from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.snapshot import phone_presence_key
-from chameleons.backend.wizard import health, worker_link
+from chameleons.backend.wizard import health, robot, worker_link
 from chameleons.backend.wizard.live import display_presence
 
 router = make_router(tags=["dashboard"])
@@ -82,21 +82,27 @@ def monitor_state(db: DbSessionType, state: Any, study: Study) -> dict[str, Any]
     workers = bridge.workers() if bridge is not None and hasattr(bridge, "workers") else {}
     tracker = health.tracker_of(state)
     hub: LiveHub = state.live_hub
+    needs = robot.robots_needed(db, study.id)  # a booth with both robots: the one missing
     booths = []
     for booth in sorted(set(sessions) | set(workers)):
         telemetry, age = worker_link.latest_telemetry(bridge, booth)
-        robot = tracker.snapshot(booth, telemetry, age, display=display_presence(state, booth))
+        robot_health = tracker.snapshot(
+            booth, telemetry, age, display=display_presence(state, booth), needs=needs
+        )
         session = sessions.get(booth)
         view = _session_view(db, session, hub) if session is not None else None
         running = bool(view and view["state"] == "running")
         phone_gone = running and not (view and view["phone_connected"])
-        problems = [f"{c['label']}: {c['value']}" for c in robot["checks"] if c["level"] == "alarm"]
+        problems = [
+            f"{c['label']}: {c['value']}" for c in robot_health["checks"] if c["level"] == "alarm"
+        ]
         if phone_gone:
             problems.append("Phone: not connected during the session")
         booths.append({
             "booth": booth,
             "session": view,
-            "health": {"checks": robot["checks"], "alarm": robot["alarm"], "ok": robot["ok"]},
+            "health": {"checks": robot_health["checks"], "alarm": robot_health["alarm"],
+                       "ok": robot_health["ok"]},
             "worker_connected": booth in workers,
             # A booth waiting for its participant warns; one in use raises the alarm.
             "alarm": bool(problems) and (booth in workers or running),

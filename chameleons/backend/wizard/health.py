@@ -14,18 +14,24 @@ reloaded console still shows how long an alarm has been on.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from chameleons.worker.drivers import speaks_text
+from chameleons.worker.drivers import renderers, speaks_text
 
 STALE_AFTER_SECONDS = 3.0  # heartbeats come at 1 Hz: three missed ones mean "gone"
 NOMINAL_TICK_HZ = 125.0
 # Nothing reaches the robot, or nothing is recorded: no grace.
 ALARM_AT_ONCE = frozenset({"worker", "robot", "recording"})
-# A fallback the session can run without: amber for as long as it fails, never an alarm.
-NEVER_ALARM = frozenset({"typed_speech"})
+# A fallback the session can run without, or the robot a later condition needs (a booth
+# with both robots): amber for as long as it fails, never an alarm.
+NEVER_ALARM = frozenset({"typed_speech", "display", "furhat"})
+# The robots of a booth with both (driver virtual+furhat), as its heartbeat names them.
+DISPLAY, FURHAT = "display", "furhat"
+ROBOT_NAMES = {DISPLAY: "the display", FURHAT: "the Furhat"}
+# Which robots a booth's study needs: robot (display/furhat) -> the conditions run on it.
+Needs = Mapping[str, Sequence[str]]
 OK, UNKNOWN, DEGRADED, ALARM = "ok", "unknown", "degraded", "alarm"
 
 
@@ -55,12 +61,15 @@ LABELS = {
     "tick": "Renderer",
     "jitter": "Jitter",
     "robot": "Robot",
+    "display": "Robot display",
+    "furhat": "Furhat",
     "recording": "Recording",
     "speaking": "Speaking",
     "face": "Robot face",
     "timecode": "Phone timecode",
     "typed_speech": "Typed speech",
 }
+ORDER = (*CHECKS, DISPLAY, FURHAT, "recording", "speaking", "face", "timecode", "typed_speech")
 ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
 
@@ -126,12 +135,16 @@ def evaluate(
     limits: Thresholds | None = None,
     display: tuple[bool, str] | None = None,
     synthesiser: tuple[bool, str] | None = None,
+    needs: Needs | None = None,
 ) -> dict[str, Check]:
     """The checks for the latest telemetry (``None``: nothing received) of ``age`` seconds.
     ``display``: whether the booth's robot display page is open and playing, and why not
     (:meth:`DisplayChannel.presence`); for the virtual robot that *is* the robot.
     ``synthesiser``: whether the server can synthesise typed speech (espeak-ng), and the
-    sentence saying so (:func:`typed_speech.check_synthesiser`); None: not checked."""
+    sentence saying so (:func:`typed_speech.check_synthesiser`); None: not checked.
+    ``needs``: the robots the booth's study runs conditions on (:func:`robots_needed`):
+    on a booth with both robots the one not driven now gets a chip of its own when a
+    condition needs it (None: not known, no such chip)."""
     limits = limits or Thresholds()
     speech = _typed_speech_check(telemetry, synthesiser)
     if telemetry is None or age is None or age > STALE_AFTER_SECONDS:
@@ -154,6 +167,7 @@ def evaluate(
         "tick": Check("tick", tick_ok, _fmt(tick, "Hz")),
         "jitter": Check("jitter", jitter_ok, _fmt(jitter, "ms p99", 2)),
         "robot": _robot_check(telemetry, robot is True, display),
+        **_needed_robots(telemetry, display, needs),
         **_recording_check(telemetry),
         "speaking": Check("speaking", True, "speaking" if speaking else "quiet"),
         **_face_check(telemetry),
@@ -236,11 +250,67 @@ def _robot_check(
     telemetry: Mapping[str, Any], connected: bool, display: tuple[bool, str] | None
 ) -> Check:
     """The virtual robot is connected when a display page of the booth is open and
-    playing, not merely when the worker runs; any other robot by its driver's state."""
+    playing, not merely when the worker runs; any other robot by its driver's state. On a
+    booth with both robots (virtual+furhat) the robot driven now, and the chip says which."""
     if telemetry.get("driver") == "virtual" and display is not None:
         open_and_playing, why = display
         return Check("robot", open_and_playing, why)
+    active = telemetry.get("robot_active")
+    if isinstance(telemetry.get("robot_outputs"), Mapping) and active in (DISPLAY, FURHAT):
+        check = output_check(telemetry, str(active), display)
+        check.value += f" ({ROBOT_NAMES[str(active)]} runs now)"
+        return check
     return Check("robot", connected, robot_value(telemetry, connected))
+
+
+def output_check(
+    telemetry: Mapping[str, Any], output: str, display: tuple[bool, str] | None,
+    check_id: str = "robot",
+) -> Check:  # fmt: skip
+    """One robot of a booth with both (``display`` or ``furhat``), driven now or not: the
+    display by its page (open and playing), the Furhat by its connection."""
+    if output == DISPLAY:
+        open_and_playing, why = display if display is not None else (
+            False, "no robot display open")  # fmt: skip
+        return Check(check_id, open_and_playing, why)
+    outputs = telemetry.get("robot_outputs")
+    stats = outputs.get(output) if isinstance(outputs, Mapping) else None
+    if not isinstance(stats, Mapping):
+        return Check(check_id, False, f"this booth's worker drives no Furhat (its driver is "
+                     f"{telemetry.get('driver') or 'unknown'})")  # fmt: skip
+    connected = stats.get("state") == "connected"
+    words = robot_value({"robot_state": stats.get("state"), "robot_problem": stats.get("problem"),
+                         "robot_retry_in": stats.get("retry_in")}, connected)  # fmt: skip
+    return Check(check_id, connected, words)
+
+
+def _needed_robots(
+    telemetry: Mapping[str, Any], display: tuple[bool, str] | None, needs: Needs | None
+) -> dict[str, Check]:
+    """A chip for each robot the study's conditions run on that is not the one driven now
+    (its own chip is *Robot*): missing, it says which conditions cannot run. A booth with
+    the display only has no chip for a study's Furhat conditions but one saying it has no
+    Furhat."""
+    if not needs:
+        return {}
+    driver = str(telemetry.get("driver") or "")
+    if needs.get(FURHAT) and FURHAT not in renderers(driver):
+        names = ", ".join(needs[FURHAT])
+        return {FURHAT: Check(FURHAT, False, f"this booth drives no Furhat (its worker's "
+                              f"driver is {driver or 'unknown'}): {names} cannot run")}  # fmt: skip
+    if not isinstance(telemetry.get("robot_outputs"), Mapping):
+        return {}
+    checks: dict[str, Check] = {}
+    for output in (DISPLAY, FURHAT):
+        conditions = needs.get(output)
+        if not conditions or output == telemetry.get("robot_active"):
+            continue
+        check = output_check(telemetry, output, display, output)
+        names = ", ".join(conditions)
+        need = "needs" if len(conditions) == 1 else "need"
+        check.value += f" (for {names})" if check.ok else f"; {names} {need} it"
+        checks[output] = check
+    return checks
 
 
 def robot_value(telemetry: Mapping[str, Any], connected: bool) -> str:
@@ -302,9 +372,10 @@ class HealthTracker:
         now: float | None = None,
         display: tuple[bool, str] | None = None,
         synthesiser: tuple[bool, str] | None = None,
+        needs: Needs | None = None,
     ) -> dict[str, Any]:
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age, self.limits, display, synthesiser)
+        checks = evaluate(telemetry, age, self.limits, display, synthesiser, needs)
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:
@@ -318,12 +389,7 @@ class HealthTracker:
             "ok": all(check.ok is not False for check in checks.values()),
             "alarm": any(check.level == ALARM for check in checks.values()),
             "alarm_after_s": self.limits.alarm_after_s,
-            "checks": [
-                checks[name].as_dict()
-                for name in (*CHECKS, "recording", "speaking", "face", "timecode",
-                             "typed_speech")
-                if name in checks
-            ],
+            "checks": [checks[name].as_dict() for name in ORDER if name in checks],
             "telemetry": dict(telemetry) if telemetry is not None else None,
             # How long ago the worker sampled its speaking state: the console lets a speech
             # event newer than that decide the Speaking chip.

@@ -29,7 +29,7 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_chan
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
-from chameleons.backend.wizard import health, typed_speech, worker_link
+from chameleons.backend.wizard import health, robot, typed_speech, worker_link
 from chameleons.backend.wizard.console_state import committed_console_state, console_state
 from chameleons.backend.wizard.playback import read
 
@@ -105,6 +105,10 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
         await websocket.accept()
         sender = Sender(websocket)
         booth = str(first["session"]["booth"])
+        study_id = first["session"].get("study_id")
+        # Which robots the study's conditions run on (a booth with both robots says when
+        # the one a later condition needs is missing).
+        needs = await run_in_threadpool(read, state, robot.robots_needed, study_id)
         await sender.send(first)
 
         reads: set[asyncio.Future[Message]] = set()
@@ -141,7 +145,7 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
 
         tasks = [
             asyncio.create_task(forward_changes()),
-            asyncio.create_task(_forward_health(sender, state, booth)),
+            asyncio.create_task(_forward_health(sender, state, booth, needs)),
             asyncio.create_task(_answer_pings(websocket, sender)),
         ]
         try:
@@ -193,7 +197,9 @@ def health_content(snapshot: Message) -> Message:
     return {**{k: v for k, v in snapshot.items() if k != "speaking_age_s"}, "checks": checks}
 
 
-async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
+async def _forward_health(
+    sender: Sender, state: Any, booth: str, needs: health.Needs | None = None
+) -> None:
     """The booth's health now, then whenever it changes (looked at once a second): an
     unchanged health sends nothing (it was a push to every console every second, about 12 %
     of a busy server's CPU, issue 34)."""
@@ -207,7 +213,7 @@ async def _forward_health(sender: Sender, state: Any, booth: str) -> None:
             found = typed_speech.synthesiser_of(state)
             synthesiser = (found.available, found.detail) if found is not None else None
             snapshot = tracker.snapshot(booth, telemetry, age, display=display,
-                                        synthesiser=synthesiser)  # fmt: skip
+                                        synthesiser=synthesiser, needs=needs)  # fmt: skip
             snapshot["bridge"] = bridge is not None
             content = health_content(snapshot)
             if content != last:

@@ -29,7 +29,7 @@ from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard import repository, worker_link
 from chameleons.backend.wizard.playback import write
 from chameleons.backend.wizard.service import Outcome
-from chameleons.worker.control import RETRY_ROBOT, SET_BEHAVIOUR, SET_FACE
+from chameleons.worker.control import FURHAT_RENDERER, RETRY_ROBOT, SET_BEHAVIOUR, SET_FACE
 
 APPLIED = "robot.applied"
 NOT_APPLIED = "robot.not_applied"
@@ -48,7 +48,7 @@ class Target:
     behaviour: str = ""
     params: dict[str, Any] | None = None
     natural_source: dict[str, Any] | None = None
-    renderer: str | None = None  # the condition's display face (2d/3d); None: the booth's
+    renderer: str | None = None  # the condition's robot (2d/3d/furhat); None: the booth's
     words: str = ""  # the behaviour and its parameters in words (behaviour_words)
 
     def face_body(self) -> dict[str, Any]:
@@ -108,12 +108,27 @@ def prepared(db: Session, state: Any, find: Finder) -> Target:
 
 
 def condition_renderer(db: Session, study_id: int, condition: str) -> str | None:
-    """The robot display's face (2d/3d) the study's condition names, if any."""
+    """The robot the study's condition names (the display's 2d or 3d face, or furhat), if
+    any."""
     study = db.get(Study, study_id)
     if study is None:
         return None
     spec = spec_of(study)
     return next((c.renderer for c in spec.conditions if c.id == condition), None)
+
+
+def robots_needed(db: Session, study_id: int | None) -> dict[str, list[str]]:
+    """Which robot of a booth with both (``virtual+furhat``) runs each of the study's
+    conditions: ``furhat`` those whose renderer is furhat, ``display`` all others (2d, 3d,
+    or none: the worker's switch drives the display then). Only robots with conditions."""
+    study = db.get(Study, study_id) if study_id is not None else None
+    if study is None:
+        return {}
+    needs: dict[str, list[str]] = {}
+    for condition in spec_of(study).conditions:
+        robot = FURHAT_RENDERER if condition.renderer == FURHAT_RENDERER else "display"
+        needs.setdefault(robot, []).append(condition.id)
+    return needs
 
 
 def _result(outcome: Outcome) -> dict[str, Any]:

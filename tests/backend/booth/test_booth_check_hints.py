@@ -106,6 +106,8 @@ def test_a_robot_that_refuses_the_login_fails_the_copy_step_with_the_login_failu
     assert copy["status"] == "fail", copy
     refused = "login refused: the robot refused the login (wrong or missing key)"
     assert copy["value"] == ("delay 4.00 s configured (copy: copies everything, 4 s late, "
-                             f"mirror image); the robot cannot copy: {refused}")  # fmt: skip
+                             "mirror image); checked on the Furhat; the robot cannot copy: "
+                             f"{refused}")  # fmt: skip
+    assert answer["checked_on"] == "Checked on the Furhat"
     assert steps["robot"]["status"] == "fail"
     assert answer["passed"] is False

@@ -222,3 +222,72 @@ def test_typed_speech_is_ok_with_espeak_or_a_robot_that_speaks_text_itself() -> 
     own = evaluate(furhat, 0.5, synthesiser=(False, "espeak-ng not installed"))["typed_speech"]
     assert (own.ok, own.value) == (True, "the robot's own voice")
     assert "typed_speech" not in evaluate(GOOD, 0.5)  # not checked: no chip
+
+
+# A booth with both robots (virtual+furhat): the heartbeat names the robot driven now and
+# each robot's state; the study's conditions need the display (copy_2d) and the Furhat.
+NEEDS = {"display": ["copy_2d"], "furhat": ["copy_furhat"]}
+OPEN, CLOSED = (True, "display open"), (False, "no robot display open")
+
+
+def two_robots(
+    active: str, furhat: str = "connected", **furhat_detail: object
+) -> dict[str, object]:
+    outputs = {
+        "display": {"state": "connected", "problem": None, "retry_in": None},
+        "furhat": {"state": furhat, "problem": None, "retry_in": None, **furhat_detail},
+    }
+    return {**GOOD, "driver": "virtual+furhat", "robot_active": active,
+            "robot_connected": (furhat if active == "furhat" else "connected") == "connected",
+            "robot_outputs": outputs}  # fmt: skip
+
+
+def test_two_robots_the_robot_chip_is_the_driven_one_and_says_which() -> None:
+    on_display = evaluate(two_robots("display"), 0.5, display=CLOSED)["robot"]
+    assert (on_display.ok, on_display.value) == (False, "no robot display open (the display "
+                                                 "runs now)")  # fmt: skip
+    on_furhat = evaluate(two_robots("furhat"), 0.5, display=CLOSED)["robot"]
+    assert (on_furhat.ok, on_furhat.value) == (True, "connected (the Furhat runs now)")
+
+
+def test_two_robots_the_one_a_later_condition_needs_says_when_it_is_missing() -> None:
+    refused = two_robots("display", "auth_refused", problem="wrong key")
+    checks = evaluate(refused, 0.5, display=OPEN, needs=NEEDS)
+    assert "display" not in checks  # the Robot chip is the display's
+    assert (checks["furhat"].ok, checks["furhat"].value) == (
+        False, "login refused: wrong key; copy_furhat needs it")  # fmt: skip
+    closed = evaluate(two_robots("furhat"), 0.5, display=CLOSED, needs=NEEDS)
+    assert (closed["display"].ok, closed["display"].value) == (
+        False, "no robot display open; copy_2d needs it")  # fmt: skip
+    both = {"display": ["copy_2d", "copy_3d"]}
+    fine = evaluate(two_robots("furhat"), 0.5, display=OPEN, needs=both)
+    assert (fine["display"].ok, fine["display"].value) == (True, "display open (for copy_2d, "
+                                                           "copy_3d)")  # fmt: skip
+    assert "furhat" not in fine  # the Furhat is the Robot chip
+    # Without the study's needs (not known) no such chip; a study without Furhat
+    # conditions has none for the Furhat either.
+    assert "furhat" not in evaluate(refused, 0.5, display=OPEN)
+    assert "furhat" not in evaluate(refused, 0.5, display=OPEN, needs={"display": ["a"]})
+
+
+def test_the_robot_a_later_condition_needs_stays_amber_never_an_alarm() -> None:
+    tracker = HealthTracker(limits=Thresholds(alarm_after_s=3.0))
+    gone = two_robots("display", "disconnected", retry_in=2.0)
+    tracker.snapshot("b1", gone, 0.2, now=0.0, display=OPEN, needs=NEEDS)
+    later = tracker.snapshot("b1", gone, 0.2, now=60.0, display=OPEN, needs=NEEDS)
+    furhat = _check(later, "furhat")
+    assert (furhat["label"], furhat["level"], furhat["failing_for"]) == ("Furhat", "degraded",
+                                                                          60.0)  # fmt: skip
+    assert furhat["value"] == "disconnected; retrying in 2 s; copy_furhat needs it"
+    assert later["alarm"] is False
+    order = [c["id"] for c in later["checks"]]
+    assert order.index("furhat") == order.index("robot") + 1
+
+
+def test_a_booth_without_a_furhat_says_its_furhat_conditions_cannot_run() -> None:
+    checks = evaluate({**GOOD, "driver": "virtual"}, 0.5, display=OPEN, needs=NEEDS)
+    assert (checks["furhat"].ok, checks["furhat"].value) == (
+        False, "this booth drives no Furhat (its worker's driver is virtual): copy_furhat "
+        "cannot run")  # fmt: skip
+    assert checks["robot"].value == "display open"
+    assert "furhat" not in evaluate({**GOOD, "driver": "furhat"}, 0.5, needs=NEEDS)

@@ -103,6 +103,7 @@ def test_the_display_page_in_chromium_voices_the_booth_checks_test_prompt(
     speech = check.locator("tr[data-step='speech']")
     expect(speech).to_have_attribute("data-status", "pass", timeout=60_000)
     expect(check.locator("tr[data-step='robot']")).to_have_attribute("data-status", "pass")
+    expect(check.locator("#check-robot")).to_have_text("Checked on the display.")
     # The page itself played it: it reported the check's prompt starting and ending.
     assert [m["event"] for m in reported] == ["start", "end"], reported
     assert all(str(m["prompt_id"]).startswith("booth-check:") for m in reported)

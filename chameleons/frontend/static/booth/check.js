@@ -5,6 +5,7 @@
 const root = document.getElementById("booth-check");
 const body = document.querySelector("#check-steps tbody");
 const summary = document.getElementById("check-summary");
+const checkedOn = document.getElementById("check-robot"); // "Checked on the Furhat"
 const prompt = document.getElementById("check-prompt");
 const button = document.getElementById("run-check");
 const PROMPTS = JSON.parse(root.dataset.prompts || "[]"); // [{id, text, seconds}], the server's plan
@@ -60,6 +61,7 @@ async function run() {
   button.disabled = true;
   summary.textContent = "Checking: follow the prompts.";
   delete summary.dataset.passed;
+  checkedOn.textContent = "";
   const answered = post();
   const guided = guide(answered);
   try {
@@ -67,6 +69,7 @@ async function run() {
     body.replaceChildren(...result.steps.map(row));
     summary.textContent = result.passed ? "Booth ready: every step passed." : "NOT READY: fix the failing steps and run the check again.";
     summary.dataset.passed = String(result.passed);
+    checkedOn.textContent = result.checked_on ? `${result.checked_on}.` : "";
   } catch (error) {
     summary.textContent = `The check could not run: ${error.message}`;
   } finally {

@@ -129,8 +129,10 @@ export class HealthStrip {
     this.container.classList.toggle("failing", failing.length > 0);
     // replaceChildren would print a null as the text "null".
     const parts = [el("span", { class: "k", text: `Robot ${message.booth}` }), ...chips];
-    const robot = checks.find((check) => check.id === "robot");
-    if (this.onRetry && robot && LOGIN_FAILED.test(robot.value || "")) {
+    // The Robot chip's, or (a booth with both robots) the Furhat's while the display runs.
+    const loginFailed = checks.some((check) => (check.id === "robot" || check.id === "furhat")
+      && LOGIN_FAILED.test(check.value || ""));
+    if (this.onRetry && loginFailed) {
       parts.push(el("button", { type: "button", class: "link", id: "robot-retry", onclick: this.onRetry }, "Try the robot again"));
     }
     const pairing = message.telemetry?.ingest?.pairing;
