@@ -12,6 +12,7 @@ from types import ModuleType
 
 import click
 import pytest
+from click.testing import CliRunner
 
 from chameleons.cli.main import COMMANDS, cli
 from chameleons.settings import Settings
@@ -73,7 +74,7 @@ def _options(command: click.Command, ctx: click.Context) -> list[str]:
     return [
         opt
         for param in command.get_params(ctx)
-        if isinstance(param, click.Option) and param.name != "help" and not param.hidden
+        if isinstance(param, click.Option) and "--help" not in param.opts and not param.hidden
         for opt in param.opts
     ]
 
@@ -98,3 +99,17 @@ def test_settings_page_lists_every_setting_with_its_variable(pages: dict[Path, s
     for name in Settings.model_fields:
         assert f"| `CHAMELEONS_{name.upper()}` |" in text
     assert "| `CHAMELEONS_PORT` | int (>= 1, <= 65535) | `8000` |" in text
+
+
+def test_the_cli_page_does_not_depend_on_a_command_run_before(generator: ModuleType) -> None:
+    """A test that runs one command on its own (not through the group, so without its
+    ``-h``) makes click keep that command's help option as ``--help`` alone; the page
+    generated after it is the same page."""
+    before = generator.cli_page()
+    ctx = click.Context(cli, info_name="chameleons", **cli.context_settings)
+    for name in ("analyze", "export"):
+        command = cli.get_command(ctx, name)
+        assert command is not None
+        result = CliRunner().invoke(command, ["--help"])
+        assert result.exit_code == 0, result.output
+    assert generator.cli_page() == before
