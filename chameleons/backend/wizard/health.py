@@ -180,9 +180,19 @@ def _typed_speech_check(
     telemetry: Mapping[str, Any] | None, synthesiser: tuple[bool, str] | None
 ) -> dict[str, Check]:
     """Whether the Say field can speak: a robot with its own text-to-speech (a Furhat) says
-    typed sentences itself; any other needs espeak-ng on the server."""
+    typed sentences itself; any other needs espeak-ng on the server. A booth with both
+    robots follows the one driven now: the display has no text-to-speech and skips typed
+    text (``SwitchDriver``), so while it runs the Say field is not voiced."""
     driver = telemetry.get("driver") if telemetry is not None else None
     if isinstance(driver, str) and speaks_text(driver):
+        active = telemetry.get("robot_active") if telemetry is not None else None
+        if isinstance(telemetry.get("robot_outputs") if telemetry else None, Mapping):
+            if active == DISPLAY:
+                return {"typed_speech": Check("typed_speech", False, (
+                    "not voiced while the display runs (it has no text-to-speech); the Furhat "
+                    "speaks typed text in its conditions"))}  # fmt: skip
+            if active == FURHAT:
+                return {"typed_speech": Check("typed_speech", True, "the Furhat's own voice")}
         return {"typed_speech": Check("typed_speech", True, "the robot's own voice")}
     if synthesiser is None:
         return {}

@@ -291,3 +291,22 @@ def test_a_booth_without_a_furhat_says_its_furhat_conditions_cannot_run() -> Non
         "cannot run")  # fmt: skip
     assert checks["robot"].value == "display open"
     assert "furhat" not in evaluate({**GOOD, "driver": "furhat"}, 0.5, needs=NEEDS)
+
+
+def test_two_robots_typed_speech_follows_the_robot_driven_now() -> None:
+    """The display has no text-to-speech (it skips typed text): while it runs, the Say
+    field is not voiced, amber, never an alarm; while the Furhat runs, its own voice."""
+    espeak = (True, "espeak-ng 1.51")  # the server's synthesiser is not used at this booth
+    on_display = evaluate(two_robots("display"), 0.5, display=OPEN, synthesiser=espeak)
+    check = on_display["typed_speech"]
+    assert (check.ok, check.value) == (False, "not voiced while the display runs (it has no "
+                                       "text-to-speech); the Furhat speaks typed text in its "
+                                       "conditions")  # fmt: skip
+    tracker = HealthTracker(limits=Thresholds(alarm_after_s=3.0))
+    tracker.snapshot("b1", two_robots("display"), 0.2, now=0.0, display=OPEN)
+    later = tracker.snapshot("b1", two_robots("display"), 0.2, now=60.0, display=OPEN)
+    assert _check(later, "typed_speech")["level"] == "degraded"
+    assert later["alarm"] is False
+    on_furhat = evaluate(two_robots("furhat"), 0.5, display=OPEN, synthesiser=espeak)
+    assert (on_furhat["typed_speech"].ok, on_furhat["typed_speech"].value) == (
+        True, "the Furhat's own voice")  # fmt: skip
