@@ -26,7 +26,7 @@ NOMINAL_TICK_HZ = 125.0
 ALARM_AT_ONCE = frozenset({"worker", "robot", "recording"})
 # A fallback the session can run without, or the robot a later condition needs (a booth
 # with both robots): amber for as long as it fails, never an alarm.
-NEVER_ALARM = frozenset({"typed_speech", "display", "furhat"})
+NEVER_ALARM = frozenset({"typed_speech", "display", "furhat", "video"})
 # The robots of a booth with both (driver virtual+furhat), as its heartbeat names them.
 DISPLAY, FURHAT = "display", "furhat"
 ROBOT_NAMES = {DISPLAY: "the display", FURHAT: "the Furhat"}
@@ -64,27 +64,32 @@ LABELS = {
     "display": "Robot display",
     "furhat": "Furhat",
     "recording": "Recording",
+    "video": "Participant video",
     "speaking": "Speaking",
     "face": "Robot face",
     "timecode": "Phone timecode",
     "typed_speech": "Typed speech",
 }
-ORDER = (*CHECKS, DISPLAY, FURHAT, "recording", "speaking", "face", "timecode", "typed_speech")
+ORDER = (*CHECKS, DISPLAY, FURHAT, "recording", "video", "speaking", "face", "timecode",
+         "typed_speech")
 ROBOT_PROBLEMS = {"auth_refused": "login refused", "auth_timeout": "login not answered"}
 
 
 @dataclass
 class Check:
-    """``ok`` None means unknown (the worker is silent, so its parts cannot be judged)."""
+    """``ok`` None means unknown (the worker is silent, so its parts cannot be judged).
+    ``since_s``: seconds since something the value counts from (the participant video's
+    last chunk), sent apart from the value so that its ticking is no change."""
 
     id: str
     ok: bool | None
     value: str
     failing_for: float | None = None
     level: str = UNKNOWN
+    since_s: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
-        return {
+        found = {
             "id": self.id,
             "label": LABELS[self.id],
             "ok": self.ok,
@@ -92,6 +97,9 @@ class Check:
             "value": self.value,
             "failing_for": None if self.failing_for is None else round(self.failing_for, 1),
         }
+        if self.since_s is not None:
+            found["since_s"] = round(self.since_s, 1)
+        return found
 
     def grade(self, failing_for: float | None, alarm_after_s: float) -> None:
         """Set ``failing_for`` and the level it gives."""
@@ -383,9 +391,12 @@ class HealthTracker:
         display: tuple[bool, str] | None = None,
         synthesiser: tuple[bool, str] | None = None,
         needs: Needs | None = None,
+        extra: Mapping[str, Check] | None = None,
     ) -> dict[str, Any]:
+        """``extra``: checks from elsewhere than the worker (the participant video's)."""
         moment = time.monotonic() if now is None else now
-        checks = evaluate(telemetry, age, self.limits, display, synthesiser, needs)
+        checks = {**evaluate(telemetry, age, self.limits, display, synthesiser, needs),
+                  **(extra or {})}  # fmt: skip
         for check in checks.values():
             key = (booth, check.id)
             if check.ok is False:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+from datetime import UTC, datetime
 from typing import Any
 
 import anyio
@@ -29,9 +30,12 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_chan
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
+from chameleons.backend.video import repository as video_reads
+from chameleons.backend.video.service import study_records_video
 from chameleons.backend.wizard import health, robot, typed_speech, worker_link
 from chameleons.backend.wizard.console_state import committed_console_state, console_state
 from chameleons.backend.wizard.playback import read
+from chameleons.backend.wizard.video_health import video_check
 
 router = make_router(tags=["wizard"])
 HEALTH_INTERVAL_SECONDS = 1.0  # how often the health is looked at (sent only when changed)
@@ -109,6 +113,8 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
         # Which robots the study's conditions run on (a booth with both robots says when
         # the one a later condition needs is missing).
         needs = await run_in_threadpool(read, state, robot.robots_needed, study_id)
+        # A study that films its participants: the health looks at the session's filming.
+        filmed = await run_in_threadpool(read, state, study_records_video, study_id)
         await sender.send(first)
 
         reads: set[asyncio.Future[Message]] = set()
@@ -145,7 +151,8 @@ async def _serve(websocket: WebSocket, session_id: int) -> None:
 
         tasks = [
             asyncio.create_task(forward_changes()),
-            asyncio.create_task(_forward_health(sender, state, booth, needs)),
+            asyncio.create_task(_forward_health(sender, state, booth, needs,
+                                                session_id if filmed else None)),
             asyncio.create_task(_answer_pings(websocket, sender)),
         ]
         try:
@@ -190,19 +197,22 @@ def display_presence(state: Any, booth: str) -> tuple[bool, str] | None:
 
 def health_content(snapshot: Message) -> Message:
     """What a health message says apart from the clock: the snapshot without the durations
-    that grow by themselves (``failing_for`` of each check, ``speaking_age_s``), which the
-    console extrapolates from the message's arrival."""
-    checks = [{k: v for k, v in check.items() if k != "failing_for"}
+    that grow by themselves (``failing_for`` and ``since_s`` of each check,
+    ``speaking_age_s``), which the console extrapolates from the message's arrival."""
+    checks = [{k: v for k, v in check.items() if k not in ("failing_for", "since_s")}
               for check in snapshot.get("checks", [])]  # fmt: skip
     return {**{k: v for k, v in snapshot.items() if k != "speaking_age_s"}, "checks": checks}
 
 
 async def _forward_health(
-    sender: Sender, state: Any, booth: str, needs: health.Needs | None = None
+    sender: Sender, state: Any, booth: str, needs: health.Needs | None = None,
+    filmed_session: int | None = None,
 ) -> None:
     """The booth's health now, then whenever it changes (looked at once a second): an
     unchanged health sends nothing (it was a push to every console every second, about 12 %
-    of a busy server's CPU, issue 34)."""
+    of a busy server's CPU, issue 34). ``filmed_session``: a session of a study that films
+    its participants, whose filming is read at each look for the video chip (two small
+    reads by key; a study that films nobody reads nothing)."""
     tracker = health.tracker_of(state)
     last: Message | None = None
     with contextlib.suppress(WebSocketDisconnect, RuntimeError):
@@ -212,8 +222,14 @@ async def _forward_health(
             display = display_presence(state, booth)
             found = typed_speech.synthesiser_of(state)
             synthesiser = (found.available, found.detail) if found is not None else None
+            extra = None
+            if filmed_session is not None:
+                filming = await run_in_threadpool(read, state, video_reads.filming,
+                                                  filmed_session)  # fmt: skip
+                extra = video_check(filming, datetime.now(UTC))
             snapshot = tracker.snapshot(booth, telemetry, age, display=display,
-                                        synthesiser=synthesiser, needs=needs)  # fmt: skip
+                                        synthesiser=synthesiser, needs=needs,
+                                        extra=extra)  # fmt: skip
             snapshot["bridge"] = bridge is not None
             content = health_content(snapshot)
             if content != last:

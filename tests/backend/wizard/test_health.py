@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from chameleons.backend.wizard.health import HealthTracker, Thresholds, evaluate, tracker_of
+from chameleons.backend.wizard.health import Check, HealthTracker, Thresholds, evaluate, tracker_of
 from chameleons.settings import Settings
 
 # The fields of the worker's heartbeat (chameleons.worker.hub.ControlHub.status).
@@ -310,3 +310,17 @@ def test_two_robots_typed_speech_follows_the_robot_driven_now() -> None:
     on_furhat = evaluate(two_robots("furhat"), 0.5, display=OPEN, synthesiser=espeak)
     assert (on_furhat["typed_speech"].ok, on_furhat["typed_speech"].value) == (
         True, "the Furhat's own voice")  # fmt: skip
+
+
+def test_the_participant_video_chip_stays_amber_never_an_alarm() -> None:
+    """A check from elsewhere than the worker (the participant video's) is graded too."""
+    tracker = HealthTracker(limits=Thresholds(alarm_after_s=3.0))
+    silent = {"video": Check("video", False, "video consented but ...", since_s=12.34)}
+    tracker.snapshot("b1", GOOD, 0.2, now=0.0, extra=silent)
+    later = tracker.snapshot("b1", GOOD, 0.2, now=60.0, extra=silent)
+    video = _check(later, "video")
+    assert (video["label"], video["level"], video["failing_for"], video["since_s"]) == (
+        "Participant video", "degraded", 60.0, 12.3)  # fmt: skip
+    assert later["alarm"] is False
+    order = [c["id"] for c in later["checks"]]
+    assert order.index("video") == order.index("speaking") - 1

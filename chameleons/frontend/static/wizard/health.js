@@ -11,6 +11,7 @@
 // The server sends the health when it changes, not every second (issue 34): a failing
 // check's duration grows here from the message's arrival, and silence is judged from the
 // link (any message, the pongs of live.js's 5 s pings included), not from health messages.
+// The same for the seconds since the participant video's last chunk (`since_s`).
 
 import { el, seconds } from "./dom.js";
 
@@ -18,6 +19,12 @@ const SILENT_AFTER_MS = 8000; // pongs come every 5 s
 const STATES = { ok: "ok", unknown: "unknown", degraded: "degraded", alarm: "bad" };
 // The robot refused or never answered the login: the worker waits for the wizard's retry.
 const LOGIN_FAILED = /^login /;
+
+// The participant video's chip: the server sends the seconds since its last chunk apart
+// from the value (their ticking is no change); they count on here.
+function withSince(check, since) {
+  return { ...check, value: `${check.value}, last ${seconds(since)} ago` };
+}
 
 function stateOf(check) {
   if (check.level && STATES[check.level]) return STATES[check.level];
@@ -81,6 +88,7 @@ export class HealthStrip {
     const elapsed = (Date.now() - this.lastAt) / 1000; // a failing check has failed longer by this
     const checks = message.checks
       .map((check) => (check.failing_for == null ? check : { ...check, failing_for: check.failing_for + elapsed }))
+      .map((check) => (check.since_s == null ? check : withSince(check, check.since_s + elapsed)))
       .map((check) => (check.id === "speaking" ? this.speakingCheck(check) : check));
     const mismatch = Boolean(expectedBehaviour && running && running !== expectedBehaviour);
     if (!mismatch) this.mismatchSince = null;
@@ -150,7 +158,7 @@ export class HealthStrip {
   checkSilence() {
     if (!this.silent()) {
       // The server sends no message while nothing changes: a failing check's time ticks here.
-      if (this.message && this.message.checks.some((check) => check.failing_for != null)) this.render();
+      if (this.message && this.message.checks.some((check) => check.failing_for != null || check.since_s != null)) this.render();
       return;
     }
     this.container.classList.add("failing");
