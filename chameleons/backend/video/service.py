@@ -53,12 +53,6 @@ def booth_state(db: DbSession, booth: str, now: datetime | None = None) -> Booth
                                    "reason": "Recording this session."})  # fmt: skip
 
 
-def study_records_video(db: DbSession, study_id: int | None) -> bool:
-    study = db.get(Study, study_id) if study_id is not None else None
-    spec = spec_of(study) if study is not None else None
-    return spec is not None and spec.procedure.records_video
-
-
 def start_video(db: DbSession, booth: str, session_id: int, mime_type: str, audio: bool,
                 clock: Clock, now: datetime | None = None) -> ParticipantVideo:  # fmt: skip
     now = now or datetime.now(UTC)

@@ -30,12 +30,10 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, Message, session_chan
 from chameleons.backend.events.repository import GONE
 from chameleons.backend.routing import make_router
 from chameleons.backend.studies.errors import NotFoundError
-from chameleons.backend.video import repository as video_reads
-from chameleons.backend.video.service import study_records_video
 from chameleons.backend.wizard import health, robot, typed_speech, worker_link
 from chameleons.backend.wizard.console_state import committed_console_state, console_state
 from chameleons.backend.wizard.playback import read
-from chameleons.backend.wizard.video_health import video_check
+from chameleons.backend.wizard.video_health import filming, study_records_video, video_check
 
 router = make_router(tags=["wizard"])
 HEALTH_INTERVAL_SECONDS = 1.0  # how often the health is looked at (sent only when changed)
@@ -224,9 +222,8 @@ async def _forward_health(
             synthesiser = (found.available, found.detail) if found is not None else None
             extra = None
             if filmed_session is not None:
-                filming = await run_in_threadpool(read, state, video_reads.filming,
-                                                  filmed_session)  # fmt: skip
-                extra = video_check(filming, datetime.now(UTC))
+                now_filming = await run_in_threadpool(read, state, filming, filmed_session)
+                extra = video_check(now_filming, datetime.now(UTC))
             snapshot = tracker.snapshot(booth, telemetry, age, display=display,
                                         synthesiser=synthesiser, needs=needs,
                                         extra=extra)  # fmt: skip

@@ -12,14 +12,59 @@ from the message's arrival, as it does a failing check's time.
 
 from __future__ import annotations
 
-from datetime import datetime
+from dataclasses import dataclass
+from datetime import UTC, datetime
 
-from chameleons.backend.video.repository import Filming
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session as DbSession
+
+from chameleons.backend.models import ParticipantVideo, Session, Study
+from chameleons.backend.studies.specs import spec_of
 from chameleons.backend.wizard.health import Check
 
 SILENT_AFTER_S = 6.0  # three missed 2 s chunks
 CHIP = "video"
 NOT_OPEN = "video consented but the booth's recording page is not open/recording"
+
+
+@dataclass(frozen=True)
+class Filming:
+    """What the chip needs of a session: its state and consent, and the chunks stored of
+    all its videos (``last_chunk_at``: when the newest came; None: none). Read here, not
+    through the video feature, which sits above the wizard's (its pages link the capture's)."""
+
+    state: str
+    consent: bool | None
+    started_at: datetime | None
+    chunks: int
+    last_chunk_at: datetime | None
+
+
+def study_records_video(db: DbSession, study_id: int | None) -> bool:
+    """Whether the study films consenting participants (``procedure.video.record``)."""
+    study = db.get(Study, study_id) if study_id is not None else None
+    return study is not None and spec_of(study).procedure.records_video
+
+
+def filming(db: DbSession, session_id: int) -> Filming | None:
+    """The session's filming now (None: no such session). Two small reads, by key."""
+    session = db.get(Session, session_id)
+    if session is None:
+        return None
+    totals = select(func.coalesce(func.sum(ParticipantVideo.chunks), 0),
+                    func.max(ParticipantVideo.last_chunk_at)
+                    ).where(ParticipantVideo.session_id == session_id)  # fmt: skip
+    chunks, last = db.execute(totals).one()
+    return Filming(state=session.state, consent=session.video_consent,
+                   started_at=_utc(session.started_at), chunks=int(chunks),
+                   last_chunk_at=_utc(last))  # fmt: skip
+
+
+def _utc(moment: datetime | None) -> datetime | None:
+    """SQLite gives the stored moments back without their zone (they are UTC)."""
+    if moment is None or moment.tzinfo is not None:
+        return moment
+    return moment.replace(tzinfo=UTC)
 
 
 def video_check(filming: Filming | None, now: datetime) -> dict[str, Check]:
