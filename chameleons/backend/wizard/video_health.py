@@ -20,7 +20,7 @@ from sqlalchemy.orm import Session as DbSession
 
 from chameleons.backend.models import ParticipantVideo, Session, Study
 from chameleons.backend.studies.specs import spec_of
-from chameleons.backend.wizard.health import Check
+from chameleons.backend.wizard.health_checks import Check
 
 SILENT_AFTER_S = 6.0  # three missed 2 s chunks
 CHIP = "video"
