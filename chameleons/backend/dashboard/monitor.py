@@ -6,9 +6,10 @@ robot presence and last events on one PI page, refreshed every second, with alar
 
 A booth is listed while it has an open session (pending or running) in the study, or a
 worker connected to this server. Its problems are the wizard's health alarms (the same
-checks and thresholds as the console's health strip) and a running session whose phone is
-gone; they raise the booth's alarm while the booth is in use (a running session or a
-connected worker), and only show while it waits for its participant.
+checks and thresholds as the console's health strip, the *Participant video* chip of a
+study that films included: :mod:`chameleons.backend.wizard.video_health`) and a running
+session whose phone is gone; they raise the booth's alarm while the booth is in use (a
+running session or a connected worker), and only show while it waits for its participant.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from chameleons.backend.routing import make_router
 from chameleons.backend.sessions.snapshot import phone_presence_key
 from chameleons.backend.wizard import health, robot, worker_link
 from chameleons.backend.wizard.live import display_presence
+from chameleons.backend.wizard.video_health import filming, study_records_video, video_check
 
 router = make_router(tags=["dashboard"])
 OPEN_STATES = ("pending", "running")
@@ -83,13 +85,15 @@ def monitor_state(db: DbSessionType, state: Any, study: Study) -> dict[str, Any]
     tracker = health.tracker_of(state)
     hub: LiveHub = state.live_hub
     needs = robot.robots_needed(db, study.id)  # a booth with both robots: the one missing
+    filmed = study_records_video(db, study.id)  # a study that films: the video chip
+    now = datetime.now(UTC)
     booths = []
     for booth in sorted(set(sessions) | set(workers)):
         telemetry, age = worker_link.latest_telemetry(bridge, booth)
-        robot_health = tracker.snapshot(
-            booth, telemetry, age, display=display_presence(state, booth), needs=needs
-        )
         session = sessions.get(booth)
+        video = video_check(filming(db, session.id), now) if filmed and session else None
+        robot_health = tracker.snapshot(booth, telemetry, age, needs=needs, extra=video,
+                                        display=display_presence(state, booth))  # fmt: skip
         view = _session_view(db, session, hub) if session is not None else None
         running = bool(view and view["state"] == "running")
         phone_gone = running and not (view and view["phone_connected"])
@@ -112,7 +116,7 @@ def monitor_state(db: DbSessionType, state: Any, study: Study) -> dict[str, Any]
         "study": {"id": study.id, "name": study.name},
         "booths": booths,
         "alarms": sum(1 for b in booths if b["alarm"]),
-        "generated_at": datetime.now(UTC).isoformat(),
+        "generated_at": now.isoformat(),
     }
 
 

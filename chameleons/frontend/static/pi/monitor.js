@@ -2,16 +2,19 @@
 // (participant, step, health chips, phone and robot, last events; red when in alarm).
 
 import { describe } from "../wizard/timeline.js";
-import { el } from "../wizard/dom.js";
+import { el, seconds } from "../wizard/dom.js";
 
 const container = document.getElementById("booths");
 const study = container.dataset.study;
 const NO_NAMES = new Map();
 const INTERVAL_MS = 1000;
 
+// The participant video's chip says how long ago its last chunk came (`since_s`), as the
+// console's does (wizard/health.js); the page redraws every second, so it counts on.
 function chip(check) {
+  const since = check.since_s == null ? "" : `, last ${seconds(check.since_s)} ago`;
   return el("span", { class: `chip ${check.level}`, title: check.id },
-    el("strong", { text: check.label }), ` ${check.value}`);
+    el("strong", { text: check.label }), ` ${check.value}${since}`);
 }
 
 function card(booth) {
