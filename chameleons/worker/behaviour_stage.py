@@ -185,8 +185,8 @@ class BehaviourStage:
         frames. The booth check (``seconds``): the mean of the last ``seconds`` of frames."""
         context = self.router.context
         seconds = body.get("seconds")
-        if seconds is None:
-            context.head_neutral.restart()
+        if seconds is None:  # the new participant's frames: those captured from now on
+            context.head_neutral.restart(since=self.clock())
         elif not (isinstance(seconds, int | float) and 0 < seconds <= context.history_seconds):
             raise CommandError("bad_field", f"seconds must be within 0..{context.history_seconds}")
         elif not context.head_neutral.capture(context.history, self.clock(), float(seconds)):

@@ -272,3 +272,21 @@ def test_copy_undoes_the_neutral_pose_as_a_rotation_not_angle_by_angle() -> None
     router.sample(1.9, out)  # at rest: straight ahead
     np.testing.assert_allclose(out[HEAD_YAW : HEAD_YAW + 3], [0.0, 0.0, 0.0], atol=0.01)
     assert context.head_neutral.describe()["pose"] == {"yaw": 0.0, "pitch": 14.7, "roll": 0.0}
+
+
+def test_a_fresh_neutral_measures_only_frames_captured_after_the_restart() -> None:
+    """A frame of the person before, captured before the restart but reaching the behaviour
+    stage after it (still in a queue), is not part of the new participant's neutral."""
+    from chameleons.worker.behaviours.neutral import HeadNeutral
+
+    neutral = HeadNeutral(calibration_s=0.5)
+    for k in range(60):  # someone else, before
+        neutral.add(k / 60, np.array([0.0, -10.0, 0.0], dtype=np.float32))
+    neutral.restart(since=1.0)
+    neutral.add(0.99, np.array([0.0, -10.0, 0.0], dtype=np.float32))  # late, from before
+    for k in range(60, 120):
+        neutral.add(k / 60, np.array([0.0, 14.7, 0.0], dtype=np.float32))
+    described = neutral.describe()
+    assert described["frozen"] is True
+    assert described["pose"] == {"yaw": 0.0, "pitch": 14.7, "roll": 0.0}
+    assert described["frames"] == 31  # 1.0 .. 1.5 s at 60 fps, the late frame left out

@@ -67,9 +67,13 @@ class HeadNeutral:
         self._last = math.nan
         self._version = 0  # counts changes of ``value``; the inverse is made per version
         self._inverse: tuple[int, F64Array] | None = None
+        self._since = -math.inf  # frames captured before this are not measured
 
-    def restart(self) -> None:
-        """Measure afresh: the mean of the next ``calibration_s`` seconds of frames."""
+    def restart(self, since: float = -math.inf) -> None:
+        """Measure afresh: the mean of the next ``calibration_s`` seconds of frames captured
+        at ``since`` or later. A frame captured before it (the person before, still in the
+        pipeline's queues when the command came) is not the new participant's."""
+        self._since = since
         self.value, self.how, self.frozen = None, CALIBRATING, False
         self._version += 1
         self._sums, self._frames = [0.0, 0.0, 0.0], 0
@@ -78,7 +82,7 @@ class HeadNeutral:
 
     def add(self, t: float, head: F32Array) -> None:
         """A participant frame captured at local time ``t`` (head in degrees)."""
-        if self.frozen:
+        if self.frozen or t < self._since:
             return
         if self._frames == 0:
             self._first = t
