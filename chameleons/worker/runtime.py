@@ -14,6 +14,7 @@ import logging
 import signal
 import sys
 import threading
+import time
 import uuid
 from collections.abc import Callable, Mapping
 from functools import partial
@@ -50,6 +51,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 START_TIMEOUT = 10.0
 GIL_SWITCH_INTERVAL = 0.0005  # seconds
+STOP_POLL_S = 0.2  # how often the main thread looks for a stop signal or a stage crash
 
 
 class Stage(Protocol):
@@ -318,8 +320,11 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
     signals: list[int] = []
 
     def request_stop(signum: int, _frame: FrameType | None) -> None:
+        # Only a note: the handler runs in the main thread between two of its bytecodes, and
+        # ``Event.set()`` here deadlocked when the signal came while that thread was inside
+        # ``Event.wait()`` holding the event's lock (a server killed hard: its SIGTERM came
+        # so, and the worker outlived it). The loop below sees the note.
         signals.append(signum)
-        worker.stop_event.set()
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[int(signum)] = signal.signal(signum, request_stop)
@@ -335,8 +340,10 @@ def run_worker(config: WorkerConfig, *, echo: Callable[[str], None] = print) -> 
         echo(f"worker {config.booth}: driver {config.driver}, behaviour {config.behaviour}, "
              f"{ports or 'no capture'}; control {config.command_endpoint}; "
              "Ctrl-C stops")  # fmt: skip
-        while not worker.stop_event.wait(0.5):
-            pass
+        # Polled, not ``stop_event.wait()``: see ``request_stop``. ``time.sleep`` is resumed
+        # after a handler (PEP 475), so a signal is seen within one nap.
+        while not signals and not worker.stop_event.is_set():
+            time.sleep(STOP_POLL_S)
     finally:
         worker.stop()
         for number, handler in previous.items():
