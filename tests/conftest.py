@@ -135,7 +135,14 @@ def live_server(app: FastAPI) -> Iterator[LiveServer]:
     server.stop()
 
 
-BROWSER_FIXTURES = {"playwright_instance", "browser", "context", "page", "phone_context"}
+BROWSER_FIXTURES = {
+    "playwright_instance",
+    "browser",
+    "context",
+    "page",
+    "phone_context",
+    "screen_context",
+}
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

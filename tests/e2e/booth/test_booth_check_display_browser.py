@@ -88,14 +88,18 @@ def open_check(page: Page, live_server: LiveServer, session_id: int) -> None:
 
 @pytest.mark.usefixtures("worker")
 def test_the_display_page_in_chromium_voices_the_booth_checks_test_prompt(
-    live_server: LiveServer, app: FastAPI, context: BrowserContext, engine: Engine
+    live_server: LiveServer,
+    app: FastAPI,
+    context: BrowserContext,
+    screen_context: BrowserContext,
+    engine: Engine,
 ) -> None:
     with httpx.Client(base_url=live_server.url, timeout=30) as http:
         pi = staff_api(http, engine, "pi")
         wizard = WizardBot.create(pi, study_with_plan(pi, participants=2), booth=BOOTH)
     add_user(engine, "tech", "correct horse battery", "wizard")
     reported: list[dict[str, Any]] = []
-    open_display(context, live_server, app, reported)
+    open_display(screen_context, live_server, app, reported)  # a window of its own
     check = context.new_page()
     open_check(check, live_server, wizard.session_id)
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from fastapi import FastAPI
-from playwright.sync_api import Page, WebSocketRoute, expect
+from playwright.sync_api import BrowserContext, Page, WebSocketRoute, expect
 
 from chameleons.backend.display.tokens import display_path, signing_key
 from chameleons.settings import Settings
@@ -217,7 +217,7 @@ def virtual_worker(console: Console, app: FastAPI, tmp_path: Path) -> Iterator[W
 
 @pytest.mark.usefixtures("virtual_worker")
 def test_a_prompt_cut_short_by_the_display_closing_is_not_voiced(
-    console: Console, app: FastAPI
+    console: Console, app: FastAPI, screen_context: BrowserContext
 ) -> None:
     """No robot display open: the play is not voiced, its button says so. Then the display
     page closes while it speaks: the play ends "not voiced" with the reason, its button
@@ -231,7 +231,7 @@ def test_a_prompt_cut_short_by_the_display_closing_is_not_voiced(
         "title", re.compile(r"^Not voiced: no robot display open")
     )
 
-    display = page.context.new_page()
+    display = screen_context.new_page()  # its own window: tests/support/browser.py
     booth = console.wizard.snapshot["booth"]
     display.goto(console.server.url + display_path(signing_key(app), booth))
     wait_for_js(display, "window.robotDisplay && window.robotDisplay.connected()")
