@@ -25,6 +25,10 @@ with the session's events.
   booth with both robots (``virtual+furhat``) the robot of the checked condition
   (:mod:`.check_robot`: the check runs on it), and the result says which
   (``checked_on``: "Checked on the Furhat").
+  A display that painted fewer than ``MIN_DISPLAY_FPS`` frames a second over the check
+  (the median of its page's 1 Hz reports) is a warning: it plays, but a participant sees a
+  face that jumps (a background tab, a covered or minimised window, no graphics
+  acceleration), which a single report cannot show.
 - **Robot copies**: the check runs the robot in the chosen ``copy`` condition (default: the
   study's copy condition) with its full parameters while the head turns and nods
   (:mod:`.check_run`, which restores the behaviour before); the condition's delay against
@@ -57,6 +61,7 @@ from chameleons.worker.recording import write_problem
 MIN_TURN_DEG, MAX_TURN_DEG = 20.0, 90.0
 MIN_NOD_DEG, MAX_NOD_DEG = 8.0, 60.0
 MAX_LATENCY_MS = 100.0
+MIN_DISPLAY_FPS = 10.0  # below this a face visibly jumps instead of moving
 MIN_FREE_BYTES = 360 * 1000**2  # the settings' default: 100 kB/s for 60 minutes
 PASS, FAIL, WARN = "pass", "fail", "warn"
 CHECKED = "booth.checked"
@@ -164,20 +169,33 @@ def unit_hint(measured: float, low: float, high: float, movement: str) -> str:
 
 def robot(
     telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None,
-    checked: Mapping[str, Any] | None = None,
+    checked: Mapping[str, Any] | None = None, paint_fps: float | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """The robot the check ran on (``checked``, :class:`.check_robot.Checked`): on a booth
-    with both robots that one, driven now or not; else the booth's robot."""
+    with both robots that one, driven now or not; else the booth's robot. ``paint_fps``:
+    the display's median frames a second over the check, judged when the robot is the
+    display."""
     if telemetry is None:
         return step("robot", "Robot", FAIL, "no worker for this booth")
     if checked and checked.get("problem"):
         return step("robot", "Robot", FAIL, str(checked["problem"]))
-    if checked and checked.get("output"):
-        check = health.output_check(telemetry, str(checked["output"]), display)
+    output = checked.get("output") if checked else None
+    if output:
+        check = health.output_check(telemetry, str(output), display)
     else:
         check = health.evaluate(telemetry, 0.0, display=display)["robot"]
     value = f"{checked['words']}: {check.value}" if checked else check.value
-    return step("robot", "Robot", PASS if check.ok else FAIL, value)
+    on_display = output == health.DISPLAY or (not output and telemetry.get("driver") == "virtual")
+    if not on_display or paint_fps is None:
+        return step("robot", "Robot", PASS if check.ok else FAIL, value)
+    if check.ok and paint_fps < MIN_DISPLAY_FPS:
+        return step("robot", "Robot", WARN, f"{value}, but it painted only {paint_fps:.0f} "
+                    f"frames a second during the check (a face moves smoothly from about "
+                    f"{MIN_DISPLAY_FPS:.0f}): give the display a full-screen window of its own "
+                    "(a background tab or a covered or minimised window is slowed down by the "
+                    "browser) on a machine with graphics acceleration",
+                    display_fps=paint_fps)  # fmt: skip
+    return step("robot", "Robot", PASS if check.ok else FAIL, value, display_fps=paint_fps)
 
 
 @dataclass(frozen=True)
@@ -320,13 +338,15 @@ def run(
     telemetry: Mapping[str, Any] | None, display: tuple[bool, str] | None, data_dir: Path,
     disk_needed: int = MIN_FREE_BYTES, spoken: Mapping[str, Any] | None = None,
     movement: Movement | None = None, checked: Mapping[str, Any] | None = None,
+    paint_fps: float | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """Every step; the head step reads the heartbeat taken right after the head movement
     when there was one (its window would lose the turn while the robot copies it).
     ``checked``: the robot the check ran on (:class:`.check_robot.Checked`), said in the
-    result as ``checked_on`` ("Checked on the Furhat")."""
+    result as ``checked_on`` ("Checked on the Furhat"); ``paint_fps``: the display's median
+    frames a second over the check (:meth:`DisplayChannel.paint_rate`)."""
     head = movement.head if movement is not None and movement.head is not None else telemetry
-    steps = [face_stream(telemetry), head_turn(head), robot(telemetry, display, checked),
+    steps = [face_stream(telemetry), head_turn(head), robot(telemetry, display, checked, paint_fps),
              copies(telemetry, movement), speech(spoken), disk(data_dir, disk_needed)]  # fmt: skip
     result = {"passed": all(s["status"] != FAIL for s in steps), "steps": steps}
     if checked:

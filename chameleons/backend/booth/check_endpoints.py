@@ -5,6 +5,7 @@ and the copy delay) and ``POST /api/booths/<booth>/check`` (runs the check, logs
 
 from __future__ import annotations
 
+import time
 from typing import Annotated, Any
 
 from fastapi import Depends, HTTPException, Path, Query, Request, status
@@ -22,7 +23,7 @@ from chameleons.backend.dependencies import AppSettings, Templates
 from chameleons.backend.models import Session
 from chameleons.backend.routing import make_router
 from chameleons.backend.wizard import health, worker_link
-from chameleons.backend.wizard.live import display_presence
+from chameleons.backend.wizard.live import display_paint_rate, display_presence
 from chameleons.backend.wizard.pages import BOOTH_PATTERN
 from chameleons.backend.wizard.playback import read, write
 
@@ -92,6 +93,7 @@ async def _judge(
 ) -> dict[str, Any]:
     """The steps, with the head movement, the copy and the test prompt on the condition's
     robot (:mod:`.check_robot`: a booth with both robots is put on it and back)."""
+    started = time.monotonic()  # the display's paint rate is judged over the check's run
     telemetry = _fresh_telemetry(state, booth)
     if telemetry is None:
         return check.run(None, display_presence(state, booth), settings.data_dir,
@@ -109,7 +111,8 @@ async def _judge(
             spoken = await say_test_prompt(state, booth) if say else None
         telemetry = _fresh_telemetry(state, booth)
     return check.run(telemetry, display_presence(state, booth), settings.data_dir,
-                     settings.session_disk_bytes, spoken, moved, checked.describe())  # fmt: skip
+                     settings.session_disk_bytes, spoken, moved, checked.describe(),
+                     paint_fps=display_paint_rate(state, booth, started))  # fmt: skip
 
 
 def _fresh_telemetry(state: Any, booth: str) -> dict[str, Any] | None:

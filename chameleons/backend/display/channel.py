@@ -25,6 +25,7 @@ import asyncio
 import contextlib
 import inspect
 import logging
+import statistics
 import threading
 import time
 from collections import Counter, deque
@@ -42,6 +43,7 @@ log = logging.getLogger(__name__)
 Listener = Callable[[str, Message], Awaitable[None] | None]
 DEFAULT_QUEUE_LIMIT = 256
 PRESENCE_STALE_SECONDS = 3.5  # the page reports once a second
+PAINT_RATES_KEPT = 600  # ten minutes of the page's 1 Hz reports, longer than a booth check
 DISPLAY_GONE_GRACE_SECONDS = 3.0  # the page's first reconnections come within it
 DISPLAY_CLOSED = "display_closed"
 CUT_PLAYS_KEPT = 64
@@ -141,6 +143,7 @@ class DisplayChannel:
         self._telemetry: dict[str, Message] = {}
         self._telemetry_at: dict[str, float] = {}
         self._sound_blocked: dict[str, bool] = {}
+        self._paint_rates: dict[str, deque[tuple[float, float]]] = {}  # (when, frames a second)
         self._listeners: list[Listener] = []
         # booth -> (prompt id, play id) the page said it started and has not ended
         self._playing: dict[str, tuple[str | None, str | None]] = {}
@@ -255,9 +258,13 @@ class DisplayChannel:
 
     async def report(self, booth: str, message: Message) -> None:
         if message.get("type") == "telemetry":
+            now, fps = time.monotonic(), message.get("fps")
             with self._lock:
                 self._telemetry[booth] = message
-                self._telemetry_at[booth] = time.monotonic()
+                self._telemetry_at[booth] = now
+                if isinstance(fps, int | float) and not isinstance(fps, bool):
+                    rates = self._paint_rates.setdefault(booth, deque(maxlen=PAINT_RATES_KEPT))
+                    rates.append((now, float(fps)))
         elif message.get("type") == "speech":
             with self._lock:  # sound plays once the page had its click; say when it did not
                 self._sound_blocked[booth] = message.get("reason") == "autoplay_blocked"
@@ -297,6 +304,18 @@ class DisplayChannel:
         if blocked:
             return False, "robot display needs a click to enable sound"
         return True, "display open"
+
+    def paint_rate(self, booth: str, since: float) -> float | None:
+        """The median of the frames a second the booth's display pages reported since
+        ``since`` (``time.monotonic()``), None without a report. What a participant saw
+        over that time, which ``presence`` cannot say: a page in a background tab or a
+        covered window paints a frame or two a second, enough to count as playing in most
+        of its 1 s reports."""
+        # A report covers the second before it, so the one from the second before
+        # ``since`` counts too: a check shorter than a second still has one.
+        with self._lock:
+            rates = [fps for at, fps in self._paint_rates.get(booth, ()) if at >= since - 1.0]
+        return statistics.median(rates) if rates else None
 
     def telemetry(self, booth: str) -> Message | None:
         """The latest telemetry report of the booth's display page, if any."""

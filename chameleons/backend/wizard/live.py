@@ -193,6 +193,14 @@ def display_presence(state: Any, booth: str) -> tuple[bool, str] | None:
     return presence(booth) if callable(presence) else (False, "no robot display open")
 
 
+def display_paint_rate(state: Any, booth: str, since: float) -> float | None:
+    """The booth's display's median frames a second since ``since`` (``time.monotonic()``;
+    :meth:`DisplayChannel.paint_rate`), None without a display or a report."""
+    channel = getattr(state, "display_channel", None)
+    paint_rate = getattr(channel, "paint_rate", None)
+    return paint_rate(booth, since) if callable(paint_rate) else None
+
+
 def health_content(snapshot: Message) -> Message:
     """What a health message says apart from the clock: the snapshot without the durations
     that grow by themselves (``failing_for`` and ``since_s`` of each check,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -284,3 +285,27 @@ def test_a_display_gone_while_it_speaks_ends_the_play_for_it(
     assert ends == [{"type": "speech", "event": "end", "prompt_id": "intro",
                      "play_id": "play-7", "reason": "display_closed"}]  # fmt: skip
     assert (cut, other, reconnected) == (True, False, False)
+
+
+def test_the_paint_rate_is_the_median_of_the_page_s_reports_since_a_moment(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """What the booth check judges the display's smoothness by: the median frames a second
+    of the reports from a second before ``since`` on (a report covers the second before it),
+    not the latest one, which a page painting a frame or two a second passes most seconds."""
+    clock = {"now": 100.0}
+    monkeypatch.setattr(channel_module, "time", SimpleNamespace(monotonic=lambda: clock["now"]))
+
+    async def scenario() -> list[float | None]:
+        channel = DisplayChannel()
+        seen = [channel.paint_rate(BOOTH, 0.0)]  # no report yet
+        for fps in (60, 60, 2, 1, 0, 2, True, "60"):  # a bool or a string is not a rate
+            await channel.report(BOOTH, {"type": "telemetry", "fps": fps})
+            clock["now"] += 1.0
+        await channel.report("booth-2", {"type": "telemetry", "fps": 60})
+        # reports at 100..107; since 103.0 takes those from 102 on: 2, 1, 0, 2
+        seen += [channel.paint_rate(BOOTH, 103.0), channel.paint_rate(BOOTH, 100.0),
+                 channel.paint_rate(BOOTH, 200.0)]  # fmt: skip
+        return seen
+
+    assert run(scenario()) == [None, 1.5, 2.0, None]

@@ -29,6 +29,13 @@ def heartbeat(app: FastAPI) -> bool:
     return bool(app.state.bridge.latest_telemetry(BOOTH)[0])
 
 
+def driving(app: FastAPI) -> bool:
+    """A heartbeat naming the virtual driver (the renderer stage has reported: the first
+    beats may come before it, and the Robot step reads the driver from them)."""
+    telemetry = app.state.bridge.latest_telemetry(BOOTH)[0] or {}
+    return bool(telemetry.get("driver") == "virtual")
+
+
 def speech_step(result: dict[str, Any]) -> dict[str, Any]:
     step: dict[str, Any] = next(s for s in result["steps"] if s["id"] == "speech")
     return step
@@ -37,7 +44,7 @@ def speech_step(result: dict[str, Any]) -> dict[str, Any]:
 def test_the_display_page_voices_the_test_prompt(
     app: FastAPI, client: TestClient, wizard: WizardBot, virtual_worker: Worker,  # noqa: F811
 ) -> None:  # fmt: skip
-    until(lambda: heartbeat(app))
+    until(lambda: driving(app))
     path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
     answer: dict[str, Any] = {}
 
@@ -58,6 +65,9 @@ def test_the_display_page_voices_the_test_prompt(
     assert step["status"] == "pass", step
     assert str(play["prompt_id"]).startswith("booth-check:")
     assert step["figures"]["ended"] is True
+    robot = next(s for s in answer["steps"] if s["id"] == "robot")
+    assert (robot["status"], robot["value"]) == ("pass", "the display: display open")
+    assert robot["figures"] == {"display_fps": 60.0}
 
 
 def test_without_a_display_page_the_test_prompt_fails(
@@ -67,3 +77,34 @@ def test_without_a_display_page_the_test_prompt_fails(
     step = speech_step(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
     assert step["status"] == "fail"
     assert step["value"] == "the robot never started speaking"
+
+
+def test_a_display_painting_a_frame_or_two_a_second_passes_with_a_warning(
+    app: FastAPI, client: TestClient, wizard: WizardBot, virtual_worker: Worker,  # noqa: F811
+) -> None:  # fmt: skip
+    """A page in a background tab plays (it reports, fps > 0) but paints 1-2 frames a second:
+    the check stays ready (the speech step passes) and its Robot step says why it warns."""
+    until(lambda: driving(app))
+    path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
+    answer: dict[str, Any] = {}
+    throttled = {**TELEMETRY, "fps": 2.0}
+
+    def run_check() -> None:
+        answer.update(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
+
+    with client.websocket_connect(path) as page:
+        page.send_text(json.dumps(throttled))
+        checking = threading.Thread(target=run_check)
+        checking.start()
+        play = _until_play_audio(page)
+        page.send_text(json.dumps({**throttled, "fps": 1.0}))
+        speech = {"type": "speech", "play_id": play["play_id"], "prompt_id": play["prompt_id"]}
+        page.send_text(json.dumps({**speech, "event": "start", "audio_delay_ms": 12.0}))
+        page.send_text(json.dumps({**speech, "event": "end", "reason": "ended"}))
+        checking.join(timeout=60)
+    assert not checking.is_alive()
+    assert speech_step(answer)["status"] == "pass"
+    robot = next(s for s in answer["steps"] if s["id"] == "robot")
+    assert robot["status"] == "warn", robot
+    assert robot["figures"]["display_fps"] == 1.5
+    assert "painted only 2 frames a second during the check" in robot["value"]

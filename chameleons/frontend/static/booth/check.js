@@ -67,7 +67,10 @@ async function run() {
   try {
     const result = await answered;
     body.replaceChildren(...result.steps.map(row));
-    summary.textContent = result.passed ? "Booth ready: every step passed." : "NOT READY: fix the failing steps and run the check again.";
+    const warned = result.steps.filter((step) => step.status === "warn").length;
+    summary.textContent = !result.passed ? "NOT READY: fix the failing steps and run the check again."
+      : warned ? `Booth ready, with ${warned === 1 ? "a warning" : `${warned} warnings`}: read the step${warned === 1 ? "" : "s"} marked warn.`
+      : "Booth ready: every step passed.";
     summary.dataset.passed = String(result.passed);
     checkedOn.textContent = result.checked_on ? `${result.checked_on}.` : "";
   } catch (error) {
