@@ -132,6 +132,7 @@ class RecorderStage:
                         self._record(message)
                 if port.socket in events:
                     port.handle_pending()
+                self._flush_due()
                 if time.monotonic() >= next_stats:
                     next_stats += STATS_INTERVAL
                     self._send(Message("stats.recorder", "stats", 0, self.name,
@@ -187,6 +188,17 @@ class RecorderStage:
             self.errors[getattr(exc, "reason", "bad_frame")] += 1
         except (OSError, pa.ArrowException) as exc:
             self._write_failed(stream, exc)
+
+    def _flush_due(self) -> None:
+        """Frames buffered when the stream paused reach the journal within a chunk's time
+        (:meth:`FrameRecorder.flush_if_due`); the loop wakes at least every ``POLL_MS``."""
+        for stream, recorder in list(self.recorders.items()):
+            if stream in self.failed:
+                continue
+            try:
+                recorder.flush_if_due()
+            except (OSError, pa.ArrowException) as exc:
+                self._write_failed(stream, exc)
 
     def _write_failed(self, stream: str, exc: OSError | pa.ArrowException) -> None:
         """Abandon the stream, keep why, and tell the server once per interaction."""

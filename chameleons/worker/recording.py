@@ -1,7 +1,8 @@
 """Face-stream recordings: FaceFrames -> a Parquet file, crash-safe while recording.
 
 While recording, frames are buffered and every chunk (``chunk_seconds`` or ``chunk_frames``,
-whichever comes first) is appended to a journal next to the target (``<name>.parquet.journal``,
+whichever comes first; the recorder stage flushes a chunk that is due while no frame comes)
+is appended to a journal next to the target (``<name>.parquet.journal``,
 an Arrow IPC stream) and flushed to the OS. A Parquet file is only readable once its footer
 is written at close, so the journal is what makes a crash lose at most the last chunk.
 :meth:`FrameRecorder.close` turns the journal into the Parquet file (written with
@@ -119,6 +120,14 @@ class FrameRecorder:
         self._texts.append((frame.source, frame.calibration))
         due = self._clock() - self._last_flush >= self.chunk_seconds
         if len(self._times) >= self.chunk_frames or due:
+            self.flush()
+
+    def flush_if_due(self) -> None:
+        """Flush the buffered frames once ``chunk_seconds`` passed since the last chunk,
+        also when no frame comes to trigger it (the face left the camera, the phone
+        paused): the frames before a pause reach the journal within a chunk's time, not
+        only with the next frame, which may never come before a crash."""
+        if self._times and self._clock() - self._last_flush >= self.chunk_seconds:
             self.flush()
 
     def flush(self) -> None:

@@ -75,6 +75,26 @@ def test_chunks_reach_the_journal_by_count_and_by_time(tmp_path: Path) -> None:
     assert read_recording_table(path).num_rows == 61
 
 
+def test_a_chunk_that_is_due_is_flushed_without_a_next_frame(tmp_path: Path) -> None:
+    """The stream paused (the face left): what was buffered reaches the journal once a
+    chunk's time passed, not only with a next frame that may never come."""
+    now = [0.0]
+    path = tmp_path / "r.parquet"
+    recorder = FrameRecorder(path, chunk_frames=50, chunk_seconds=0.5, clock=lambda: now[0])
+    recorder.flush_if_due()  # nothing buffered: nothing to write
+    assert recorder.frames_written == 0
+    for frame in frames(20):
+        recorder.write(frame)
+    now[0] = 0.4
+    recorder.flush_if_due()  # not due yet
+    assert recorder.frames_written == 0
+    now[0] = 0.5
+    recorder.flush_if_due()
+    assert (read_recording_table(path).num_rows, recorder.frames_written) == (20, 20)
+    recorder.close()
+    assert read_recording_table(path).num_rows == 20
+
+
 def test_truncated_journal_is_readable_up_to_the_last_full_chunk(tmp_path: Path) -> None:
     path = tmp_path / "r.parquet"
     recorder = FrameRecorder(path, chunk_frames=40)
