@@ -69,7 +69,7 @@ async function run() {
     body.replaceChildren(...result.steps.map(row));
     const warned = result.steps.filter((step) => step.status === "warn").length;
     summary.textContent = !result.passed ? "NOT READY: fix the failing steps and run the check again."
-      : warned ? `Booth ready, with ${warned === 1 ? "a warning" : `${warned} warnings`}: read the step${warned === 1 ? "" : "s"} marked warn.`
+      : warned ? `Booth ready, with ${warned === 1 ? "a warning" : `${warned} warnings`}: read the step${warned === 1 ? "" : "s"} marked WARN.`
       : "Booth ready: every step passed.";
     summary.dataset.passed = String(result.passed);
     checkedOn.textContent = result.checked_on ? `${result.checked_on}.` : "";
