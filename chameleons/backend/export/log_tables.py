@@ -57,7 +57,11 @@ def booth_checks_table(spec: StudySpec) -> TableSpec:
     steps = (
         ("face", "Face stream (frames arrive, capture to robot latency)"),
         ("head", "Turn your head left, then nod (sign and size of yaw and pitch)"),
-        ("robot", "Robot connected (virtual robot: display page open and playing)"),
+        (
+            "robot",
+            "Robot connected (virtual robot: display page open and playing; warn: the"
+            " display painted under 10 frames a second during the check)",
+        ),
         (
             "copy",
             "Robot copies the head: the check runs the robot in copy with the study's"
