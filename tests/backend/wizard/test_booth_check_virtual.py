@@ -41,9 +41,12 @@ def speech_step(result: dict[str, Any]) -> dict[str, Any]:
     return step
 
 
-def test_the_display_page_voices_the_test_prompt(
-    app: FastAPI, client: TestClient, wizard: WizardBot, virtual_worker: Worker,  # noqa: F811
-) -> None:  # fmt: skip
+def check_with_page(
+    app: FastAPI, client: TestClient, wizard: WizardBot, fps: list[float]
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Run the check (no head movement) with the display page as a WebSocket peer that
+    reports ``fps[0]`` before the check, the rest once the test prompt reached it, and
+    then the prompt's speech start and end; returns the check's answer and the play."""
     until(lambda: driving(app))
     path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
     answer: dict[str, Any] = {}
@@ -52,15 +55,24 @@ def test_the_display_page_voices_the_test_prompt(
         answer.update(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
 
     with client.websocket_connect(path) as page:
-        page.send_text(json.dumps(TELEMETRY))
+        page.send_text(json.dumps({**TELEMETRY, "fps": fps[0]}))
         checking = threading.Thread(target=run_check)
         checking.start()
         play = _until_play_audio(page)
+        for rate in fps[1:]:
+            page.send_text(json.dumps({**TELEMETRY, "fps": rate}))
         speech = {"type": "speech", "play_id": play["play_id"], "prompt_id": play["prompt_id"]}
         page.send_text(json.dumps({**speech, "event": "start", "audio_delay_ms": 12.0}))
         page.send_text(json.dumps({**speech, "event": "end", "reason": "ended"}))
         checking.join(timeout=60)
     assert not checking.is_alive()
+    return answer, play
+
+
+def test_the_display_page_voices_the_test_prompt(
+    app: FastAPI, client: TestClient, wizard: WizardBot, virtual_worker: Worker,  # noqa: F811
+) -> None:  # fmt: skip
+    answer, play = check_with_page(app, client, wizard, [60.0])
     step = speech_step(answer)
     assert step["status"] == "pass", step
     assert str(play["prompt_id"]).startswith("booth-check:")
@@ -84,25 +96,7 @@ def test_a_display_painting_a_frame_or_two_a_second_passes_with_a_warning(
 ) -> None:  # fmt: skip
     """A page in a background tab plays (it reports, fps > 0) but paints 1-2 frames a second:
     the check stays ready (the speech step passes) and its Robot step says why it warns."""
-    until(lambda: driving(app))
-    path = f"/ws/display/{BOOTH}?token={display_token(signing_key(app), BOOTH)}"
-    answer: dict[str, Any] = {}
-    throttled = {**TELEMETRY, "fps": 2.0}
-
-    def run_check() -> None:
-        answer.update(wizard.staff.post(f"/api/booths/{BOOTH}/check?movement=false"))
-
-    with client.websocket_connect(path) as page:
-        page.send_text(json.dumps(throttled))
-        checking = threading.Thread(target=run_check)
-        checking.start()
-        play = _until_play_audio(page)
-        page.send_text(json.dumps({**throttled, "fps": 1.0}))
-        speech = {"type": "speech", "play_id": play["play_id"], "prompt_id": play["prompt_id"]}
-        page.send_text(json.dumps({**speech, "event": "start", "audio_delay_ms": 12.0}))
-        page.send_text(json.dumps({**speech, "event": "end", "reason": "ended"}))
-        checking.join(timeout=60)
-    assert not checking.is_alive()
+    answer, _ = check_with_page(app, client, wizard, [2.0, 1.0])
     assert speech_step(answer)["status"] == "pass"
     robot = next(s for s in answer["steps"] if s["id"] == "robot")
     assert robot["status"] == "warn", robot
