@@ -69,6 +69,18 @@ class WorkerConfig:
                 "calibration_s": self.head_calibration_s}  # fmt: skip
 
     @property
+    def switch_hold_seconds(self) -> float:
+        """virtual+furhat: how long the robot switched to stays at its neutral: until the
+        behaviour crossfade that comes with a switch has reached it (the crossfade, the
+        behaviour stage's lookahead) plus a margin for the two commands' hops."""
+        return self.crossfade_seconds + self.lookahead_ticks / self.render.tick_rate + 0.1
+
+    @property
+    def switch_fade_seconds(self) -> float:
+        """virtual+furhat: then it fades into its frames over as long as a crossfade."""
+        return self.crossfade_seconds
+
+    @property
     def head_lead(self) -> float:
         render = self.render
         return HeadFilter(render.fir_taps, render.fir_cutoff_hz, render.tick_rate).group_delay

@@ -66,6 +66,10 @@ class RendererProcessConfig(Protocol):
     @property
     def render(self) -> RenderConfig: ...
     @property
+    def switch_hold_seconds(self) -> float: ...
+    @property
+    def switch_fade_seconds(self) -> float: ...
+    @property
     def renderer_realtime(self) -> bool: ...
     @property
     def renderer_cpu(self) -> int | None: ...
@@ -75,7 +79,9 @@ def make_driver(config: RendererProcessConfig, publish: Publish) -> Any:
     options = DriverOptions(booth=config.booth, robot_url=config.robot_url,
                             robot_key=config.robot_key,
                             record_path=config.data_dir / f"driver-{config.booth}.jsonl",
-                            furhat_faces=config.furhat_faces)  # fmt: skip
+                            furhat_faces=config.furhat_faces,
+                            switch_hold_seconds=config.switch_hold_seconds,
+                            switch_fade_seconds=config.switch_fade_seconds)  # fmt: skip
     return create_driver(config.driver, options, publish)
 
 

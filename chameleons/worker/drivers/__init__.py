@@ -17,7 +17,12 @@ from chameleons.worker.drivers.base import (
 from chameleons.worker.drivers.furhat import DEFAULT_URL, FurhatDriver
 from chameleons.worker.drivers.null import NullDriver
 from chameleons.worker.drivers.record import RecordDriver
-from chameleons.worker.drivers.switch import FURHAT, SwitchDriver
+from chameleons.worker.drivers.switch import (
+    DEFAULT_FADE_SECONDS,
+    DEFAULT_HOLD_SECONDS,
+    FURHAT,
+    SwitchDriver,
+)
 from chameleons.worker.drivers.virtual import Publish, VirtualDriver
 
 DRIVER_NAMES = ("virtual", "furhat", "virtual+furhat", "record", "null")
@@ -52,6 +57,9 @@ class DriverOptions:
     robot_key: str | None = None
     record_path: Path = Path("data/driver-record.jsonl")
     furhat_faces: Mapping[str, str] = field(default_factory=dict)  # study face id -> robot's
+    # virtual+furhat: how the robot switched to wakes from its neutral (drivers.switch)
+    switch_hold_seconds: float = DEFAULT_HOLD_SECONDS
+    switch_fade_seconds: float = DEFAULT_FADE_SECONDS
 
 
 def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver:
@@ -62,7 +70,9 @@ def create_driver(name: str, options: DriverOptions, publish: Publish) -> Driver
         return FurhatDriver(options.robot_url, key=options.robot_key, faces=options.furhat_faces)
     if name == "virtual+furhat":
         return SwitchDriver(VirtualDriver(options.booth, publish),
-                            create_driver("furhat", options, publish))  # fmt: skip
+                            create_driver("furhat", options, publish),
+                            hold_seconds=options.switch_hold_seconds,
+                            fade_seconds=options.switch_fade_seconds)  # fmt: skip
     if name == "record":
         return RecordDriver(options.record_path)
     if name == "null":

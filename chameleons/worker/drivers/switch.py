@@ -5,29 +5,53 @@ The condition's ``renderer`` says which robot it runs on: ``2d`` or ``3d`` the d
 face, ``furhat`` the Furhat (the server sends it with the face in ``set_face``). Only that
 robot is driven: the face and head frames, the prompts' audio or typed speech go to it. On
 a switch the other robot is first set to its neutral face and head, so it never stays
-frozen mid-expression, and audio it was playing stops. Both connect at the start; their
+frozen mid-expression, and audio it was playing stops.
+
+The robot switched to wakes from that neutral: it is held there for ``hold_seconds``, then
+faded linearly into the frames it is sent over ``fade_seconds``. A switch comes with the
+new condition's behaviour, which the behaviour stage crossfades from the old one over its
+``crossfade_seconds`` (and the renderer runs a few ticks ahead of the robot): without the
+hold, the robot switched to showed the tail of the *other* robot's behaviour. A booth
+check that had run a copy on the Furhat swung the display's head up to 12.7 deg and back
+within 0.3 s as it put the booth back (issue 36's run 12). The hold covers that tail
+whichever of the two commands comes first (the server sends the behaviour first; the
+bridge's replay after a reconnect, the face first). Both connect at the start; their
 events (speech, connection state) reach the worker tagged with ``output``, and the worker's
 robot state is the driven robot's (a switch to a robot in another state reports it).
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from typing import Any, ClassVar
+
+import numpy as np
 
 from chameleons.worker.drivers.base import ROBOT_STATE, Driver, DriverEvent, EventSink
 from chameleons.worker.frames import F32Array
 
 FURHAT = "furhat"
+# The worker's defaults: its 0.3 s behaviour crossfade, 5 ticks of lookahead at 125 Hz and
+# a margin for the commands' hops (``WorkerConfig.switch_hold_seconds``).
+DEFAULT_HOLD_SECONDS = 0.45
+DEFAULT_FADE_SECONDS = 0.3
 
 
 class SwitchDriver(Driver):
     name = "virtual+furhat"
     speaks_text: ClassVar[bool] = True  # the Furhat's TTS; on the display typed text is skipped
 
-    def __init__(self, display: Driver, furhat: Driver) -> None:
+    def __init__(
+        self, display: Driver, furhat: Driver, *, hold_seconds: float = DEFAULT_HOLD_SECONDS,
+        fade_seconds: float = DEFAULT_FADE_SECONDS, clock: Callable[[], float] = time.monotonic,
+    ) -> None:  # fmt: skip
         super().__init__()
         self.outputs = {"display": display, FURHAT: furhat}
         self.active_name = "display"
+        self.hold_seconds, self.fade_seconds = hold_seconds, fade_seconds
+        self._clock = clock
+        self._switched_at: float | None = None  # while the robot switched to wakes
 
     @property
     def active(self) -> Driver:
@@ -58,11 +82,26 @@ class SwitchDriver(Driver):
 
     def send_face(self, blendshapes: F32Array) -> None:
         self.faces_sent += 1
-        self.active.send_face(blendshapes)
+        weight = self._wake_weight()
+        self.active.send_face(blendshapes if weight == 1.0 else blendshapes * np.float32(weight))
 
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
         self.heads_sent += 1
-        self.active.send_head(yaw, pitch, roll)
+        weight = self._wake_weight()
+        self.active.send_head(yaw * weight, pitch * weight, roll * weight)
+
+    def _wake_weight(self) -> float:
+        """How much of the frames sent the driven robot shows: 0 (its neutral, which is all
+        zeros) through the hold after a switch, rising linearly to 1 over the fade."""
+        if self._switched_at is None:
+            return 1.0
+        into_fade = self._clock() - self._switched_at - self.hold_seconds
+        if into_fade < 0.0:
+            return 0.0
+        if into_fade >= self.fade_seconds:
+            self._switched_at = None
+            return 1.0
+        return into_fade / self.fade_seconds
 
     def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         self.active.play_audio(prompt_id, url, play_id)
@@ -83,6 +122,7 @@ class SwitchDriver(Driver):
             previous.stop_audio()
             previous.rest()
             self.active_name = chosen
+            self._switched_at = self._clock()
             self.set_state(self.active.state, output=chosen)
         if chosen == FURHAT:
             self.active.set_face(face_id)

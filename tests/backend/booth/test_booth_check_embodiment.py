@@ -127,12 +127,16 @@ def test_the_check_runs_on_the_conditions_robot_and_puts_the_booth_back(
             until(lambda: heartbeat(bridge).get("robot_active") == "display",
                   what="the display driven again")  # fmt: skip
             # The Furhat's head copied the turn; the display's stayed at its neutral while
-            # the Furhat ran, i.e. until the check put the booth back on the display (its
-            # set_face): after it the display's head may ease through the copy's last
-            # ~0.1 s (the renderer's lookahead and filter; fresh-clone run 12 saw 0.8°).
+            # the Furhat ran, and after the check put the booth back on the display (its
+            # set_face) it woke from that neutral into still: it never showed the tail of
+            # the Furhat's copy, which the behaviour crossfade into still runs through
+            # (before the switch's hold it swung the display's head up to 12.7 deg).
             assert max(furhat_yaws(robot, start, end)) == pytest.approx(TURN, abs=2.5)
             back = min(m.time for m in frames if m.type == "set_face" and m.time > start)
-            assert max(display_yaws(frames, start + 0.5, back), default=0.0) < 0.5
+            woken = back + config.switch_hold_seconds + config.switch_fade_seconds + 0.2
+            until(lambda: any(m.time > woken for m in frames if m.type == "head"),
+                  what="the display's frames after its wake")  # fmt: skip
+            assert max(display_yaws(frames, start + 0.5, woken), default=0.0) < 0.5
 
             on_display, start, end = run_on(pi, bridge, worker, "copy_2d", "2d")
             assert face(bridge) == BEFORE
