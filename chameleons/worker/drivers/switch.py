@@ -11,9 +11,9 @@ The robot switched to wakes from that neutral: it is held there for ``hold_secon
 faded linearly into the frames it is sent over ``fade_seconds``. A switch comes with the
 new condition's behaviour, which the behaviour stage crossfades from the old one over its
 ``crossfade_seconds`` (and the renderer runs a few ticks ahead of the robot): without the
-hold, the robot switched to showed the tail of the *other* robot's behaviour. A booth
-check that had run a copy on the Furhat swung the display's head up to 12.7 deg and back
-within 0.3 s as it put the booth back (issue 36's run 12). The hold covers that tail
+hold, the robot switched to showed the tail of the *other* robot's behaviour: a booth
+check that had run a copy on the Furhat swung the display's head 15-18 deg as it put the
+booth back (tests/backend/booth/test_booth_check_embodiment.py). The hold covers that tail
 whichever of the two commands comes first (the server sends the behaviour first; the
 bridge's replay after a reconnect, the face first). Both connect at the start; their
 events (speech, connection state) reach the worker tagged with ``output``, and the worker's
