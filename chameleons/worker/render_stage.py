@@ -188,6 +188,9 @@ class RendererStage:
         assert self.core is not None
         self._sent[:] = self.core.agent
         self._sent[HEAD_SLICE] = self.core.filter.output
+        shown = self.driver.shown_weight() if self.driver is not None else 1.0
+        if shown != 1.0:  # a robot waking from its neutral after a switch shows less
+            self._sent *= np.float32(shown)
         self._seq += 1
         body = {"t": due, "input_time": input_time if math.isfinite(input_time) else None}
         self._publish(Message(SENT_TOPIC, "sent", self._seq, self.name, due, body,

@@ -81,6 +81,12 @@ class Driver(ABC):
     def send_head(self, yaw: float, pitch: float, roll: float) -> None:
         """Absolute head pose in degrees."""
 
+    def shown_weight(self) -> float:
+        """How much of the frames it is sent the robot shows now: 1, except while a robot
+        switched to wakes from its neutral (``drivers.switch``). The renderer scales its
+        record of what was sent (``face.sent``, the recordings') by it."""
+        return 1.0
+
     def rest(self) -> None:
         """Set the robot to its neutral face and head now (another robot takes over)."""
         self.send_face(np.zeros(N_BLENDSHAPES, dtype=np.float32))

@@ -90,18 +90,21 @@ class SwitchDriver(Driver):
         weight = self._wake_weight()
         self.active.send_head(yaw * weight, pitch * weight, roll * weight)
 
-    def _wake_weight(self) -> float:
-        """How much of the frames sent the driven robot shows: 0 (its neutral, which is all
-        zeros) through the hold after a switch, rising linearly to 1 over the fade."""
+    def shown_weight(self) -> float:
+        """0 (its neutral, which is all zeros) through the hold after a switch, rising
+        linearly to 1 over the fade."""
         if self._switched_at is None:
             return 1.0
         into_fade = self._clock() - self._switched_at - self.hold_seconds
         if into_fade < 0.0:
             return 0.0
-        if into_fade >= self.fade_seconds:
-            self._switched_at = None
-            return 1.0
-        return into_fade / self.fade_seconds
+        return 1.0 if into_fade >= self.fade_seconds else into_fade / self.fade_seconds
+
+    def _wake_weight(self) -> float:
+        weight = self.shown_weight()
+        if weight == 1.0:
+            self._switched_at = None  # awake: no clock read per frame from now on
+        return weight
 
     def play_audio(self, prompt_id: str, url: str, play_id: str | None = None) -> None:
         self.active.play_audio(prompt_id, url, play_id)
