@@ -151,7 +151,8 @@ def test_the_robot_switched_to_wakes_from_its_neutral_and_is_recorded_so(
     rows = list(zip(table.column("capture_time").to_pylist(),
                     table.column("head_yaw").to_pylist(), strict=True))  # fmt: skip
     before = [abs(y) for t, y in rows if t < asked - 0.1]
-    assert before and before[-1] == pytest.approx(REST, abs=1.0)
+    assert before
+    assert before[-1] == pytest.approx(REST, abs=1.0)
     switched = next(t for t, y in rows if t >= asked and abs(y) < 0.5)
     assert max(abs(y) for t, y in rows if switched <= t < switched + crossfade - 0.1) < 0.5
     assert abs(next(y for t, y in rows if t > switched + hold + fade + 0.1)) == pytest.approx(
