@@ -184,7 +184,16 @@ class ParticipantBot:
 
     def _send(self, kind: str, body: Json) -> Json:
         self.sent.append({"kind": kind, **body})
-        receipt: Json = _json(self.http.post(f"/api/phone/{self.token}/{kind}", json=body))
+        url = f"/api/phone/{self.token}/{kind}"
+        try:
+            response = self.http.post(url, json=body)
+        except httpx.RemoteProtocolError:
+            # The server closed a kept-alive connection as the submission went out on it
+            # (uvicorn lets one go after 5 s idle; a client that waited longer, or was
+            # slowed down, reused it). The phone's page sends the same submission again,
+            # and so does the bot: its client id makes the server store it once.
+            response = self.http.post(url, json=body)
+        receipt: Json = _json(response)
         return receipt
 
     def submit_ranking(
