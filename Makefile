@@ -25,8 +25,8 @@ test:
 	$(MAKE) --no-print-directory $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy chameleons tests
-	$(BIN)/pytest -n $(PYTEST_WORKERS) -m "not browser"
-	$(BIN)/pytest -n $(PYTEST_WORKERS) -m browser
+	$(BIN)/pytest -n $(PYTEST_WORKERS) -m "not browser" --durations=20
+	$(BIN)/pytest -n $(PYTEST_WORKERS) -m browser --durations=10
 
 # The documentation's screenshots (docs/screenshots/), from a real demo session in Chromium.
 screenshots: $(STAMP)
