@@ -21,7 +21,7 @@ from chameleons.worker.recording import read_recording_table
 from chameleons.worker.runtime import Worker, WorkerConfig
 from tests.worker.control_peer import ControlPeer
 from tests.worker.furhat_peer import FurhatPeer
-from tests.worker.head_stream import Pose, stream
+from tests.worker.head_stream import Pose, stream, stream_after
 
 pytestmark = pytest.mark.slow
 BOOTH = "embodiment"
@@ -119,8 +119,10 @@ def test_the_robot_switched_to_wakes_from_its_neutral_and_is_recorded_so(
         worker = start(context, server, "virtual+furhat", robot.url, data_dir=tmp_path)
         hold, fade = worker.config.switch_hold_seconds, worker.config.switch_fade_seconds
         crossfade = worker.config.crossfade_seconds  # the hold outlasts it (at least)
-        sender = threading.Thread(
-            target=stream, args=(worker.receivers["livelink"].port, Pose(rest_yaw=REST), 4.0))
+        done = threading.Event()  # the participant rests until the test has seen enough
+        sender = threading.Thread(target=stream_after, args=(
+            worker.receivers["livelink"].port, Pose(rest_yaw=REST), 0.1, lambda: True),
+            kwargs={"until": done.is_set})  # fmt: skip
         try:
             robot.wait_for(lambda p: bool(p.of_type("request.face.config")), timeout=10)
             recording = {"interaction_id": 1, "directory": str(tmp_path)}
@@ -133,10 +135,12 @@ def test_the_robot_switched_to_wakes_from_its_neutral_and_is_recorded_so(
             assert server.command(BOOTH, SET_FACE, {"face_id": "f1", "renderer": "furhat"}).ok
             robot.wait_for(lambda p: bool(furhat_yaws(robot, asked + hold + fade + 0.5)),
                            timeout=10)  # fmt: skip
+            done.set()
             sender.join()
             stopped = server.command(BOOTH, STOP_RECORDING, {"interaction_id": 1})
             assert stopped.ok, stopped
         finally:
+            done.set()
             worker.stop()
             server.close()
 
@@ -144,8 +148,9 @@ def test_the_robot_switched_to_wakes_from_its_neutral_and_is_recorded_so(
               if r.time >= asked]  # fmt: skip
     first = furhat[0][0]
     assert max(abs(y) for t, y in furhat if t < first + crossfade) < 0.5  # its neutral
-    assert [y for t, y in furhat if t > first + hold + fade + 0.2] == pytest.approx(
-        [REST] * len([t for t, _ in furhat if t > first + hold + fade + 0.2]), abs=1.0)
+    awake = [y for t, y in furhat if t > first + hold + fade + 0.2]  # then the copied rest
+    assert awake
+    assert awake == pytest.approx([REST] * len(awake), abs=1.0)
     # The robot's recording: the copied rest, then the switched robot's neutral and wake.
     table = read_recording_table(stopped.result["files"]["agent"])
     rows = list(zip(table.column("capture_time").to_pylist(),
