@@ -11,6 +11,7 @@ from typing import Any
 
 from chameleons.worker.curve import ClientKeys
 from chameleons.worker.drivers import DEFAULT_URL
+from chameleons.worker.drivers.switch import hold_seconds_for
 from chameleons.worker.renderer import HeadFilter, RenderConfig
 from chameleons.worker.stage import Endpoints
 
@@ -70,10 +71,10 @@ class WorkerConfig:
 
     @property
     def switch_hold_seconds(self) -> float:
-        """virtual+furhat: how long the robot switched to stays at its neutral: until the
-        behaviour crossfade that comes with a switch has reached it (the crossfade, the
-        behaviour stage's lookahead) plus a margin for the two commands' hops."""
-        return self.crossfade_seconds + self.lookahead_ticks / self.render.tick_rate + 0.1
+        """virtual+furhat: how long the robot switched to stays at its neutral
+        (``drivers.switch.hold_seconds_for``)."""
+        return hold_seconds_for(self.crossfade_seconds,
+                                self.lookahead_ticks / self.render.tick_rate)  # fmt: skip
 
     @property
     def switch_fade_seconds(self) -> float:

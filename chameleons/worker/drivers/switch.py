@@ -32,10 +32,19 @@ from chameleons.worker.drivers.base import ROBOT_STATE, Driver, DriverEvent, Eve
 from chameleons.worker.frames import F32Array
 
 FURHAT = "furhat"
-# The worker's defaults: its 0.3 s behaviour crossfade, 5 ticks of lookahead at 125 Hz and
-# a margin for the commands' hops (``WorkerConfig.switch_hold_seconds``).
-DEFAULT_HOLD_SECONDS = 0.45
+HOLD_MARGIN_SECONDS = 0.1  # for the two commands' hops
+
+
+def hold_seconds_for(crossfade_seconds: float, lookahead_seconds: float) -> float:
+    """How long the robot switched to stays at its neutral: until the behaviour crossfade
+    that comes with a switch has reached it (the crossfade, and the lookahead the behaviour
+    stage samples ahead of the renderer), plus a margin."""
+    return crossfade_seconds + lookahead_seconds + HOLD_MARGIN_SECONDS
+
+
+# The worker's defaults: its 0.3 s behaviour crossfade, 5 ticks of lookahead at 125 Hz.
 DEFAULT_FADE_SECONDS = 0.3
+DEFAULT_HOLD_SECONDS = hold_seconds_for(DEFAULT_FADE_SECONDS, 5 / 125)
 
 
 class SwitchDriver(Driver):

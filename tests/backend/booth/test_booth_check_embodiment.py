@@ -130,7 +130,7 @@ def test_the_check_runs_on_the_conditions_robot_and_puts_the_booth_back(
             # the Furhat ran, and after the check put the booth back on the display (its
             # set_face) it woke from that neutral into still: it never showed the tail of
             # the Furhat's copy, which the behaviour crossfade into still runs through
-            # (before the switch's hold it swung the display's head up to 12.7 deg).
+            # (before the switch's hold it swung the display's head 15-18 deg here).
             assert max(furhat_yaws(robot, start, end)) == pytest.approx(TURN, abs=2.5)
             back = min(m.time for m in frames if m.type == "set_face" and m.time > start)
             woken = back + config.switch_hold_seconds + config.switch_fade_seconds + 0.2
