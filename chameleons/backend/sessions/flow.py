@@ -29,6 +29,7 @@ from chameleons.backend.models import Session as SessionRow
 from chameleons.backend.models import Study as StudyRow
 from chameleons.backend.sessions.states import (
     NEXT_STEP,
+    STEPS,
     UNDO_WINDOW_SECONDS,
     Action,
     allowed_sentence,
@@ -49,6 +50,7 @@ SUGGESTIONS_OF_INTERACTIONS = (
     .where(Suggestion.interaction_id.in_(bindparam("ids", expanding=True)))
     .order_by(Suggestion.interaction_id, Suggestion.index)
 )
+STEPS_BEFORE_NEGOTIATION = STEPS[: STEPS.index("negotiation")]  # no suggestion yet
 KeyColumn = Literal["id", "phone_token"]  # how a flow is found: the session's id or link
 FlowRow = tuple[SessionRow, StudyRow, Participant]
 INTERACTIONS_QUERY = (
@@ -104,11 +106,15 @@ class Flow:
         return list(self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": [interaction.id]}))
 
     def suggestions_by_interaction(self) -> dict[int, list[Suggestion]]:
-        """``suggestions`` of every interaction, in one query (the snapshot's)."""
-        ids = [interaction.id for interaction in self.interactions]
-        found: dict[int, list[Suggestion]] = {i: [] for i in ids}
-        for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
-            found[suggestion.interaction_id].append(suggestion)
+        """``suggestions`` of every interaction, in one query (the snapshot's). Only an
+        interaction that has reached its negotiation can have any (steps only move on,
+        ``sessions.states``; the robot proposes on entering it), so before the first
+        negotiation nothing is asked (issue 34)."""
+        found: dict[int, list[Suggestion]] = {i.id: [] for i in self.interactions}
+        ids = [i.id for i in self.interactions if i.state not in STEPS_BEFORE_NEGOTIATION]
+        if ids:
+            for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
+                found[suggestion.interaction_id].append(suggestion)
         return found
 
     def row_number(self) -> int:

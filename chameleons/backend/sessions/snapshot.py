@@ -132,8 +132,7 @@ def behaviour_summary(condition: Condition) -> str:
 def _interaction(
     flow: Flow, interaction: Interaction, suggestions: list[Suggestion], done: set[str]
 ) -> dict[str, Any]:
-    task = flow.spec.task(interaction.task)
-    items = [task.item(item_key(str(item_id))) for item_id in interaction.presented_order]
+    task_name, items, expert_order = _task_parts(flow, interaction)
     return {
         "position": interaction.position,
         "state": interaction.state,
@@ -149,22 +148,12 @@ def _interaction(
         "robot_name": interaction.robot_name,
         "face": interaction.face,
         "task": interaction.task,
-        "task_name": task.name,
+        "task_name": task_name,
         "item_set": interaction.item_set,
         "scenario": f"{interaction.task}-{interaction.item_set}",
-        "items": [
-            {
-                "id": str(item_id),
-                "name": item.name,
-                "description": item.description,
-                "expert_rank": item.expert_rank,
-            }
-            for item_id, item in zip(interaction.presented_order, items, strict=True)
-        ],
+        "items": items,
         "presented_order": list(interaction.presented_order),
-        "expert_order": flow.spec.expert_order(
-            interaction.task, [str(i) for i in interaction.presented_order]
-        ),
+        "expert_order": expert_order,
         "initial_ranking": interaction.initial_ranking,
         "current_ranking": interaction.current_ranking,
         "final_ranking": interaction.final_ranking,
@@ -174,6 +163,30 @@ def _interaction(
         "accepted": sum(1 for s in suggestions if s.accepted),
         "questionnaires": _progress(flow, interaction.position, done),
     }
+
+
+# An interaction's task name, items and expert order follow from the study's config and
+# the presented order alone, which never change: built once per (config, task, order)
+# instead of at every snapshot (issue 34). Shared by the snapshots, which are read only.
+TaskParts = tuple[str, list[dict[str, Any]], list[str]]
+_TASK_PARTS: dict[tuple[str, str, tuple[str, ...]], TaskParts] = {}
+_TASK_PARTS_MAX = 4096  # a server's sessions x interactions; emptied when full
+
+
+def _task_parts(flow: Flow, interaction: Interaction) -> TaskParts:
+    presented = tuple(str(item_id) for item_id in interaction.presented_order)
+    key = (flow.study.config_hash, interaction.task, presented)
+    found = _TASK_PARTS.get(key)
+    if found is None:
+        task = flow.spec.task(interaction.task)
+        items = [{"id": item_id, "name": item.name, "description": item.description,
+                  "expert_rank": item.expert_rank}
+                 for item_id, item in ((i, task.item(item_key(i))) for i in presented)]  # fmt: skip
+        found = (task.name, items, flow.spec.expert_order(interaction.task, list(presented)))
+        if len(_TASK_PARTS) >= _TASK_PARTS_MAX:
+            _TASK_PARTS.clear()
+        _TASK_PARTS[key] = found
+    return found
 
 
 def _suggestion(flow: Flow, interaction: Interaction, suggestion: Suggestion) -> dict[str, Any]:

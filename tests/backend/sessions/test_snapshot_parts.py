@@ -1,0 +1,86 @@
+"""The console's snapshot built with less work (issue 34) still says what the study and
+the database say: each interaction's items, names and expert order are its own study's
+(kept per study config and presented order), and the suggestions are read only once an
+interaction can have any."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from fastapi import FastAPI
+from sqlalchemy import Engine
+
+from chameleons.backend.db import build_sessionmaker
+from chameleons.backend.sessions.flow import load
+from chameleons.backend.sessions.snapshot import session_snapshot
+from chameleons.backend.studies.specs import item_key
+from chameleons.experiment.study import default_study_path
+from tests.backend.wizard.test_retained_state import statements_here
+from tests.support.bots import ParticipantBot, StaffApi, WizardBot, study_with_plan
+
+SUGGESTION_READ = re.compile(r"FROM suggestion\b", re.IGNORECASE)
+
+
+def _snapshot(engine: Engine, session_id: int) -> tuple[dict[str, Any], list[str]]:
+    with build_sessionmaker(engine)() as db, statements_here() as statements:
+        flow = load(db, session_id, lock=False)
+        return session_snapshot(flow, "", []), statements
+
+
+def _expected_items(engine: Engine, session_id: int) -> list[list[tuple[str, str, int]]]:
+    """Each interaction's items as the study's spec gives them, in presented order."""
+    with build_sessionmaker(engine)() as db:
+        flow = load(db, session_id, lock=False)
+        found = []
+        for interaction in flow.interactions:
+            task = flow.spec.task(interaction.task)
+            items = [task.item(item_key(str(i))) for i in interaction.presented_order]
+            order = interaction.presented_order
+            found.append([(str(i), item.name, item.expert_rank)
+                          for i, item in zip(order, items, strict=True)])  # fmt: skip
+        return found
+
+
+def _shown_items(snapshot: dict[str, Any]) -> list[list[tuple[str, str, int]]]:
+    interactions = snapshot["interactions"]
+    assert isinstance(interactions, list)
+    return [[(item["id"], item["name"], item["expert_rank"]) for item in i["items"]]
+            for i in interactions]  # fmt: skip
+
+
+def test_two_studies_with_the_same_plan_show_their_own_items(pi: StaffApi, engine: Engine) -> None:
+    renamed = re.sub(r'(\n\s+en: ")', r"\1Renamed ", default_study_path().read_text())
+    first = WizardBot.create(pi, study_with_plan(pi, seed=7))
+    second = WizardBot.create(pi, study_with_plan(pi, seed=7, yaml=renamed))
+    orders = [[i["presented_order"] for i in w.snapshot["interactions"]] for w in (first, second)]
+    assert orders[0] == orders[1]  # the same plan: only the study's config tells them apart
+    for wizard in (first, second, first, second):  # built, then kept
+        snapshot, _ = _snapshot(engine, wizard.session_id)
+        assert _shown_items(snapshot) == _expected_items(engine, wizard.session_id)
+        interactions = snapshot["interactions"]
+        assert isinstance(interactions, list)
+        for interaction in interactions:
+            ranks = {item["id"]: item["expert_rank"] for item in interaction["items"]}
+            assert interaction["expert_order"] == sorted(ranks, key=ranks.__getitem__)
+    names = [_shown_items(_snapshot(engine, w.session_id)[0])[0][0][1] for w in (first, second)]
+    assert names[1] == f"Renamed {names[0]}"
+
+
+def test_suggestions_are_read_once_an_interaction_can_have_any(
+    app: FastAPI, wizard: WizardBot, phone: ParticipantBot, engine: Engine
+) -> None:
+    wizard.start()
+    wizard.advance(1, "discussion")
+    wizard.advance(1, "ranking")
+    snapshot, statements = _snapshot(engine, wizard.session_id)
+    assert not [s for s in statements if SUGGESTION_READ.search(s)], statements
+    assert all(i["suggestions"] == [] for i in snapshot["interactions"])
+    ranking = list(wizard.interaction(1)["presented_order"])
+    phone.submit_ranking(1, ranking)
+    wizard.advance(1, "negotiation")  # the robot proposes its first suggestion
+    snapshot, statements = _snapshot(engine, wizard.session_id)
+    assert [s for s in statements if SUGGESTION_READ.search(s)]
+    first = snapshot["interactions"][0]
+    assert [s["index"] for s in first["suggestions"]] == [1]
+    assert first["suggestions"] == wizard.refresh()["interactions"][0]["suggestions"]
