@@ -174,7 +174,7 @@ _TASK_PARTS_MAX = 4096  # a server's sessions x interactions; emptied when full
 
 
 def _task_parts(flow: Flow, interaction: Interaction) -> TaskParts:
-    presented = tuple(str(item_id) for item_id in interaction.presented_order)
+    presented = tuple(map(str, interaction.presented_order))
     key = (flow.study.config_hash, interaction.task, presented)
     found = _TASK_PARTS.get(key)
     if found is None:
