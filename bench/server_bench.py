@@ -2,8 +2,8 @@
 same traffic against a bare FastAPI server (``bench.baseline_app``) measured in the same run.
 
 ``python -m bench.server_bench [--quick] [--phones 50] [--think-max 3] [--wizard-think 1]
-[--hold-phones 200] [--hold-seconds 120] [--phone-servers 1] [--only sqlite|postgresql]
-[--report-only]``
+[--hold-phones 200] [--hold-seconds 120] [--phone-servers 1] [--scaling-phones 20]
+[--scaling-seconds 30] [--only sqlite|postgresql] [--report-only]``
 
 The server under test is ``chameleons serve`` in a process of its own (as in a lab), on a
 fresh SQLite file, or a fresh PostgreSQL database on ``--database-url``'s server (default:
@@ -23,6 +23,9 @@ the phone page does) and its session's console socket (``/ws/wizard/sessions/{id
   human-paced run again with the phones' links and sockets on N more server processes on
   the same database, the wizards and consoles on the main one (the deployment of docs/deployment.md,
   "More than one server process"): each answer reaches its console through LISTEN/NOTIFY.
+- **scaling** (PostgreSQL, ``bench.server_hold.scaling``): phones walking sessions with no
+  pause at all for ``--scaling-seconds``, on one server process and then with the phones on
+  a second: the throughput's ratio (goal: >= 1.8x).
 
 Figures per scenario: the phone's HTTP round trip and **submit -> console update** (from
 just before the POST until the console's WebSocket delivers the event with the
@@ -59,7 +62,8 @@ from bench import server_hold
 from bench.server_load import Figures, Server, cpu_seconds, run_threads, scratch_postgres
 from bench.server_walk import BaselinePhone, Pace, Phone, RealServer, submit_measured, walk_session
 
-GOALS = {"think_update_p99_ms": 50.0, "burst_update_p99_ms": 500.0, "cpu_ratio": 1.2}
+GOALS = {"think_update_p99_ms": 50.0, "burst_update_p99_ms": 500.0, "cpu_ratio": 1.2,
+         "scaling_ratio": 1.8}  # fmt: skip
 SCENARIOS = {"think_instant": "think, instant wizard (stress)",
              "think_paced": "think, human-paced wizard", "burst": "burst"}  # fmt: skip
 # PostgreSQL only: the human-paced run with the phones on more server processes (docs/deployment.md,
@@ -257,6 +261,11 @@ def goals(report: dict[str, Any], hold_phones: int) -> dict[str, dict[str, bool]
             checks["burst CPU / submission <= 1.2x baseline"] = ratio <= GOALS["cpu_ratio"]
         if "hold" in ours:
             checks[f"{hold_phones} phones held"] = ours["hold"]["held"] >= hold_phones
+        if "scaling" in ours:
+            scaled = ours["scaling"]
+            clean = not (scaled["one"]["errors"] or scaled["two"]["errors"])
+            scales = scaled["throughput_ratio"] >= GOALS["scaling_ratio"]
+            checks["two processes: throughput >= 1.8x one"] = clean and scales
         if SPLIT in ours:
             split = ours[SPLIT]
             checks[f"think p99 <= 50 ms, phones on {split['phone_servers']} more process(es)"] = (
@@ -290,6 +299,9 @@ def parser() -> argparse.ArgumentParser:
     found.add_argument("--phone-servers", type=int, default=1,
                        help="PostgreSQL: also run the human-paced scenario with the phones "
                             "on this many more server processes (0: not).")  # fmt: skip
+    found.add_argument("--scaling-phones", type=int, default=20)
+    found.add_argument("--scaling-seconds", type=float, default=30.0,
+                       help="PostgreSQL: each run of the scaling scenario (0: not).")  # fmt: skip
     found.add_argument("--database-url", default=None, help="PostgreSQL server to use.")
     found.add_argument("--only", choices=("sqlite", "postgresql"), default=None,
                        help="Run one database only.")  # fmt: skip
@@ -308,8 +320,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         args.phones, args.think_max, args.wizard_think = 6, 0.3, 0.3
         args.hold_phones, args.hold_seconds = 10, 8.0
+        args.scaling_phones, args.scaling_seconds = 4, 3.0
     if args.burst_only:
-        args.hold_phones, args.phone_servers = 0, 0
+        args.hold_phones, args.phone_servers, args.scaling_seconds = 0, 0, 0.0
     print(f"{args.phones} phones, think time 0-{args.think_max:g} s, wizard 0 (stress) and "
           f"0-{args.wizard_think:g} s; hold {args.hold_phones} phones for "
           f"{args.hold_seconds:g} s; baseline: bare FastAPI + SQLAlchemy app with the same "
@@ -330,6 +343,9 @@ def main(argv: list[str] | None = None) -> int:
                 ours["hold"], baseline["hold"] = server_hold.hold_both(
                     url, baseline_url, args.hold_phones, args.hold_seconds, args.think_max,
                     args.seed, args.wizard_think)  # fmt: skip
+            if name == "PostgreSQL" and args.scaling_seconds > 0:
+                ours["scaling"] = server_hold.scaling(url, args.scaling_phones,
+                                                      args.scaling_seconds, args.seed)  # fmt: skip
             ours["load_before"], ours["load_after"] = load, os.getloadavg()
             report[name], report[f"{name} baseline"] = ours, baseline
             print_table(f"{name} (chameleons serve)", ours, baseline)
@@ -337,6 +353,8 @@ def main(argv: list[str] | None = None) -> int:
                         baseline)  # fmt: skip
             if args.hold_phones:
                 server_hold.print_hold(name, ours["hold"], baseline["hold"])
+            if "scaling" in ours:
+                server_hold.print_scaling(name, ours["scaling"])
             print(f"load average (1, 5, 15 min) before: {_load(load)}; after: "
                   f"{_load(ours['load_after'])}; {os.cpu_count()} CPUs")  # fmt: skip
     report["goals"] = goals(report, args.hold_phones)

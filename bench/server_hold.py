@@ -7,11 +7,17 @@ action), opening a new session with its sockets when one ends. Figures: submit -
 p50/p99, errors, sockets the server dropped, and the server process's CPU (share of one
 core over the window) and resident memory (now and its peak). The baseline holds the same
 number of sockets on ``bench.baseline_app`` and submits at the same think times.
+
+The scaling scenario (``scaling``, PostgreSQL): the same walk with no pause at all (phone
+and wizard instant, so the server is the limit), once on one server process and once with
+the phones on a second process (the deployment of docs/deployment.md, "More than one server
+process"); its figure is the second run's submissions per second over the first's.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import random
 import threading
 import time
@@ -34,7 +40,7 @@ class Window:
     """The measured window: opened by the barrier's action once every phone is set up."""
 
     seconds: float
-    pid: int
+    pids: tuple[int, ...]  # the server processes whose CPU is the window's (the first's memory)
     deadline: float = math.inf
     started: float = 0.0
     cpu_before: float = 0.0
@@ -45,15 +51,15 @@ class Window:
             self.together.wait()
         self.started = time.monotonic()
         self.deadline = self.started + self.seconds
-        self.cpu_before = cpu_seconds(self.pid)
+        self.cpu_before = sum(map(cpu_seconds, self.pids))
 
     def close(self, figures: Figures, phones: int, held: int, sockets: int) -> dict[str, Any]:
         wall = time.monotonic() - self.started
-        figures.server_cpu_s = cpu_seconds(self.pid) - self.cpu_before
+        figures.server_cpu_s = sum(map(cpu_seconds, self.pids)) - self.cpu_before
         figures.seconds = wall
         return {**figures.summary(), "phones": phones, "held": held, "sockets_opened": sockets,
                 "server_cpu_share": round(figures.server_cpu_s / wall, 3) if wall else 0.0,
-                **memory_mib(self.pid)}  # fmt: skip
+                **memory_mib(self.pids[0])}  # fmt: skip
 
 
 def _with_barrier(barrier: threading.Barrier, figures: Figures, setup: Callable[[], Any],
@@ -74,12 +80,15 @@ def _with_barrier(barrier: threading.Barrier, figures: Figures, setup: Callable[
 
 
 def hold_real(database_url: str, phones: int, seconds: float, think_max: float, seed: int,
-              wizard_think: float,
-              together: threading.Barrier | None = None) -> dict[str, Any]:  # fmt: skip
-    rows = phones * max(3, math.ceil(seconds / 4))  # sessions last longer than 4 s
-    with Server.chameleons(database_url, sessions=rows) as (server, setup):
+              wizard_think: float, together: threading.Barrier | None = None,
+              phone_servers: int = 0) -> dict[str, Any]:  # fmt: skip
+    # Paced sessions last longer than 4 s; instant ones (the scaling runs) about a second.
+    rows = phones * max(3, math.ceil(seconds / (4 if think_max else 0.5)))
+    with Server.chameleons(database_url, sessions=rows,
+                           phone_servers=phone_servers) as (server, setup):  # fmt: skip
         real = RealServer.of(server, setup)
-        figures, window = Figures(), Window(seconds, server.process.pid, together=together)
+        pids = tuple(s.process.pid for s in (server, *real.phone_servers))
+        figures, window = Figures(), Window(seconds, pids, together=together)
         barrier = threading.Barrier(phones, action=window.open)
         held: list[int] = []  # phones that were still there at the window's end
 
@@ -108,7 +117,7 @@ def hold_baseline(phones: int, seconds: float, think_max: float, seed: int,
                   database_url: str | None = None,
                   together: threading.Barrier | None = None) -> dict[str, Any]:  # fmt: skip
     with Server.baseline(database_url) as server:
-        figures, window = Figures(), Window(seconds, server.process.pid, together=together)
+        figures, window = Figures(), Window(seconds, (server.process.pid,), together=together)
         barrier = threading.Barrier(phones, action=window.open)
         held: list[int] = []
 
@@ -141,6 +150,34 @@ def hold_both(database_url: str, baseline_url: str, phones: int, seconds: float,
 
     run_threads([real, baseline])
     return found["real"], found["baseline"]
+
+
+def scaling(database_url: str, phones: int, seconds: float, seed: int) -> dict[str, Any]:
+    """``phones`` walking sessions with no pause for ``seconds`` on one server process, then
+    with the phones on a second one: each run's figures and the throughput's ratio."""
+    one = hold_real(database_url, phones, seconds, 0.0, seed, 0.0)
+    two = hold_real(database_url, phones, seconds, 0.0, seed, 0.0, phone_servers=1)
+    rates = [run["submissions"] / run["seconds"] if run["seconds"] else 0.0 for run in (one, two)]
+    return {"phones": phones, "one": one, "two": two,
+            "submissions_per_s": [round(rate, 1) for rate in rates],
+            "throughput_ratio": round(rates[1] / rates[0], 3) if rates[0] else 0.0}  # fmt: skip
+
+
+def print_scaling(name: str, found: dict[str, Any]) -> None:
+    one, two = found["one"], found["two"]
+    print(f"\n{name}: scaling, {found['phones']} phones with no pause, one server process "
+          "against two (the phones on the second)")  # fmt: skip
+    print(f"{'figure':<34} {'one process':>12} {'two':>10}")
+    rate_one, rate_two = found["submissions_per_s"]
+    print(f"{'phone submissions per second':<34} {rate_one:>12.1f} {rate_two:>10.1f}")
+    print(f"{'servers CPU, share of a core':<34} {one['server_cpu_share']:>12.2f} "
+          f"{two['server_cpu_share']:>10.2f}")  # fmt: skip
+    print(f"{'submit -> console state p99 ms':<34} {one['state_p99_ms']:>12.1f} "
+          f"{two['state_p99_ms']:>10.1f}")  # fmt: skip
+    print(f"{'errors':<34} {one['errors'] or 0} / {two['errors'] or 0}")
+    print(f"throughput, two processes over one: {found['throughput_ratio']:.2f}x "
+          f"({os.cpu_count()} CPUs on this machine, the load generator and PostgreSQL among "
+          "them)")  # fmt: skip
 
 
 def print_hold(name: str, ours: dict[str, Any], base: dict[str, Any]) -> None:

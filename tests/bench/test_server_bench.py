@@ -126,13 +126,24 @@ def test_a_goal_fails_on_slow_updates_and_on_an_error_in_any_scenario() -> None:
 def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
     tmp_path: Path,
 ) -> None:
-    """PostgreSQL's scenario of more server processes (its live fan-out): two phones walk
-    whole sessions on a phone server while their wizards and consoles use the main one."""
+    """PostgreSQL's scenarios of more server processes (its live fan-out): two phones walk
+    whole sessions on a phone server while their wizards and consoles use the main one;
+    and the scaling runs, on one process and then on two, each counted."""
     if not os.environ.get("TEST_DATABASE_URL"):
         pytest.skip("TEST_DATABASE_URL is not set: the phone processes are PostgreSQL's")
     stdout, report = _smoke_run(
-        tmp_path, "--hold-phones", "0", "--phone-servers", "1", "--only", "postgresql"
-    )
+        tmp_path, "--hold-phones", "0", "--phone-servers", "1", "--only", "postgresql",
+        "--scaling-phones", "2", "--scaling-seconds", "2",
+    )  # fmt: skip
+    scaled = report["PostgreSQL"]["scaling"]
+    for run in (scaled["one"], scaled["two"]):
+        assert run["errors"] == {}
+        assert run["submissions"] > 0
+        assert run["server_cpu_share"] > 0
+    rates = [run["submissions"] / run["seconds"] for run in (scaled["one"], scaled["two"])]
+    assert scaled["throughput_ratio"] == pytest.approx(rates[1] / rates[0], rel=1e-2)
+    assert "throughput, two processes over one" in stdout
+    assert "two processes: throughput >= 1.8x one" in report["goals"]["PostgreSQL"]
     split = report["PostgreSQL"][SPLIT]
     assert split["phone_servers"] == 1
     assert split["submissions"] == 2 * _submissions_per_session()
@@ -157,6 +168,16 @@ def test_the_goals_judge_the_console_state_and_the_cpu_beside_the_baseline() -> 
                   "SQLite baseline": {"burst": {"server_cpu_ms_per_submission": 10.0}}}  # fmt: skip
         assert goals(report, 0)["SQLite"][cpu] is met
     assert cpu not in goals({"SQLite": fast}, 0)["SQLite"]  # no baseline: not judged
+
+
+def test_the_scaling_goal_needs_the_ratio_and_no_error() -> None:
+    fast = {name: _scenario(10.0) for name in SCENARIOS}
+    goal = "two processes: throughput >= 1.8x one"
+    assert goal not in goals({"PostgreSQL": fast}, 0)["PostgreSQL"]  # not run: not judged
+    for ratio, errors, met in ((1.9, {}, True), (1.3, {}, False), (2.0, {"HTTP 500": 1}, False)):
+        scaled = {"throughput_ratio": ratio, "one": {"errors": {}}, "two": {"errors": errors}}
+        checked = goals({"PostgreSQL": {**fast, "scaling": scaled}}, 0)["PostgreSQL"]
+        assert checked[goal] is met, (ratio, errors)
 
 
 def test_the_phone_processes_goal_is_checked_when_they_ran() -> None:
