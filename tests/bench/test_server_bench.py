@@ -21,7 +21,7 @@ from chameleons.experiment.study import load_default_study
 
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
-SCENARIOS = ("think_instant", "think_paced", "burst")
+SCENARIOS = ("think_instant", "think_paced", "burst", "burst_loaded")
 
 
 def _smoke_run(tmp_path: Path, *options: str) -> tuple[str, dict[str, Any]]:
@@ -46,6 +46,11 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
     for scenario in ("think_instant", "think_paced"):
         assert real[scenario]["submissions"] == 2 * _submissions_per_session()
     assert real["burst"]["submissions"] == 2
+    # The burst under the standard load: two more phones walked sessions meanwhile.
+    assert real["burst_loaded"]["submissions"] == 2
+    assert real["burst_loaded"]["load"]["phones"] == 2
+    assert real["burst_loaded"]["load"]["submissions"] >= 2  # the burst waited for them
+    assert "burst p99 <= 500 ms under the standard load" in report["goals"]["SQLite"]
     for scenario in [real[name] for name in SCENARIOS] + [baseline[name] for name in SCENARIOS]:
         assert scenario["errors"] == {}
         assert scenario["dropped_sockets"] == {}
@@ -65,6 +70,7 @@ def test_the_server_benchmark_smoke_run(tmp_path: Path) -> None:
         assert hold["errors"] == {}
         assert hold["dropped_sockets"] == {}
     for line in ("think, instant wizard (stress)", "think, human-paced wizard",
+                 "burst, under the standard load",
                  "submit -> console state", "server CPU / submission", "hold, 2 phones",
                  "same moment", "load average",
                  "server RSS MiB (peak)", "goals:"):  # fmt: skip
@@ -121,6 +127,12 @@ def test_a_goal_fails_on_slow_updates_and_on_an_error_in_any_scenario() -> None:
     assert held["no error or dropped socket in any scenario"] is False
     short = goals({"SQLite": {**fast, "hold": {**hold, "held": 199}}}, 200)["SQLite"]
     assert short["200 phones held"] is False
+    loaded = goals({"SQLite": {**fast, "burst_loaded": _scenario(600.0)}}, 200)["SQLite"]
+    assert loaded["burst p99 <= 500 ms under the standard load"] is False
+    assert loaded["burst p99 <= 500 ms"] is True
+    troubled = {**fast, "burst_loaded": _scenario(10.0, {"load: wizard action: HTTP 500": 1})}
+    assert goals({"SQLite": troubled}, 200)["SQLite"][
+        "no error or dropped socket in any scenario"] is False  # fmt: skip
 
 
 def test_the_phones_on_a_second_server_process_reach_the_consoles_on_the_first(
