@@ -6,7 +6,8 @@ In order: ``bench.server_bench`` (think with an instant and a human-paced wizard
 hold; SQLite, and PostgreSQL when ``TEST_DATABASE_URL`` is set), ``bench.submission_calls``
 (a ranking submission's calls and statements against the bare app's, which the machine's
 load does not change), ``bench.console_dom_bench`` (a ranking until the wizard's console
-page in Chromium shows it, beside the console's message), ``bench.speech_bench``
+page in Chromium shows it, beside the console's message), ``bench.independent_check``
+(the bench's HTTP timing against wrk's), ``bench.speech_bench``
 (wizard click -> speech start, virtual robot and Furhat peer), ``bench.data_bench``
 (planning, export, analysis page: time and peak memory), ``bench.cli_bench`` (start-up
 CPU), ``bench.display_bench`` (the robot display's 3D head against its 2D face in
@@ -34,6 +35,7 @@ BENCHES: dict[str, list[str]] = {
     "server": ["bench.server_bench"],
     "calls": ["bench.submission_calls"],
     "console": ["bench.console_dom_bench"],
+    "check": ["bench.independent_check"],
     "speech": ["bench.speech_bench"],
     "data": ["bench.data_bench"],
     "cli": ["bench.cli_bench"],

@@ -7,7 +7,7 @@ match wrk's within the noise between the two A runs, its HTTP figures measure th
 and not the bench's client. (The console state the wizard sees has its own independent
 check: ``bench.console_dom_bench``, in Chromium.)
 
-    python -m bench.independent_check [--connections 1 8] [--seconds 10] [--json FILE]
+    python -m bench.independent_check [--connections 1 8] [--seconds 10] [--quick] [--json FILE]
 """
 
 from __future__ import annotations
@@ -104,13 +104,14 @@ def parser() -> argparse.ArgumentParser:
     found = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     found.add_argument("--connections", type=int, nargs="+", default=[1, 8])
     found.add_argument("--seconds", type=float, default=10.0)
+    found.add_argument("--quick", action="store_true", help="2 s a run")
     found.add_argument("--json", type=Path, help="write the figures to this file")
     return found
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
-    runs = compare(args.connections, args.seconds)
+    runs = compare(args.connections, 2.0 if args.quick else args.seconds)
     report(runs)
     if args.json:
         args.json.write_text(json.dumps(runs, indent=2))

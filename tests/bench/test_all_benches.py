@@ -22,6 +22,7 @@ def test_every_command_is_one_its_benchmark_accepts(quick: bool, tmp_path: Path)
         "server",
         "calls",
         "console",
+        "check",
         "speech",
         "data",
         "cli",
@@ -40,7 +41,8 @@ def test_the_list_names_the_commands_without_running_them() -> None:
     command = [sys.executable, "-m", "bench.all", "--list", "--quick", "--worker"]
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120,
                           check=True)  # fmt: skip
-    names = ("server_bench", "submission_calls", "console_dom_bench", "speech_bench",
+    names = ("server_bench", "submission_calls", "console_dom_bench", "independent_check",
+             "speech_bench",
              "data_bench", "cli_bench",
              "display_bench", "synchrony_bench", "worker_bench", "webcam_bench")  # fmt: skip
     assert done.stdout.splitlines() == [f"-m bench.{name} --quick" for name in names]
