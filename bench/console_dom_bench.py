@@ -22,7 +22,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from bench.server_burst import submit_ranking
+from bench.server_burst import at_the_ranking, submit_ranking
 from bench.server_load import Figures, Server, percentile
 from bench.server_walk import RealServer
 
@@ -61,14 +61,10 @@ def run(submissions: int) -> dict[str, Any]:
                              for name, value in setup["cookies"].items()])  # fmt: skip
         page = context.new_page()
         for _ in range(submissions):
-            phone = real.new_phone()
-            phone.wizard.start()
-            for to in ("discussion", "ranking"):
-                phone.wizard.advance(1, to)
+            [phone], [ranking] = at_the_ranking(real, 1)
             page.goto(f"{server.base}/wizard/sessions/{phone.wizard.session_id}")
             wait_for_js(page, "document.getElementById('bar-step')?.textContent === 'ranking'")
             page.evaluate(OBSERVE)
-            ranking = [item["id"] for item in phone.participant.state()["items"]]
             started = time.time()
             submit_ranking(phone, figures, ranking)
             wait_for_js(page, "window.__rankingShown !== undefined")

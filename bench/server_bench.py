@@ -60,8 +60,8 @@ from pathlib import Path
 from typing import Any
 
 from bench import server_hold
-from bench.server_burst import burst, burst_under_load, server_cpu
-from bench.server_load import Figures, Server, run_threads, scratch_postgres
+from bench.server_burst import burst, burst_under_load
+from bench.server_load import Figures, Server, run_threads, scratch_postgres, server_cpu
 from bench.server_walk import BaselinePhone, Pace, RealServer, walk_session
 
 GOALS = {"think_update_p99_ms": 50.0, "burst_update_p99_ms": 500.0, "cpu_ratio": 1.2,

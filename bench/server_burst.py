@@ -14,28 +14,13 @@ from __future__ import annotations
 import random
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from functools import partial
 from typing import Any
 
-from bench.server_load import Figures, Server, cpu_seconds, run_threads
+from bench.server_load import Figures, Server, run_threads, server_cpu
 from bench.server_walk import BaselinePhone, Pace, Phone, RealServer, submit_measured, walk_session
 
 WARM_UP_CAP_S = 30.0  # the load's first submissions come within its think time; at most this
-
-
-@contextmanager
-def server_cpu(server: Server, figures: Figures, *more: Server) -> Iterator[None]:
-    """The server processes' CPU time over the block (``more``: the phone servers beside
-    the main one), noted in ``figures`` (the wizard's actions of the think scenario are in
-    it too: per submission, it is the servers' cost of a whole session divided by the
-    phone's submissions)."""
-    pids = [s.process.pid for s in (server, *more)]
-    before, started = sum(map(cpu_seconds, pids)), time.monotonic()
-    yield
-    figures.server_cpu_s = sum(map(cpu_seconds, pids)) - before
-    figures.seconds = time.monotonic() - started
 
 
 def burst(
@@ -45,7 +30,7 @@ def burst(
     ``rounds`` times (new sessions each time), the CPU of all rounds added up."""
     figures, theirs = Figures(), Figures()
     for round_ in range(rounds):
-        waiting, rankings = _at_the_ranking(real, phones)
+        waiting, rankings = at_the_ranking(real, phones)
         beside = [BaselinePhone(base, f"burst-{round_}-{i}") for i in range(phones)]
         cpu, seconds = (figures.server_cpu_s, theirs.server_cpu_s), figures.seconds
         with server_cpu(real.server, figures), server_cpu(base, theirs):
@@ -66,7 +51,7 @@ def burst_under_load(
     as many baseline phones submit at the same think times); the burst's figures. The
     burst waits until the load has made about one submission a phone."""
     figures, theirs, busy, their_busy = Figures(), Figures(), Figures(), Figures()
-    waiting, rankings = _at_the_ranking(real, phones)
+    waiting, rankings = at_the_ranking(real, phones)
     beside = [BaselinePhone(base, f"loaded-burst-{i}") for i in range(phones)]
     walkers = [real.new_phone_alone() for _ in range(load)]
     loaders = [BaselinePhone(base, f"load-{i}") for i in range(load)]
@@ -107,7 +92,7 @@ def burst_under_load(
     return found, theirs.summary()
 
 
-def _at_the_ranking(real: RealServer, phones: int) -> tuple[list[Phone], list[list[str]]]:
+def at_the_ranking(real: RealServer, phones: int) -> tuple[list[Phone], list[list[str]]]:
     """``phones`` new sessions, each at its first ranking, and the items each will rank."""
     waiting = [real.new_phone() for _ in range(phones)]
     for phone in waiting:  # one after the other: the burst is the phones' alone

@@ -211,6 +211,19 @@ def _event_keys(message: Any) -> list[str]:
     return keys
 
 
+@contextmanager
+def server_cpu(server: Server, figures: Figures, *more: Server) -> Iterator[None]:
+    """The server processes' CPU time over the block (``more``: the phone servers beside
+    the main one), noted in ``figures`` (the wizard's actions of the think scenario are in
+    it too: per submission, it is the servers' cost of a whole session divided by the
+    phone's submissions)."""
+    pids = [s.process.pid for s in (server, *more)]
+    before, started = sum(map(cpu_seconds, pids)), time.monotonic()
+    yield
+    figures.server_cpu_s = sum(map(cpu_seconds, pids)) - before
+    figures.seconds = time.monotonic() - started
+
+
 def run_threads(jobs: Sequence[Callable[[], Any]], *, together: bool = False) -> None:
     """Each job in a thread of its own; with ``together`` they start at one barrier."""
     barrier = threading.Barrier(len(jobs)) if together else None

@@ -13,7 +13,7 @@ from sqlalchemy import Engine, func, select
 
 from chameleons.backend.db import build_sessionmaker
 from chameleons.backend.models import Event, QuestionnaireResponse
-from tests.backend.sessions.conftest import refused, to_negotiation
+from tests.backend.sessions.conftest import open_ranking, refused, to_negotiation
 from tests.support.bots import ParticipantBot, WizardBot, answers_for
 
 
@@ -21,13 +21,6 @@ def _count(engine: Engine, model: Any, **where: Any) -> int:
     with build_sessionmaker(engine)() as db:
         query = select(func.count()).select_from(model).filter_by(**where)
         return int(db.scalar(query) or 0)
-
-
-def _open_ranking(wizard: WizardBot) -> list[str]:
-    wizard.start()
-    wizard.advance(1, "discussion")
-    wizard.advance(1, "ranking")
-    return list(wizard.interaction(1)["presented_order"])
 
 
 NOT_PERMUTATIONS: dict[str, Callable[[list[str]], list[str]]] = {
@@ -42,7 +35,7 @@ NOT_PERMUTATIONS: dict[str, Callable[[list[str]], list[str]]] = {
 def test_a_ranking_that_is_not_a_permutation_is_refused(
     wizard: WizardBot, phone: ParticipantBot, engine: Engine
 ) -> None:
-    ranking = _open_ranking(wizard)
+    ranking = open_ranking(wizard)
     for case, mangle in NOT_PERMUTATIONS.items():
         message = refused(partial(phone.submit_ranking, 1, mangle(ranking)), 422)
         assert message == "The ranking must contain each of the 5 items exactly once.", case
@@ -70,7 +63,7 @@ def test_a_ranking_at_the_wrong_moment_is_refused(wizard: WizardBot, phone: Part
 def test_resubmitting_the_same_id_returns_the_stored_result_once(
     wizard: WizardBot, phone: ParticipantBot, engine: Engine
 ) -> None:
-    ranking = _open_ranking(wizard)
+    ranking = open_ranking(wizard)
     first = phone.submit_ranking(1, ranking, client_id="phone-id-0001")
     assert first["saved"] is True
     assert first["duplicate"] is False
@@ -85,7 +78,7 @@ def test_resubmitting_the_same_id_returns_the_stored_result_once(
 
 
 def test_a_bad_client_id_or_token_is_refused(wizard: WizardBot, phone: ParticipantBot) -> None:
-    ranking = _open_ranking(wizard)
+    ranking = open_ranking(wizard)
     refused(lambda: phone.submit_ranking(1, ranking, client_id="short"), 422)
     refused(lambda: phone.submit_ranking(1, ranking, client_id="has spaces in it"), 422)
     stranger = ParticipantBot(phone.http, "not-a-token")

@@ -47,6 +47,14 @@ def refused(call: Callable[[], Any], status: int) -> str:
     return str(caught.value.detail)
 
 
+def open_ranking(wizard: WizardBot) -> list[str]:
+    """Start the session and open interaction 1's ranking; its presented order."""
+    wizard.start()
+    wizard.advance(1, "discussion")
+    wizard.advance(1, "ranking")
+    return list(wizard.interaction(1)["presented_order"])
+
+
 def to_negotiation(wizard: WizardBot, phone: ParticipantBot, position: int = 1) -> list[str]:
     """Run the interaction up to negotiation with the presented order as the ranking."""
     if wizard.snapshot["state"] == "pending":

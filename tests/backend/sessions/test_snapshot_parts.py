@@ -16,6 +16,7 @@ from chameleons.backend.sessions.flow import load
 from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.study import default_study_path
+from tests.backend.sessions.conftest import open_ranking
 from tests.backend.wizard.test_retained_state import statements_here
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot, study_with_plan
 
@@ -70,13 +71,10 @@ def test_two_studies_with_the_same_plan_show_their_own_items(pi: StaffApi, engin
 def test_suggestions_are_read_once_an_interaction_can_have_any(
     app: FastAPI, wizard: WizardBot, phone: ParticipantBot, engine: Engine
 ) -> None:
-    wizard.start()
-    wizard.advance(1, "discussion")
-    wizard.advance(1, "ranking")
+    ranking = open_ranking(wizard)
     snapshot, statements = _snapshot(engine, wizard.session_id)
     assert not [s for s in statements if SUGGESTION_READ.search(s)], statements
     assert all(i["suggestions"] == [] for i in snapshot["interactions"])
-    ranking = list(wizard.interaction(1)["presented_order"])
     phone.submit_ranking(1, ranking)
     wizard.advance(1, "negotiation")  # the robot proposes its first suggestion
     snapshot, statements = _snapshot(engine, wizard.session_id)
