@@ -51,6 +51,7 @@ SUGGESTIONS_OF_INTERACTIONS = (
     .order_by(Suggestion.interaction_id, Suggestion.index)
 )
 STEPS_BEFORE_NEGOTIATION = STEPS[: STEPS.index("negotiation")]  # no suggestion yet
+ROW_NUMBER_OF_PLAN_ROW = select(PlanRow.row_number).where(PlanRow.id == bindparam("id"))
 KeyColumn = Literal["id", "phone_token"]  # how a flow is found: the session's id or link
 FlowRow = tuple[SessionRow, StudyRow, Participant]
 INTERACTIONS_QUERY = (
@@ -80,6 +81,10 @@ class Flow:
     # The session's newest event id, read with the session when the flow was loaded to be
     # read only (``_load``): nothing can change it then. None: ask ``events.last_id``.
     version: int | None = None
+    # Suggestions per interaction id, read once per flow (a wizard's decision asked four
+    # times: is it pending, what comes next, the snapshot, the console's buttons; issue
+    # 34); the negotiation, their one writer, keeps it current (``added``, ``removed``).
+    suggestions_memo: dict[int, list[Suggestion]] | None = None
 
     def newest_event_id(self) -> int:
         """The session's version: read with the session when it was loaded read-only, else
@@ -103,23 +108,41 @@ class Flow:
         return self.session.current_position >= len(self.interactions)
 
     def suggestions(self, interaction: Interaction) -> list[Suggestion]:
-        return list(self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": [interaction.id]}))
+        """The interaction's suggestions in order (a copy: change them through the
+        negotiation, which keeps the memo)."""
+        return list(self._suggestions()[interaction.id])
 
     def suggestions_by_interaction(self) -> dict[int, list[Suggestion]]:
-        """``suggestions`` of every interaction, in one query (the snapshot's). Only an
-        interaction that has reached its negotiation can have any (steps only move on,
-        ``sessions.states``; the robot proposes on entering it), so before the first
-        negotiation nothing is asked (issue 34)."""
-        found: dict[int, list[Suggestion]] = {i.id: [] for i in self.interactions}
-        ids = [i.id for i in self.interactions if i.state not in STEPS_BEFORE_NEGOTIATION]
-        if ids:
-            for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
-                found[suggestion.interaction_id].append(suggestion)
-        return found
+        """``suggestions`` of every interaction (copies), from one query (the snapshot's)."""
+        return {key: list(found) for key, found in self._suggestions().items()}
+
+    def _suggestions(self) -> dict[int, list[Suggestion]]:
+        # Only an interaction that has reached its negotiation can have any (steps only move
+        # on, ``sessions.states``; the robot proposes on entering it), so before the first
+        # negotiation nothing is asked (issue 34). One entering it later in this flow gets
+        # its first suggestion through ``suggestion_added``.
+        if self.suggestions_memo is None:
+            found: dict[int, list[Suggestion]] = {i.id: [] for i in self.interactions}
+            ids = [i.id for i in self.interactions if i.state not in STEPS_BEFORE_NEGOTIATION]
+            if ids:
+                for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
+                    found[suggestion.interaction_id].append(suggestion)
+            self.suggestions_memo = found
+        return self.suggestions_memo
+
+    def suggestion_added(self, suggestion: Suggestion) -> None:
+        """A suggestion this flow stored (it comes after the interaction's others)."""
+        self._suggestions()[suggestion.interaction_id].append(suggestion)
+
+    def suggestions_removed(self, removed: list[Suggestion]) -> None:
+        """Suggestions this flow deleted."""
+        for suggestion in removed:
+            self._suggestions()[suggestion.interaction_id].remove(suggestion)
 
     def row_number(self) -> int:
-        row = self.db.get(PlanRow, self.session.plan_row_id)
-        return row.row_number if row else 0
+        # The number only (the row's plan, a JSON list, is not needed here).
+        found = self.db.scalar(ROW_NUMBER_OF_PLAN_ROW, {"id": self.session.plan_row_id})
+        return found or 0
 
     def log(
         self,

@@ -44,6 +44,7 @@ def propose_next(flow: Flow, interaction: Interaction) -> Suggestion | None:
     )
     flow.db.add(suggestion)
     flow.db.flush()
+    flow.suggestion_added(suggestion)
     flow.log(
         "suggestion.proposed",
         source="server",
@@ -110,6 +111,7 @@ def undo(flow: Flow, position: int, index: int, now: datetime | None = None) -> 
     withdrawn = [s for s in suggestions if s.index > index]
     for later in withdrawn:
         flow.db.delete(later)
+    flow.suggestions_removed(withdrawn)
     if chosen.accepted:
         ranking = list(interaction.current_ranking or [])
         interaction.current_ranking = move(ranking, chosen.item, chosen.from_rank)

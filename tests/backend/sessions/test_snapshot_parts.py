@@ -1,26 +1,29 @@
 """The console's snapshot built with less work (issue 34) still says what the study and
 the database say: each interaction's items, names and expert order are its own study's
 (kept per study config and presented order), and the suggestions are read only once an
-interaction can have any."""
+interaction can have any, and once per change."""
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from fastapi import FastAPI
 from sqlalchemy import Engine
 
 from chameleons.backend.db import build_sessionmaker
-from chameleons.backend.sessions.flow import load
+from chameleons.backend.sessions import negotiation
+from chameleons.backend.sessions.flow import Flow, allowed_actions, load
 from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.study import default_study_path
-from tests.backend.sessions.conftest import open_ranking
+from tests.backend.sessions.conftest import open_ranking, to_negotiation
 from tests.backend.wizard.test_retained_state import statements_here
 from tests.support.bots import ParticipantBot, StaffApi, WizardBot, study_with_plan
 
-SUGGESTION_READ = re.compile(r"FROM suggestion\b", re.IGNORECASE)
+SUGGESTION_READ = re.compile(r"^\s*SELECT\b.*\bFROM suggestion\b", re.IGNORECASE | re.DOTALL)
 
 
 def _snapshot(engine: Engine, session_id: int) -> tuple[dict[str, Any], list[str]]:
@@ -82,3 +85,33 @@ def test_suggestions_are_read_once_an_interaction_can_have_any(
     first = snapshot["interactions"][0]
     assert [s["index"] for s in first["suggestions"]] == [1]
     assert first["suggestions"] == wizard.refresh()["interactions"][0]["suggestions"]
+
+
+def _suggestions_shown(snapshot: dict[str, Any]) -> list[list[tuple[int, bool | None]]]:
+    return [[(s["index"], s["accepted"]) for s in i["suggestions"]]
+            for i in snapshot["interactions"]]  # fmt: skip
+
+
+def test_a_decision_and_an_undo_read_the_suggestions_once(
+    app: FastAPI, wizard: WizardBot, phone: ParticipantBot, engine: Engine
+) -> None:
+    """The flow keeps the suggestions it read (a decision asked four times) and the
+    negotiation keeps that current: the one it proposes is added, the ones an undo
+    withdraws are gone, in the snapshot and the buttons alike."""
+    to_negotiation(wizard, phone)
+    changes: list[Callable[[Flow], object]] = [
+        partial(negotiation.decide, position=1, index=1, accepted=True),
+        partial(negotiation.undo, position=1, index=1),
+    ]
+    expected = [[[(1, True), (2, None)], [], []], [[(1, None)], [], []]]
+    for change, shown in zip(changes, expected, strict=True):
+        with build_sessionmaker(engine)() as db, statements_here() as statements:
+            flow = load(db, wizard.session_id)
+            change(flow)
+            snapshot = session_snapshot(flow, "", [])
+            actions = allowed_actions(flow)
+            db.commit()
+        assert len([s for s in statements if SUGGESTION_READ.search(s)]) == 1, statements
+        assert _suggestions_shown(snapshot) == shown
+        assert _suggestions_shown(_snapshot(engine, wizard.session_id)[0]) == shown
+        assert actions[0] == {"action": "decide", "position": 1, "index": shown[0][-1][0]}
