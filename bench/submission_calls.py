@@ -10,7 +10,9 @@ fresh SQLite file each) with no WebSocket open, so nothing is pushed and nothing
 a timer; the burst bench measures the rest. Every thread but this one is counted (the
 client's own calls run on this thread), from the request's arrival to its answer. The real
 app's ranking is counted at the first interaction and at the last, whose session has more
-stored (suggestions, answers).
+stored (suggestions, answers). A wizard's decision (interaction 1's first suggestion:
+the decision, the next proposal, their two events) is counted too: the wizards' actions
+were the largest share of a held server's CPU (docs/performance.md, "Where the rest is").
 
     python -m bench.submission_calls [--submissions 30] [--quick] [--json FILE]
 """
@@ -96,10 +98,11 @@ def _accept(rng: random.Random, _suggestion: Any) -> bool:
     return rng.random() < 0.5
 
 
-def count_real(submissions: int, tmp: Path, position: int = 1) -> Counts:
+def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = False) -> Counts:
     """``submissions`` sessions, each walked to interaction ``position``'s ranking (the
     interactions before it done in full: ranked, negotiated, questionnaires answered);
-    then each phone's ranking, counted."""
+    then each phone's ranking, counted. With ``decision``, the ranking is not counted; the
+    wizard's decision on that interaction's first suggestion is."""
     from fastapi.testclient import TestClient
 
     from bench.server_load import _prepare
@@ -133,6 +136,14 @@ def count_real(submissions: int, tmp: Path, position: int = 1) -> Counts:
             for to in ("discussion", "ranking"):
                 wizard.advance(position, to)
             waiting.append((phone, [item["id"] for item in phone.state()["items"]]))
+            if decision:
+                phone.submit_ranking(position, waiting[-1][1])
+                wizard.advance(position, "negotiation")
+                with counter.counting():
+                    wizard.decide(position, 1, True)
+        if decision:
+            app.state.engine.dispose()
+            return counter.counts
         # A phone has no staff login: the staff cookie the client kept goes (else every
         # counted request would decode it). The client's own calls are on this thread.
         http.cookies.clear()
@@ -170,18 +181,27 @@ def count_bare(submissions: int, tmp: Path) -> Counts:
 POSITIONS = (1, 3)  # the default study's first and last interaction
 
 
-def measure(submissions: int, positions: tuple[int, ...] = POSITIONS) -> dict[str, Any]:
+def measure(
+    submissions: int, positions: tuple[int, ...] = POSITIONS, decision: bool = True
+) -> dict[str, Any]:
     """The real app's ranking at each of ``positions`` (the first: no suggestion or
-    interaction's answers stored yet; a later one reads those of the ones before), and the
-    bare app's submission, which is the same at every position."""
+    interaction's answers stored yet; a later one reads those of the ones before), the
+    bare app's submission, which is the same at every position, and (``decision``) a
+    wizard's decision."""
     with tempfile.TemporaryDirectory(prefix="chameleons-calls-") as tmp:
         bare = count_bare(submissions, Path(tmp)).per(submissions)
         found: dict[str, Any] = {"submissions": submissions, "bare": bare, "positions": {}}
         for position in positions:
             real = count_real(submissions, Path(tmp), position).per(submissions)
-            ratio = {key: real[key] / bare[key] for key in real if bare[key]}
-            found["positions"][str(position)] = {"real": real, "ratio": ratio}
+            found["positions"][str(position)] = _compared(real, bare)
+        if decision:
+            real = count_real(submissions, Path(tmp), 1, decision=True).per(submissions)
+            found["decision"] = _compared(real, bare)
     return found
+
+
+def _compared(real: dict[str, float], bare: dict[str, float]) -> dict[str, Any]:
+    return {"real": real, "ratio": {key: real[key] / bare[key] for key in real if bare[key]}}
 
 
 def report(result: dict[str, Any], out: Callable[[str], Any] = print) -> None:
@@ -194,6 +214,13 @@ def report(result: dict[str, Any], out: Callable[[str], Any] = print) -> None:
         shown = "".join(f"{found['real'][key]:12.1f} ({found['ratio'].get(key, 0):4.2f}x)"
                         for found in positions.values())  # fmt: skip
         out(f"{label:14}{result['bare'][key]:10.1f}{shown}")
+    if "decision" in result:
+        found = result["decision"]
+        out("A wizard's decision (interaction 1, suggestion 1; the next proposal; two events):")
+        for key, label in (("python_calls", "Python calls"), ("c_calls", "C calls"),
+                           ("statements", "statements")):  # fmt: skip
+            out(f"{label:14}{found['real'][key]:10.1f} ({found['ratio'].get(key, 0):4.2f}x "
+                "the bare submission)")  # fmt: skip
     out("(x: the real app's figure over the bare app's)")
     out("* with the profiler's own cost: a rough figure; the counts are the measure.")
 

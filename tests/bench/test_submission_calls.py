@@ -26,9 +26,15 @@ def test_both_apps_are_counted_and_compared() -> None:
         )
     # Interaction 2's snapshot reads the suggestions interaction 1 had; the first has none.
     assert second["real"]["statements"] > first["real"]["statements"]
+    # The decision: the session and its interactions, the suggestions (read once), the
+    # decision's update, the next proposal, two events.
+    decision = result["decision"]["real"]
+    assert decision["statements"] >= 7
+    assert decision["python_calls"] > first["real"]["python_calls"]  # two events, not one
     lines: list[str] = []
     submission_calls.report(result, lines.append)
     assert any(line.startswith("Python calls") for line in lines)
+    assert any(line.startswith("A wizard's decision") for line in lines)
 
 
 def test_the_calling_thread_is_not_counted_and_others_are() -> None:
