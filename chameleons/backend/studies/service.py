@@ -123,6 +123,7 @@ def next_free_row(db: Session, study: StudyRow) -> PlanRow | None:
         select(PlanRow)
         .where(PlanRow.study_id == study.id, PlanRow.id.not_in(taken))
         .order_by(freed.desc(), PlanRow.row_number)
+        .limit(1)  # one row, not every free row's plan read and dropped (issue 34)
     )
     return db.scalars(query).first()
 
