@@ -102,8 +102,8 @@ from chameleons.rehearsal.script import SCRIPTS
     show_default=True,
     metavar="SECONDS",
     help="Each interaction's discussion lasts at least this long (the simulated face is "
-    "recorded meanwhile), so its synchrony can be measured: it needs the window plus the "
-    "lag (36 s by default), e.g. --hold 45.",
+    "recorded meanwhile), so its synchrony can be measured: it needs the first second "
+    "(left out), the window and the lag (37 s by default), e.g. --hold 45.",
 )
 @click.option(
     "--simulate-face/--no-simulate-face",

@@ -4,6 +4,8 @@ corrected for pseudo-synchrony, gaps and the robot's speech are taken into accou
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -102,6 +104,25 @@ def test_a_robot_that_does_not_move_at_all_gives_a_reason() -> None:
     assert "did not move" in result.detail
 
 
+def test_a_still_robot_that_ends_its_switch_in_the_recording_is_still() -> None:
+    """Seen in a rehearsal: the still interaction's recording began with the last two
+    frames of the robot's 0.3 s crossfade from the natural condition before (a head 0.002
+    rad off neutral). That was "moving", and it gave a mimicry lag and no sync lag with no
+    reason. The first second (``settle_s``) is left out, so the robot is still."""
+    participant = smooth_face(16, SECONDS)
+    robot = still(participant)
+    values = robot.values.copy()
+    values[:2, robot.channels.index("head_yaw")] = [-0.0023, -0.0011]  # the fade's end
+    switching = FaceStream(robot.times, values, robot.channels)
+    result = measure_synchrony(participant, switching, [], QUICK)
+    assert result.reason == "robot_still"
+    assert result.sync_lag_s is None
+    assert result.mimicry_lag_s is None
+    unsettled = measure_synchrony(participant, switching, [], replace(QUICK, settle_s=0.0))
+    assert unsettled.reason is None  # without it: "moving", as in the rehearsal
+    assert unsettled.channels == ["head_yaw"]
+
+
 def test_mimicry_of_the_robot_is_found_and_surrogate_corrected() -> None:
     robot = smooth_face(7, SECONDS + 5)  # a natural robot: its own movement
     participant = delayed(robot, 1.5, noise=0.3, seed=7)  # the participant follows at 1.5 s
@@ -169,7 +190,7 @@ def test_too_short_a_recording_says_how_long_it_needs() -> None:
     participant = smooth_face(13, 20.0)
     result = measure_synchrony(participant, delayed(participant, 4.0), [], QUICK)
     assert result.reason == "too_short"
-    assert "at least 26 s" in result.detail
+    assert "at least 27 s" in result.detail  # the first second, the window, the lag
 
 
 def test_segment_shuffles_never_keep_two_segments_of_the_same_time() -> None:
@@ -189,7 +210,7 @@ def test_the_result_records_how_it_was_computed() -> None:
     participant = smooth_face(14, SECONDS)
     result = measure_synchrony(participant, delayed(participant, 4.0), [], QUICK)
     assert result.params["window_s"] == 20.0
-    assert result.params["method_version"] == 1
+    assert result.params["method_version"] == 2
     assert result.lags_s[0] == -6.0
     assert result.lags_s[-1] == 6.0
     assert len(result.curve) == len(result.lags_s) == len(result.surrogate_high)
@@ -202,7 +223,7 @@ def test_a_short_interaction_still_gets_a_within_interaction_baseline() -> None:
     result = measure_synchrony(participant, robot, [], SyncParams(), 4.0)
     assert result.surrogate_kind == "segments"
     assert result.surrogate_count == 40
-    assert result.segment_s == pytest.approx(12.48)  # 1248 samples // 4 at 25 Hz
+    assert result.segment_s == pytest.approx(12.24)  # 1224 samples // 4 at 25 Hz (after settle_s)
     assert result.detail == ""
     assert result.mimicry_r is not None
     assert result.sync_band_r is not None

@@ -69,7 +69,7 @@ def test_synchrony_is_computed_in_the_background_when_the_recording_stops(
         row = repository.stored(db, [target])[target]
     # A face fed for two seconds: recorded and measured, too short for a window.
     assert row.reason == "too_short"
-    assert "synchrony needs at least 36 s" in row.detail
+    assert "synchrony needs at least 37 s" in row.detail  # 1 s settling, 30 s, 6 s
     assert row.params["window_s"] == 30.0
     assert set(row.recordings)  # the indexed recordings it read
 

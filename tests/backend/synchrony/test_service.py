@@ -68,7 +68,7 @@ def test_a_number_traces_back_to_its_parameters_and_pseudo_pairs(
     row = rows[copy_id]
     assert row.params["window_s"] == 20.0
     assert row.params["seed"] == copy_id
-    assert row.params["method_version"] == 1
+    assert row.params["method_version"] == 2
     own = {r.id for r in db_session.scalars(select(Recording).where(
         Recording.interaction_id == copy_id))}  # fmt: skip
     assert set(row.recordings) == own

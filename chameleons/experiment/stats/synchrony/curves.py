@@ -110,11 +110,13 @@ def surrogate_curves(
 
 
 def own_grid(stream: FaceStream, channels: list[str], params: SyncParams) -> Array:
-    """A stream on a grid from its own first frame (pseudo-pairs are aligned by start)."""
+    """A stream on a grid from its own first frame after the settling time (pseudo-pairs
+    are aligned by start)."""
     chosen = stream.select(channels)
-    if chosen.empty:
+    if chosen.empty or chosen.end <= chosen.start + params.settle_s:
         return np.empty((0, len(channels)))
-    return resample(chosen, grid(chosen.start, chosen.end, params.rate_hz), params.max_gap_s)
+    times = grid(chosen.start + params.settle_s, chosen.end, params.rate_hz)
+    return resample(chosen, times, params.max_gap_s)
 
 
 def moving(values: Array, params: SyncParams) -> Bools:

@@ -149,8 +149,9 @@ def measure_synchrony(
         return _missing(result, "too_short", (
             f"The two recordings overlap for {result.duration_s:.1f} s; synchrony needs at "
             f"least {params.minimum_s:g} s (a {params.window_s:g} s window and a "
-            f"{params.max_lag_s:g} s lag)."))  # fmt: skip
-    times = grid(start, end, params.rate_hz)
+            f"{params.max_lag_s:g} s lag after the first {params.settle_s:g} s, which is "
+            "left out: the robot's switch from the condition before)."))  # fmt: skip
+    times = grid(start + params.settle_s, end, params.rate_hz)
     p = resample(participant, times, params.max_gap_s)
     r = resample(robot, times, params.max_gap_s)
     names = [c for c in participant.channels if c in set(robot.channels)]
