@@ -21,6 +21,9 @@ from chameleons.settings import Settings
 # interaction's discussion is held HOLD seconds, enough for a 10 s window and the 6 s lag,
 # and for the within-interaction baseline's four shuffled segments of at least 6 s.
 HOLD = 30.0
+# One participant: the default study's plan gives each participant every condition once
+# (still, natural, copy), so one session covers every behaviour in half the time of two.
+PARTICIPANTS = 1
 
 
 @pytest.mark.slow
@@ -29,8 +32,8 @@ def test_a_rehearsal_exports_synchrony_for_every_recorded_interaction(tmp_path: 
                         sync_window_s=10.0, sync_increment_s=5.0, sync_surrogates=20,
                         _env_file=None)  # fmt: skip
     with embedded_system(settings) as target:
-        summary = rehearse(target, Options(2, seed=3, script="brief", hold=HOLD))
-    assert len(summary.codes) == 2
+        summary = rehearse(target, Options(PARTICIPANTS, seed=3, script="brief", hold=HOLD))
+    assert len(summary.codes) == PARTICIPANTS
     out = tmp_path / "export"
     env = {"CHAMELEONS_DATABASE_URL": settings.effective_database_url}
     result = CliRunner().invoke(cli, ["export", "--include-rehearsal", "--out", str(out)],
@@ -38,9 +41,9 @@ def test_a_rehearsal_exports_synchrony_for_every_recorded_interaction(tmp_path: 
     assert result.exit_code == 0, result.output
     with (out / "interactions.csv").open(encoding="utf-8", newline="") as handle:
         rows = list(csv.DictReader(handle))
-    assert len(rows) == 6
+    assert len(rows) == 3 * PARTICIPANTS
+    assert sorted(r["behaviour"] for r in rows) == ["copy", "natural", "still"] * PARTICIPANTS
     copies = [r for r in rows if r["behaviour"] == "copy"]
-    assert len(copies) == 2
     for row in rows:
         assert row["sync_missing"] not in ("no_recording", "not_computed"), row
         if row["sync_missing"]:
