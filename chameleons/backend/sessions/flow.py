@@ -83,7 +83,8 @@ class Flow:
     version: int | None = None
     # Suggestions per interaction id, read once per flow (a wizard's decision asked four
     # times: is it pending, what comes next, the snapshot, the console's buttons; issue
-    # 34); the negotiation, their one writer, keeps it current (``added``, ``removed``).
+    # 34); the negotiation, their one writer, keeps it current (``suggestion_added``,
+    # ``suggestions_removed``).
     suggestions_memo: dict[int, list[Suggestion]] | None = None
 
     def newest_event_id(self) -> int:
