@@ -19,6 +19,8 @@ GONE_KEY = "live_gone_sessions"
 RESYNC_KEY = "live_resync_sessions"
 RETAIN_KEY = "live_retained"
 NOTICES_KEY = "live_notices"  # (channel, message) pairs
+KEEP_KEY = "kept_after_commit"  # (store, key, value) triples
+HUB_KEY = "live_hub"  # in ``Session.info``: the hub a session publishes to after commits
 GONE: dict[str, Any] = {"type": "gone"}
 
 
@@ -34,6 +36,15 @@ def retain_after_commit(db: Session, channel: str, view: str, value: dict[str, A
     (``LiveHub.retain``). The views a commit retains replace all the channel kept before:
     a view this commit did not make is no longer the latest."""
     db.info.setdefault(RETAIN_KEY, {}).setdefault(channel, {})[view] = value
+
+
+def keep_after_commit(db: Session, store: dict[Any, Any], key: Any, value: Any) -> None:
+    """After the commit (never on rollback), ``store[key] = value``: a process cache of
+    facts that hold once committed (sessions.snapshot's settled suggestions). Only sessions
+    with a live hub are committed through the listener that does it (``unit_of_work``);
+    in others nothing is kept, which a cache can afford."""
+    if HUB_KEY in db.info:
+        db.info.setdefault(KEEP_KEY, []).append((store, key, value))
 
 
 def announce_rewritten(db: Session, session_ids: set[int]) -> None:

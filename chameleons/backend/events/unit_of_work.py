@@ -24,6 +24,8 @@ from chameleons.backend.events.hub import RESYNC, LiveHub, session_channel
 from chameleons.backend.events.repository import (
     GONE,
     GONE_KEY,
+    HUB_KEY,
+    KEEP_KEY,
     NOTICES_KEY,
     OUTBOX_KEY,
     RESYNC_KEY,
@@ -38,7 +40,6 @@ def get_hub(request: Request) -> LiveHub:
     return hub
 
 
-HUB_KEY = "live_hub"  # in ``Session.info``: the hub a session publishes to after commits
 _listening = threading.Lock()
 _listens = False
 
@@ -69,6 +70,8 @@ def _after_commit(session: Session) -> None:
     hub: LiveHub | None = session.info.get(HUB_KEY)
     if hub is None:
         return
+    for store, key, value in session.info.pop(KEEP_KEY, []):
+        store[key] = value
     # Retained first: a reader woken by the events below finds the state they made.
     for channel, value in session.info.pop(RETAIN_KEY, {}).items():
         hub.retain(channel, value)
@@ -89,7 +92,7 @@ def _after_commit(session: Session) -> None:
 def _after_rollback(session: Session) -> None:
     if HUB_KEY not in session.info:
         return
-    for key in (OUTBOX_KEY, GONE_KEY, RESYNC_KEY, RETAIN_KEY, NOTICES_KEY):
+    for key in (OUTBOX_KEY, GONE_KEY, RESYNC_KEY, RETAIN_KEY, NOTICES_KEY, KEEP_KEY):
         session.info.pop(key, None)
 
 

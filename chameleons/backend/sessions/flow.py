@@ -8,6 +8,7 @@ now": the 409 sentences and the wizard console's buttons both come from it.
 from __future__ import annotations
 
 import functools
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
 from typing import Literal
@@ -113,8 +114,17 @@ class Flow:
         negotiation, which keeps the memo)."""
         return list(self._suggestions()[interaction.id])
 
-    def suggestions_by_interaction(self) -> dict[int, list[Suggestion]]:
-        """``suggestions`` of every interaction (copies), from one query (the snapshot's)."""
+    def suggestions_by_interaction(
+        self, known: Collection[int] = ()
+    ) -> dict[int, list[Suggestion]]:
+        """``suggestions`` of every interaction (copies), from one query (the snapshot's).
+        ``known``: interaction ids whose suggestions the caller has already (settled ones,
+        ``sessions.snapshot``): not read unless this flow has read them all already; their
+        lists are then empty, and the partial read is not kept."""
+        if self.suggestions_memo is None and known:
+            found: dict[int, list[Suggestion]] = {i.id: [] for i in self.interactions}
+            self._read_suggestions(found, known)
+            return found
         return {key: list(found) for key, found in self._suggestions().items()}
 
     def _suggestions(self) -> dict[int, list[Suggestion]]:
@@ -124,12 +134,18 @@ class Flow:
         # its first suggestion through ``suggestion_added``.
         if self.suggestions_memo is None:
             found: dict[int, list[Suggestion]] = {i.id: [] for i in self.interactions}
-            ids = [i.id for i in self.interactions if i.state not in STEPS_BEFORE_NEGOTIATION]
-            if ids:
-                for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
-                    found[suggestion.interaction_id].append(suggestion)
+            self._read_suggestions(found)
             self.suggestions_memo = found
         return self.suggestions_memo
+
+    def _read_suggestions(
+        self, found: dict[int, list[Suggestion]], known: Collection[int] = ()
+    ) -> None:
+        ids = [i.id for i in self.interactions
+               if i.state not in STEPS_BEFORE_NEGOTIATION and i.id not in known]  # fmt: skip
+        if ids:
+            for suggestion in self.db.scalars(SUGGESTIONS_OF_INTERACTIONS, {"ids": ids}):
+                found[suggestion.interaction_id].append(suggestion)
 
     def suggestion_added(self, suggestion: Suggestion) -> None:
         """A suggestion this flow stored (it comes after the interaction's others)."""

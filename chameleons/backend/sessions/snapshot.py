@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from chameleons.backend.db import is_read_only
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, session_channel
 from chameleons.backend.models import Interaction, Suggestion
@@ -14,7 +15,7 @@ from chameleons.backend.sessions.answers import (
 )
 from chameleons.backend.sessions.flow import Flow, allowed_actions, undo_deadline
 from chameleons.backend.sessions.pausing import paused_view
-from chameleons.backend.sessions.states import allowed_sentence
+from chameleons.backend.sessions.states import STEPS, allowed_sentence
 from chameleons.backend.studies.specs import item_key
 from chameleons.experiment.model import Condition
 from chameleons.worker.behaviours.copy_params import in_words
@@ -33,8 +34,12 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
     """``phones``: the phones on the link now, oldest first (``phone.devices.phones``)."""
     session = flow.session
     actions = allowed_actions(flow)
-    # One query each for every interaction's suggestions and answers (not one per part).
-    suggestions = flow.suggestions_by_interaction()
+    # One query each for every interaction's suggestions and answers (not one per part);
+    # settled interactions' suggestions are kept (``_SETTLED``) and not read again.
+    settled = _settled_parts(flow)
+    suggestions = flow.suggestions_by_interaction(known=settled.keys())
+    shown = {i.id: settled.get(i.id) or _suggestion_parts(flow, i, suggestions[i.id])
+             for i in flow.interactions}  # fmt: skip
     done = answered_by_position(flow)
     return {
         "id": session.id,
@@ -64,7 +69,7 @@ def session_snapshot(flow: Flow, base_url: str, phones: list[dict[str, Any]]) ->
         "suggestions_per_interaction": flow.spec.suggestions_per_interaction,
         "condition_details": [_condition(c) for c in flow.spec.conditions],
         "interactions": [
-            _interaction(flow, i, suggestions[i.id], done.get(i.position, set()))
+            _interaction(flow, i, shown[i.id], done.get(i.position, set()))
             for i in flow.interactions
         ],
         "final_questionnaire": _progress(flow, FINAL_POSITION, done.get(FINAL_POSITION, set())),
@@ -130,7 +135,7 @@ def behaviour_summary(condition: Condition) -> str:
 
 
 def _interaction(
-    flow: Flow, interaction: Interaction, suggestions: list[Suggestion], done: set[str]
+    flow: Flow, interaction: Interaction, suggestions: SuggestionParts, done: set[str]
 ) -> dict[str, Any]:
     task_name, items, expert_order = _task_parts(flow, interaction)
     return {
@@ -159,8 +164,8 @@ def _interaction(
         "final_ranking": interaction.final_ranking,
         "started_at": _time(interaction.started_at),
         "ended_at": _time(interaction.ended_at),
-        "suggestions": [_suggestion(flow, interaction, s) for s in suggestions],
-        "accepted": sum(1 for s in suggestions if s.accepted),
+        "suggestions": list(suggestions[0]),
+        "accepted": suggestions[1],
         "questionnaires": _progress(flow, interaction.position, done),
     }
 
@@ -187,6 +192,48 @@ def _task_parts(flow: Flow, interaction: Interaction) -> TaskParts:
             _TASK_PARTS.clear()
         _TASK_PARTS[key] = found
     return found
+
+
+# An interaction's suggestions are final once it is past its negotiation (they are
+# proposed, decided and undone only in it: sessions.negotiation). Their parts are kept per
+# (session link, interaction) once that state is committed, so a snapshot reads only the
+# suggestions of an interaction still in negotiation (issue 34). Kept after the commit, not
+# before: a rolled-back advance to the questionnaire leaves an undo possible. The link is
+# the key because ids may be reused after a withdrawal deletes a session; links are not.
+SuggestionParts = tuple[list[dict[str, Any]], int]  # the suggestions shown, how many accepted
+SETTLED_STEPS = frozenset(STEPS[STEPS.index("negotiation") + 1 :])
+_SETTLED: dict[tuple[str, int], SuggestionParts] = {}
+_SETTLED_MAX = 4096  # a server's sessions x interactions; emptied when full
+NO_SUGGESTIONS: SuggestionParts = ([], 0)  # shared: ``_interaction`` copies the list
+
+
+def _settled_parts(flow: Flow) -> dict[int, SuggestionParts]:
+    token = flow.session.phone_token
+    found = {}
+    for interaction in flow.interactions:
+        if interaction.state in SETTLED_STEPS:
+            parts = _SETTLED.get((token, interaction.id))
+            if parts is not None:
+                found[interaction.id] = parts
+    return found
+
+
+def _suggestion_parts(
+    flow: Flow, interaction: Interaction, suggestions: list[Suggestion]
+) -> SuggestionParts:
+    if not suggestions and interaction.state not in SETTLED_STEPS:
+        return NO_SUGGESTIONS  # before its negotiation (or at its very start)
+    parts = ([_suggestion(flow, interaction, s) for s in suggestions],
+             sum(1 for s in suggestions if s.accepted))  # fmt: skip
+    if interaction.state in SETTLED_STEPS:
+        if len(_SETTLED) >= _SETTLED_MAX:
+            _SETTLED.clear()
+        key = (flow.session.phone_token, interaction.id)
+        if is_read_only(flow.db):  # a committed state
+            _SETTLED[key] = parts
+        else:
+            events.keep_after_commit(flow.db, _SETTLED, key, parts)
+    return parts
 
 
 def _suggestion(flow: Flow, interaction: Interaction, suggestion: Suggestion) -> dict[str, Any]:

@@ -1,10 +1,12 @@
 """The console's snapshot built with less work (issue 34) still says what the study and
 the database say: each interaction's items, names and expert order are its own study's
 (kept per study config and presented order), and the suggestions are read only once an
-interaction can have any, and once per change."""
+interaction can have any, once per change, and no more once the interaction is settled
+(kept after the commit that settled it, never before)."""
 
 from __future__ import annotations
 
+import contextlib
 import re
 from collections.abc import Callable
 from functools import partial
@@ -14,7 +16,8 @@ from fastapi import FastAPI
 from sqlalchemy import Engine
 
 from chameleons.backend.db import build_sessionmaker
-from chameleons.backend.sessions import negotiation
+from chameleons.backend.events.unit_of_work import write_session
+from chameleons.backend.sessions import negotiation, service, snapshot
 from chameleons.backend.sessions.flow import Flow, allowed_actions, load
 from chameleons.backend.sessions.snapshot import session_snapshot
 from chameleons.backend.studies.specs import item_key
@@ -115,3 +118,41 @@ def test_a_decision_and_an_undo_read_the_suggestions_once(
         assert _suggestions_shown(snapshot) == shown
         assert _suggestions_shown(_snapshot(engine, wizard.session_id)[0]) == shown
         assert actions[0] == {"action": "decide", "position": 1, "index": shown[0][-1][0]}
+
+
+def _settled_kept(token: str) -> list[Any]:
+    return [parts for (link, _id), parts in snapshot._SETTLED.items() if link == token]
+
+
+def test_a_settled_interactions_suggestions_are_kept_once_committed(
+    app: FastAPI, wizard: WizardBot, phone: ParticipantBot, engine: Engine
+) -> None:
+    """Past its negotiation an interaction's suggestions are final, so its shown parts are
+    kept and later snapshots read no suggestion. An advance to the questionnaire that is
+    rolled back keeps nothing: the negotiation goes on, and the undo after it shows."""
+    to_negotiation(wizard, phone)
+    wizard.negotiate(1, lambda _suggestion: True)
+    factory = build_sessionmaker(engine)
+    with contextlib.suppress(RuntimeError), write_session(factory, app.state.live_hub) as db:
+        flow = load(db, wizard.session_id)
+        service.advance(flow, 1, "questionnaire")
+        assert _suggestions_shown(session_snapshot(flow, "", []))[0][-1] == (3, True)
+        raise RuntimeError("rolled back")  # e.g. the commit failed
+    assert _settled_kept(wizard.token) == []
+    wizard.undo(1, 3)
+    wizard.decide(1, 3, False)  # the last decision taken back and made the other way
+    shown = _suggestions_shown(wizard.advance(1, "questionnaire"))
+    assert shown[0] == [(1, True), (2, True), (3, False)]
+    assert len(_settled_kept(wizard.token)) == 1  # kept after the advance's commit
+    later, statements = _snapshot(engine, wizard.session_id)
+    assert not [s for s in statements if SUGGESTION_READ.search(s)], statements
+    assert _suggestions_shown(later) == shown
+    assert later["interactions"][0]["accepted"] == 2
+    kept = snapshot._SETTLED.copy()
+    snapshot._SETTLED.clear()  # as after a restart: read again, and the same
+    try:
+        fresh, statements = _snapshot(engine, wizard.session_id)
+    finally:
+        snapshot._SETTLED.update(kept)
+    assert [s for s in statements if SUGGESTION_READ.search(s)]
+    assert fresh["interactions"] == later["interactions"]
