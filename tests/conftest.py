@@ -148,7 +148,11 @@ BROWSER_FIXTURES = {
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Every test that drives Chromium is marked ``browser``: Playwright's sync API keeps an
     asyncio loop running in the main thread for the rest of the process, so `make test`
-    runs browser tests in a pytest run of their own (``-m browser``)."""
+    runs browser tests in a pytest run of their own (``-m browser``). A run that selects
+    both (a plain ``pytest``, as on a Windows lab PC) runs the browser tests last: a test
+    that calls ``asyncio.run`` after one of them in the same process fails ("cannot be
+    called from a running event loop"). Stable, so the order within each kind stays."""
     for item in items:
         if BROWSER_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.browser)
+    items.sort(key=lambda item: item.get_closest_marker("browser") is not None)
