@@ -110,9 +110,11 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
     from chameleons.backend.sessions.bot import ParticipantBot, StaffApi, WizardBot
     from chameleons.settings import Settings
 
-    url = f"sqlite:///{tmp / f'real-{position}.sqlite3'}"
+    # A database of its own per count: the decision's is not the ranking's at position 1.
+    name = f"{'decision' if decision else 'ranking'}-{position}"
+    url = f"sqlite:///{tmp / f'real-{name}.sqlite3'}"
     study_ids, username, password = _prepare(url, submissions, "wizard")
-    settings = Settings(database_url=url, data_dir=tmp / f"data-{position}", bridge_enabled=False,
+    settings = Settings(database_url=url, data_dir=tmp / f"data-{name}", bridge_enabled=False,
                         secret_key=secrets.token_urlsafe(32), _env_file=None)  # fmt: skip
     app = create_app(settings)
     counter = Counter()
@@ -141,13 +143,11 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
                 wizard.advance(position, "negotiation")
                 with counter.counting():
                     wizard.decide(position, 1, True)
-        if decision:
-            app.state.engine.dispose()
-            return counter.counts
         # A phone has no staff login: the staff cookie the client kept goes (else every
         # counted request would decode it). The client's own calls are on this thread.
         http.cookies.clear()
-        for phone, ranking in waiting:
+        counted = [] if decision else waiting  # the decisions were counted as they came
+        for phone, ranking in counted:
             with counter.counting():
                 phone.submit_ranking(position, ranking)
     app.state.engine.dispose()
