@@ -28,7 +28,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -102,7 +102,9 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
     """``submissions`` sessions, each walked to interaction ``position``'s ranking (the
     interactions before it done in full: ranked, negotiated, questionnaires answered);
     then each phone's ranking, counted. With ``decision``, the ranking is not counted; the
-    wizard's decision on that interaction's first suggestion is."""
+    wizard's decision on that interaction's first suggestion is. One session more is walked
+    the same way and its request is not counted: the warm-up the bare app has too (a
+    route's first request is slower: FastAPI reads its endpoint's source once)."""
     from fastapi.testclient import TestClient
 
     from bench.server_load import _prepare
@@ -113,7 +115,7 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
     # A database of its own per count: the decision's is not the ranking's at position 1.
     name = f"{'decision' if decision else 'ranking'}-{position}"
     url = f"sqlite:///{tmp / f'real-{name}.sqlite3'}"
-    study_ids, username, password = _prepare(url, submissions, "wizard")
+    study_ids, username, password = _prepare(url, submissions + 1, "wizard")
     settings = Settings(database_url=url, data_dir=tmp / f"data-{name}", bridge_enabled=False,
                         secret_key=secrets.token_urlsafe(32), _env_file=None)  # fmt: skip
     app = create_app(settings)
@@ -122,7 +124,7 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
     with profiled(counter), TestClient(app) as http:
         staff = StaffApi(http).login(username, password)
         waiting = []
-        for i in range(submissions):
+        for i in range(submissions + 1):  # the first: the warm-up
             wizard = WizardBot.create(staff, study_ids[i % len(study_ids)])
             wizard.start()
             phone = ParticipantBot(http, wizard.token)
@@ -141,14 +143,14 @@ def count_real(submissions: int, tmp: Path, position: int = 1, decision: bool = 
             if decision:
                 phone.submit_ranking(position, waiting[-1][1])
                 wizard.advance(position, "negotiation")
-                with counter.counting():
+                with counter.counting() if i else nullcontext():
                     wizard.decide(position, 1, True)
         # A phone has no staff login: the staff cookie the client kept goes (else every
         # counted request would decode it). The client's own calls are on this thread.
         http.cookies.clear()
         counted = [] if decision else waiting  # the decisions were counted as they came
-        for phone, ranking in counted:
-            with counter.counting():
+        for i, (phone, ranking) in enumerate(counted):
+            with counter.counting() if i else nullcontext():
                 phone.submit_ranking(position, ranking)
     app.state.engine.dispose()
     return counter.counts

@@ -11,6 +11,7 @@ from sqlalchemy import event as sa_event
 from sqlalchemy.engine import Connection
 from sqlalchemy.orm import Mapper, ORMExecuteState, Session, SessionTransaction, object_session
 
+from chameleons.backend.db import is_read_only
 from chameleons.backend.models import Event
 from chameleons.backend.models.base import utcnow
 
@@ -45,6 +46,21 @@ def keep_after_commit(db: Session, store: dict[Any, Any], key: Any, value: Any) 
     in others nothing is kept, which a cache can afford."""
     if HUB_KEY in db.info:
         db.info.setdefault(KEEP_KEY, []).append((store, key, value))
+
+
+def keep_once_committed(
+    db: Session, store: dict[Any, Any], key: Any, value: Any, limit: int = 4096
+) -> None:
+    """``store[key] = value`` once ``db``'s state is committed: at once if ``db`` is read
+    only (what it reads is committed), else after the commit (``keep_after_commit``). A
+    store of ``limit`` entries is emptied first: the caches this serves hold a server's
+    sessions x interactions, and an emptied one reads from the database again."""
+    if len(store) >= limit:
+        store.clear()
+    if is_read_only(db):
+        store[key] = value
+    else:
+        keep_after_commit(db, store, key, value)
 
 
 def announce_rewritten(db: Session, session_ids: set[int]) -> None:

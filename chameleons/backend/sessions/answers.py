@@ -13,10 +13,12 @@ from typing import Any
 
 from sqlalchemy import bindparam, select
 
+from chameleons.backend.events import repository as events
 from chameleons.backend.models import Event, Interaction, QuestionnaireResponse
 from chameleons.backend.sessions.consent import BEFORE_POSITION, waiting_before_start
 from chameleons.backend.sessions.flow import Flow
 from chameleons.backend.sessions.pausing import refuse_phone_if_paused
+from chameleons.backend.sessions.states import STEPS
 from chameleons.backend.studies.errors import ConflictError, GoneError, InvalidInputError
 from chameleons.experiment.model import Questionnaire, QuestionnaireItem
 from chameleons.i18n import N_
@@ -79,18 +81,63 @@ def answered_by_position(flow: Flow) -> dict[int, set[str]]:
 
 
 def _answered_memo(flow: Flow) -> dict[int, set[str]]:
-    """Every position's stored questionnaire ids, read in one query once per flow: a page's
-    submission asks several times (may it store, is the part done, what does the phone see
-    next, the console's state it leaves), and its one writer keeps the memo current
-    (``submit_questionnaire``)."""
+    """Every position's stored questionnaire ids, known once per flow: a page's submission
+    asks several times (may it store, is the part done, what does the phone see next, the
+    console's state it leaves), and its one writer keeps the memo current
+    (``submit_questionnaire``). Read in one query, and only if a part may have answers
+    this process does not know (``_part``; issue 34)."""
     positions = (BEFORE_POSITION, *range(1, len(flow.interactions) + 1), FINAL_POSITION)
-    if any(position not in flow.answered_memo for position in positions):
-        found: dict[int, set[str]] = {position: set() for position in positions}
-        rows = flow.db.execute(ANSWERED_BY_POSITION, {"session_id": flow.session.id})
-        for position, questionnaire in rows:
-            found.setdefault(position, set()).add(questionnaire)
-        flow.answered_memo.update(found)
+    missing = [position for position in positions if position not in flow.answered_memo]
+    if not missing:
+        return flow.answered_memo
+    token = flow.session.phone_token
+    parts = {position: _part(flow, position) for position in missing}
+    known: dict[int, set[str]] = {}
+    for position, part in parts.items():
+        kept = _CLOSED.get((token, position)) if part == CLOSED else frozenset()
+        if part == OPEN or kept is None:
+            break
+        known[position] = set(kept)
+    else:
+        flow.answered_memo.update(known)
+        return flow.answered_memo
+    found: dict[int, set[str]] = {position: set() for position in positions}
+    for position, questionnaire in flow.db.execute(
+        ANSWERED_BY_POSITION, {"session_id": flow.session.id}
+    ):
+        found.setdefault(position, set()).add(questionnaire)
+    for position, part in parts.items():
+        if part == CLOSED:
+            events.keep_once_committed(flow.db, _CLOSED, (token, position),
+                                       frozenset(found[position]), _CLOSED_MAX)  # fmt: skip
+    flow.answered_memo.update({position: found[position] for position in missing})
     return flow.answered_memo
+
+
+# Answers are stored only while their part is open (``_questionnaire_target``) and states
+# only move on (``sessions.states``): a part not open yet has none, and a part closed for
+# good keeps what it had. A closed part's ids are kept per (session link, position) once a
+# committed state showed them closed, so a submission reads answers only while a part is
+# open (issue 34). The link is the key: a withdrawal may free a session's id, not its link.
+NOT_YET, OPEN, CLOSED = "not yet open", "open", "closed"
+STEPS_BEFORE_QUESTIONNAIRE = STEPS[: STEPS.index("questionnaire")]
+_CLOSED: dict[tuple[str, int], frozenset[str]] = {}
+_CLOSED_MAX = 4096  # a server's sessions x parts; emptied when full
+
+
+def _part(flow: Flow, position: int) -> str:
+    """Whether answers of ``position`` may be stored now, later, or never again."""
+    state = flow.session.state
+    if position == BEFORE_POSITION:
+        return OPEN if state == "pending" else CLOSED
+    if position == FINAL_POSITION:
+        if state in ("pending", "running"):
+            return NOT_YET
+        return OPEN if state == "final_questionnaire" else CLOSED
+    step = flow.interaction(position).state
+    if step in STEPS_BEFORE_QUESTIONNAIRE:
+        return NOT_YET
+    return OPEN if step == "questionnaire" and state == "running" else CLOSED
 
 
 def submit_questionnaire(

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from chameleons.backend.db import is_read_only
 from chameleons.backend.events import repository as events
 from chameleons.backend.events.hub import LiveHub, session_channel
 from chameleons.backend.models import Interaction, Suggestion
@@ -226,13 +225,8 @@ def _suggestion_parts(
     parts = ([_suggestion(flow, interaction, s) for s in suggestions],
              sum(1 for s in suggestions if s.accepted))  # fmt: skip
     if interaction.state in SETTLED_STEPS:
-        if len(_SETTLED) >= _SETTLED_MAX:
-            _SETTLED.clear()
         key = (flow.session.phone_token, interaction.id)
-        if is_read_only(flow.db):  # a committed state
-            _SETTLED[key] = parts
-        else:
-            events.keep_after_commit(flow.db, _SETTLED, key, parts)
+        events.keep_once_committed(flow.db, _SETTLED, key, parts, _SETTLED_MAX)
     return parts
 
 
