@@ -92,14 +92,9 @@ def _answered_memo(flow: Flow) -> dict[int, set[str]]:
         return flow.answered_memo
     token = flow.session.phone_token
     parts = {position: _part(flow, position) for position in missing}
-    known: dict[int, set[str]] = {}
-    for position, part in parts.items():
-        kept = _CLOSED.get((token, position)) if part == CLOSED else frozenset()
-        if part == OPEN or kept is None:
-            break
-        known[position] = set(kept)
-    else:
-        flow.answered_memo.update(known)
+    known = {position: _known(token, position, part) for position, part in parts.items()}
+    if all(ids is not None for ids in known.values()):
+        flow.answered_memo.update({position: set(ids or ()) for position, ids in known.items()})
         return flow.answered_memo
     found: dict[int, set[str]] = {position: set() for position in positions}
     for position, questionnaire in flow.db.execute(
@@ -123,6 +118,13 @@ NOT_YET, OPEN, CLOSED = "not yet open", "open", "closed"
 STEPS_BEFORE_QUESTIONNAIRE = STEPS[: STEPS.index("questionnaire")]
 _CLOSED: dict[tuple[str, int], frozenset[str]] = {}
 _CLOSED_MAX = 4096  # a server's sessions x parts; emptied when full
+
+
+def _known(token: str, position: int, part: str) -> frozenset[str] | None:
+    """The ids of ``position`` if this process knows them without a read, else None."""
+    if part == NOT_YET:
+        return frozenset()
+    return _CLOSED.get((token, position)) if part == CLOSED else None
 
 
 def _part(flow: Flow, position: int) -> str:
